@@ -1,0 +1,6 @@
+// cullkit/cullkit.hpp: the umbrella header. Include this, or only the headers you use.
+#pragma once
+
+#include "config.hpp"
+#include "geometry.hpp"
+#include "traits.hpp"

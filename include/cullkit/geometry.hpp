@@ -1,0 +1,9 @@
+// cullkit/geometry.hpp: all value types of the geometry core.
+#pragma once
+
+#include "geometry/aabb.hpp"
+#include "geometry/camera.hpp"
+#include "geometry/convex_polygon.hpp"
+#include "geometry/frustum.hpp"
+#include "geometry/plane.hpp"
+#include "geometry/sphere.hpp"

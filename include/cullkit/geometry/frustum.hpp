@@ -1,0 +1,161 @@
+// cullkit/geometry/frustum.hpp: view frusta from projection matrices, box and sphere tests.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include "aabb.hpp"
+#include "plane.hpp"
+#include "sphere.hpp"
+
+namespace cullkit {
+
+/// How normalized device depth maps: OpenGL's [-1, 1], or Direct3D/Vulkan/Metal's [0, 1].
+/// Reversed-Z (near at 1, far at 0) needs no flag of its own: its planes come out of the same rows.
+enum class DepthRange { negative_one_to_one, zero_to_one };
+
+/// A set of active planes, one bit each (bit i for `Frustum::plane(i)`).
+using PlaneMask = std::uint8_t;
+
+/// A convex view volume: up to six planes whose normals point inward.
+///
+/// Plane order is left, right, bottom, top, near, far. A plane that could not be extracted (the
+/// far plane of an infinite projection, a matrix with NaN) is *dropped*: its bit is absent from
+/// `active_mask()` and it never rejects anything. Every query is conservative: `outside` is only
+/// returned when float rounding cannot have moved the shape across a plane.
+///
+/// Cost: `classify(Aabb)` tests two corners per active plane (the one farthest along the normal to
+/// reject, the nearest to accept). Thread safety: immutable after construction.
+class Frustum {
+ public:
+  static constexpr int max_planes = 6;
+  enum PlaneIndex : int { left = 0, right = 1, bottom = 2, top = 3, near_plane = 4, far_plane = 5 };
+
+  /// An empty frustum with no planes: everything is inside it.
+  Frustum() noexcept = default;
+
+  /// Extracts the planes from the rows of `view_proj` (clip = view_proj * world, column vectors,
+  /// GLM layout), computed in double precision and normalized. Works for perspective and
+  /// orthographic projections, both depth ranges, reversed-Z and infinite far planes. `depth` must
+  /// match the projection; GLM's clip-control macros are never read.
+  [[nodiscard]] static Frustum from_matrix(const glm::mat4& view_proj,
+                                           DepthRange depth = DepthRange::negative_one_to_one) noexcept {
+    double m[4][4];  // m[row][col]
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) m[r][c] = static_cast<double>(view_proj[c][r]);
+    double rows[6][4];
+    for (int k = 0; k < 4; ++k) {
+      rows[left][k] = m[3][k] + m[0][k];
+      rows[right][k] = m[3][k] - m[0][k];
+      rows[bottom][k] = m[3][k] + m[1][k];
+      rows[top][k] = m[3][k] - m[1][k];
+      rows[near_plane][k] = depth == DepthRange::zero_to_one ? m[2][k] : m[3][k] + m[2][k];
+      rows[far_plane][k] = m[3][k] - m[2][k];
+    }
+    Frustum f;
+    for (int i = 0; i < 6; ++i) {
+      const double* r = rows[i];
+      const double len = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+      // Scale of the row, to tell a vanishing normal (an infinite far plane: row3 - row2 has a
+      // normal that is zero up to rounding) from a genuine plane.
+      const double scale = std::fabs(r[0]) + std::fabs(r[1]) + std::fabs(r[2]) + std::fabs(r[3]);
+      if (!(len > 1e-6 * scale) || !std::isfinite(len) || !std::isfinite(r[3])) continue;
+      Plane p{glm::vec3(static_cast<float>(r[0] / len), static_cast<float>(r[1] / len),
+                        static_cast<float>(r[2] / len)),
+              static_cast<float>(r[3] / len)};
+      if (!is_valid(p)) continue;
+      f.planes_[i] = p;
+      f.mask_ = static_cast<PlaneMask>(f.mask_ | (1u << i));
+    }
+    return f;
+  }
+
+  /// Builds a frustum from up to six inward-facing planes; invalid ones are dropped.
+  [[nodiscard]] static Frustum from_planes(const Plane* planes, int count) noexcept {
+    Frustum f;
+    for (int i = 0; i < count && i < max_planes; ++i) {
+      if (!is_valid(planes[i])) continue;
+      f.planes_[i] = planes[i];
+      f.mask_ = static_cast<PlaneMask>(f.mask_ | (1u << i));
+    }
+    return f;
+  }
+
+  /// Bits of the planes that exist.
+  [[nodiscard]] PlaneMask active_mask() const noexcept { return mask_; }
+  [[nodiscard]] const Plane& plane(int i) const noexcept { return planes_[i]; }
+  [[nodiscard]] bool has_plane(int i) const noexcept { return (mask_ >> i) & 1u; }
+
+  /// Box test. Never `outside` for a box that meets the volume. A box with NaN is `intersecting`.
+  [[nodiscard]] Containment classify(const Aabb& box) const noexcept {
+    PlaneMask m = mask_;
+    return classify(box, m);
+  }
+
+  /// Box test against the planes in `mask` only. On return `mask` holds the planes the box
+  /// straddles; planes it is fully inside of are cleared, so children of this box can pass the
+  /// result down and skip them. If the answer is `outside`, `mask` is unspecified.
+  [[nodiscard]] Containment classify(const Aabb& box, PlaneMask& mask) const noexcept {
+    const glm::vec3 c = (box.min + box.max) * 0.5f;
+    const glm::vec3 e = (box.max - box.min) * 0.5f;
+    PlaneMask out = mask;
+    for (int i = 0; i < max_planes; ++i) {
+      if (!((mask >> i) & 1u)) continue;
+      const Plane& p = planes_[i];
+      const float dc = glm::dot(p.normal, c) + p.d;
+      const float r = std::fabs(p.normal.x) * e.x + std::fabs(p.normal.y) * e.y +
+                      std::fabs(p.normal.z) * e.z;
+      // Farthest corner along the normal is at dc + r, nearest at dc - r. The slack covers the
+      // rounding of both sums, so a touching box is never rejected.
+      const float slack = tolerance(p, c, r);
+      if (dc + r < -slack) return Containment::outside;
+      if (dc - r >= slack) out = static_cast<PlaneMask>(out & ~(1u << i));
+      // NaN: neither comparison holds; the plane stays in the mask (intersecting).
+    }
+    mask = out;
+    return out == 0 ? Containment::inside : Containment::intersecting;
+  }
+
+  /// Sphere test, same guarantees as the box test.
+  [[nodiscard]] Containment classify(const Sphere& s) const noexcept {
+    PlaneMask m = mask_;
+    return classify(s, m);
+  }
+  [[nodiscard]] Containment classify(const Sphere& s, PlaneMask& mask) const noexcept {
+    if (!(s.radius >= 0.0f)) return Containment::outside;  // the empty sphere
+    PlaneMask out = mask;
+    for (int i = 0; i < max_planes; ++i) {
+      if (!((mask >> i) & 1u)) continue;
+      const Plane& p = planes_[i];
+      const float dc = glm::dot(p.normal, s.center) + p.d;
+      const float slack = tolerance(p, s.center, s.radius);
+      if (dc + s.radius < -slack) return Containment::outside;
+      if (dc - s.radius >= slack) out = static_cast<PlaneMask>(out & ~(1u << i));
+    }
+    mask = out;
+    return out == 0 ? Containment::inside : Containment::intersecting;
+  }
+
+  /// Point test: true unless the point is clearly outside some plane.
+  [[nodiscard]] bool contains(const glm::vec3& p) const noexcept {
+    return classify(Sphere{p, 0.0f}) != Containment::outside;
+  }
+
+  /// The rounding slack used for a plane at a point with a given radius: a bound on the float
+  /// error of `dot(n, c) + d ± r`, plus the error of the plane itself (rounded to float).
+  [[nodiscard]] static float tolerance(const Plane& p, const glm::vec3& c, float r) noexcept {
+    const float mag = std::fabs(p.normal.x * c.x) + std::fabs(p.normal.y * c.y) +
+                      std::fabs(p.normal.z * c.z) + std::fabs(p.d) + r;
+    return mag * (8.0f * std::numeric_limits<float>::epsilon());
+  }
+
+ private:
+  Plane planes_[max_planes] = {};
+  PlaneMask mask_ = 0;
+};
+
+}  // namespace cullkit

@@ -1,0 +1,96 @@
+// cullkit_support/scene.hpp: triangle scenes for tests, benchmarks and demos: seeded generators
+// (city, office, forest) and real OBJ scenes from ../shared/scenes.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include <cullkit/cullkit.hpp>
+
+namespace cullkit::support {
+
+/// One object of a scene: a contiguous range of triangles.
+struct SceneObject {
+  std::string name;
+  std::uint32_t first_triangle = 0;  ///< index of its first triangle (indices[3*first_triangle])
+  std::uint32_t triangle_count = 0;
+  Aabb bounds = Aabb::empty();       ///< tight bounds of its triangles
+  bool major_occluder = false;       ///< a big closed solid (building, wall) worth occluding with
+  bool is_box = false;               ///< exactly the 12 outward-facing triangles of `bounds`
+};
+
+/// An indexed triangle soup with objects. Triangles are counter-clockwise seen from their front
+/// (outward for closed solids). Y is up.
+struct Scene {
+  std::string name;
+  std::vector<glm::vec3> positions;
+  std::vector<std::uint32_t> indices;
+  std::vector<SceneObject> objects;
+  Aabb bounds = Aabb::empty();
+
+  [[nodiscard]] std::size_t triangle_count() const { return indices.size() / 3; }
+  [[nodiscard]] MeshView<glm::vec3> mesh() const {
+    return MeshView<glm::vec3>{positions.data(), positions.size(), indices.data(), indices.size()};
+  }
+  /// Bounds of every object, in object order (handy for the trees).
+  [[nodiscard]] std::vector<Aabb> object_bounds() const;
+  /// Adds a closed box as 12 outward-facing triangles forming one object; returns its object index.
+  std::uint32_t add_box(const Aabb& box, const std::string& name, bool major_occluder);
+  /// Appends raw triangles (positions given 3 per triangle) as one object; returns its object index.
+  std::uint32_t add_triangles(const std::vector<glm::vec3>& corners, const std::string& name);
+};
+
+/// A city: a grid of `blocks` x `blocks` blocks separated by streets, each block holding box
+/// buildings of varied heights (major occluders), with props (lamp posts, benches, cars) on the
+/// streets and small rooftop props (antennas, water tanks). About 250 triangles per block.
+[[nodiscard]] Scene make_city(std::uint32_t seed, int blocks);
+/// An office floor: a grid of `rooms_x` x `rooms_z` rooms with walls (major occluders, as boxes),
+/// door gaps, desks, chairs and monitors. About 400 triangles per room.
+[[nodiscard]] Scene make_office(std::uint32_t seed, int rooms_x, int rooms_z);
+/// A forest: a terrain height field of `terrain_cells` x `terrain_cells` quads and `trees` trees
+/// (trunk box + crown cone), seeded placement.
+[[nodiscard]] Scene make_forest(std::uint32_t seed, int terrain_cells, int trees);
+
+/// Loads an OBJ (through tinyobjloader), fan-triangulating faces; every `o`/`g` object becomes a
+/// SceneObject. Returns nothing if the file cannot be read or the loader is not available.
+[[nodiscard]] std::optional<Scene> load_obj(const std::string& path);
+
+/// The folder of real scenes: $CULLKIT_SCENES if set, else ../shared/scenes beside the checkout.
+/// Empty string if it does not exist (tests then skip real scenes and must still pass).
+[[nodiscard]] std::string scenes_dir();
+/// Real scene file names present in `scenes_dir()` (e.g. "fzk_haus.obj"), smallest first.
+[[nodiscard]] std::vector<std::string> real_scene_files();
+
+/// A right-handed look-at perspective camera (GLM conventions) for the given depth range.
+/// `far_plane` <= 0 means an infinite far plane; `reversed_z` swaps near and far depths.
+[[nodiscard]] Camera make_camera(const glm::vec3& eye, const glm::vec3& target, float fov_y_degrees,
+                                 int width, int height, float near_plane, float far_plane,
+                                 DepthRange depth = DepthRange::negative_one_to_one,
+                                 bool reversed_z = false);
+
+/// A deterministic pseudo-random generator (splitmix64), the same on every platform.
+class Rng {
+ public:
+  explicit Rng(std::uint64_t seed) : state_(seed) {}
+  std::uint64_t next() {
+    std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  /// Uniform in [0, 1).
+  float uniform() { return static_cast<float>(next() >> 40) * (1.0f / 16777216.0f); }
+  float uniform(float lo, float hi) { return lo + (hi - lo) * uniform(); }
+  int range(int lo, int hi_inclusive) {
+    return lo + static_cast<int>(next() % static_cast<std::uint64_t>(hi_inclusive - lo + 1));
+  }
+
+ private:
+  std::uint64_t state_;
+};
+
+}  // namespace cullkit::support
