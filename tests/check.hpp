@@ -34,7 +34,8 @@ inline int report(const char* name) {
 }  // namespace cullkit_test
 
 /// CHECK(expr): records a failure with file:line and the expression text; evaluates to expr.
-#define CHECK(expr) ::cullkit_test::record(static_cast<bool>(expr), __FILE__, __LINE__, #expr)
+/// Variadic so that template arguments with commas need no extra parentheses.
+#define CHECK(...) ::cullkit_test::record(static_cast<bool>(__VA_ARGS__), __FILE__, __LINE__, #__VA_ARGS__)
 /// CHECK_MSG(expr, fmt, ...): as CHECK, and prints a printf-style context line on failure
 /// (use it to print the seed, camera or index that failed).
 #define CHECK_MSG(expr, ...)                                                  \

@@ -137,7 +137,10 @@ struct MeshView {
 template <class Traits, class Vertex, class Index>
 [[nodiscard]] bool triangle_positions(const MeshView<Vertex, Index>& mesh, std::size_t t,
                                       glm::vec3 out[3]) noexcept {
-  (void)require_vertex_traits<Vertex, Traits>::value;
+  static_assert(require_vertex_traits<Vertex, Traits>::value, "");
+  if constexpr (!has_vertex_traits_v<Vertex, Traits>) {
+    return false;  // unreachable: the static_assert above already stopped the build
+  } else {
   CULLKIT_ASSERT(t < mesh.triangle_count(), "triangle index within the mesh");
   std::size_t idx[3];
   for (int k = 0; k < 3; ++k) {
@@ -150,6 +153,7 @@ template <class Traits, class Vertex, class Index>
   }
   for (int k = 0; k < 3; ++k) out[k] = glm::vec3(Traits::position(mesh.vertices[idx[k]]));
   return true;
+  }
 }
 template <class Vertex, class Index>
 [[nodiscard]] bool triangle_positions(const MeshView<Vertex, Index>& mesh, std::size_t t,
