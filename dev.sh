@@ -55,11 +55,11 @@ cmd_demo() {
 
 cmd_test() {
   deps
-  run_tests release
-  run_tests asan -LE bench
-  say "strict: clang++, C++20, -fno-exceptions -fno-rtti"
-  run_tests strict -LE 'bench|oracle'
   cmd_fuzz "${FUZZ_SECONDS:-20}"
+  say "strict: clang++, C++20, -fno-exceptions -fno-rtti"
+  run_tests strict --no-tests=error
+  run_tests asan -LE bench --no-tests=error
+  run_tests release --no-tests=error
 }
 
 cmd_matrix() {
@@ -84,6 +84,7 @@ cmd_fuzz() {
   rm -f build/fuzz/CMakeCache.txt
   cmake --preset fuzz -DCULLKIT_FUZZ_SECONDS="$seconds" >/dev/null
   build fuzz
+  if ! ls fuzz/fuzz_*.cpp >/dev/null 2>&1; then say "fuzz: no fuzzers yet"; return 0; fi
   say "fuzz ($seconds s each)"
   ctest --preset fuzz -j "$JOBS"
 }
