@@ -4,3 +4,4 @@
 #include "config.hpp"
 #include "geometry.hpp"
 #include "traits.hpp"
+#include "box_proxy.hpp"
