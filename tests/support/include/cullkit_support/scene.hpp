@@ -42,7 +42,15 @@ struct Scene {
   std::uint32_t add_box(const Aabb& box, const std::string& name, bool major_occluder);
   /// Appends raw triangles (positions given 3 per triangle) as one object; returns its object index.
   std::uint32_t add_triangles(const std::vector<glm::vec3>& corners, const std::string& name);
+  /// Appends an indexed mesh (indices local to `mesh_positions`, 3 per triangle) as one object;
+  /// returns its object index. Indices out of range are the caller's bug (asserted, then clamped to 0).
+  std::uint32_t add_mesh(const std::vector<glm::vec3>& mesh_positions, const std::vector<std::uint32_t>& mesh_indices,
+                         const std::string& name);
 };
+
+/// The 12 outward, counter-clockwise triangles of a box as 36 indices into its 8 corners
+/// (`cullkit::corner(box, i)`: bit 0 x, bit 1 y, bit 2 z). Faces in the order -x, +x, -y, +y, -z, +z.
+extern const std::uint32_t kBoxTriangleCorners[36];
 
 /// A city: a grid of `blocks` x `blocks` blocks separated by streets, each block holding box
 /// buildings of varied heights (major occluders), with props (lamp posts, benches, cars) on the
@@ -58,6 +66,16 @@ struct Scene {
 /// Loads an OBJ (through tinyobjloader), fan-triangulating faces; every `o`/`g` object becomes a
 /// SceneObject. Returns nothing if the file cannot be read or the loader is not available.
 [[nodiscard]] std::optional<Scene> load_obj(const std::string& path);
+
+/// What `load_obj` skipped (it never prints; callers that care print these).
+struct ObjLoadStats {
+  std::size_t faces = 0;               ///< faces read (polygons, before triangulation)
+  std::size_t skipped_faces = 0;       ///< faces with an index out of range or fewer than 3 corners
+  std::size_t nonfinite_vertices = 0;  ///< vertices with NaN/inf coordinates (kept; excluded from bounds)
+  std::size_t empty_shapes = 0;        ///< `o`/`g` groups without a triangle (no object made)
+};
+/// As `load_obj(path)`, and reports what was skipped in `stats` (may be null).
+[[nodiscard]] std::optional<Scene> load_obj(const std::string& path, ObjLoadStats* stats);
 
 /// The folder of real scenes: $CULLKIT_SCENES if set, else ../shared/scenes beside the checkout.
 /// Empty string if it does not exist (tests then skip real scenes and must still pass).

@@ -1,0 +1,271 @@
+// The scene generators and the OBJ loader: deterministic output, valid indices, objects that
+// partition the triangles, tight bounds, outward winding on boxes and closed solids, rooftop props
+// resting on their roofs; OBJ parsing of quads, negative indices and o/g groups; the real scenes.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+
+#include <check.hpp>
+#include <cullkit/cullkit.hpp>
+#include <cullkit_support/scene.hpp>
+
+using namespace cullkit;
+using support::Scene;
+using support::SceneObject;
+
+namespace {
+
+bool finite3(const glm::vec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+
+bool same_box(const Aabb& a, const Aabb& b) { return a.min == b.min && a.max == b.max; }
+
+glm::dvec3 tri_normal(const Scene& s, std::size_t t) {
+  const glm::dvec3 a(s.positions[s.indices[3 * t]]), b(s.positions[s.indices[3 * t + 1]]),
+      c(s.positions[s.indices[3 * t + 2]]);
+  return glm::cross(b - a, c - a);
+}
+
+// Signed volume of an object's triangles (positive for a closed, outward-wound solid).
+double signed_volume(const Scene& s, const SceneObject& o) {
+  double v = 0;
+  const glm::dvec3 ref(o.bounds.center());
+  for (std::uint32_t t = o.first_triangle; t < o.first_triangle + o.triangle_count; ++t) {
+    const glm::dvec3 a = glm::dvec3(s.positions[s.indices[3 * t]]) - ref;
+    const glm::dvec3 b = glm::dvec3(s.positions[s.indices[3 * t + 1]]) - ref;
+    const glm::dvec3 c = glm::dvec3(s.positions[s.indices[3 * t + 2]]) - ref;
+    v += glm::dot(a, glm::cross(b, c)) / 6.0;
+  }
+  return v;
+}
+
+// Everything every scene must satisfy. Returns the number of problems found (printed when
+// `verbose`), so that tests can also prove it notices broken scenes.
+#define PROBLEM(cond, ...)                                   \
+  do {                                                       \
+    if (!(cond)) {                                           \
+      ++problems;                                            \
+      if (verbose) std::fprintf(stderr, "    " __VA_ARGS__); \
+      if (verbose) std::fprintf(stderr, "\n");              \
+    }                                                        \
+  } while (0)
+
+int validate(const Scene& s, bool all_finite = true, bool verbose = true) {
+  const char* name = s.name.c_str();
+  int problems = 0;
+  PROBLEM(s.indices.size() % 3 == 0, "%s: index count %zu", name, s.indices.size());
+  std::size_t bad_index = 0, bad_pos = 0;
+  for (std::uint32_t i : s.indices) bad_index += i >= s.positions.size();
+  for (const glm::vec3& p : s.positions) bad_pos += !finite3(p);
+  PROBLEM(bad_index == 0, "%s: %zu indices out of range", name, bad_index);
+  if (all_finite) PROBLEM(bad_pos == 0, "%s: %zu non-finite positions", name, bad_pos);
+  if (bad_index) return problems;
+  // Objects partition the triangles, in order.
+  std::uint32_t next = 0;
+  bool partition = true;
+  Aabb all = Aabb::empty();
+  std::size_t loose = 0, bad_box = 0;
+  for (const SceneObject& o : s.objects) {
+    partition = partition && o.first_triangle == next && o.triangle_count > 0;
+    next = o.first_triangle + o.triangle_count;
+    if (next > s.triangle_count()) {
+      partition = false;
+      break;
+    }
+    Aabb tight = Aabb::empty();
+    for (std::uint32_t t = o.first_triangle; t < next; ++t)
+      for (int k = 0; k < 3; ++k)
+        if (finite3(s.positions[s.indices[3 * t + k]])) tight = merge(tight, s.positions[s.indices[3 * t + k]]);
+    loose += !same_box(tight, o.bounds);
+    all = merge(all, o.bounds);
+    if (o.is_box) {
+      // Exactly the 12 outward triangles of `bounds`: corners on the box's corners, every normal
+      // axis-aligned and pointing away from the centre, the six faces' areas adding up.
+      bool ok = o.triangle_count == 12;
+      const glm::dvec3 c(o.bounds.center());
+      double area[6] = {0, 0, 0, 0, 0, 0};
+      for (std::uint32_t t = o.first_triangle; ok && t < next; ++t) {
+        for (int k = 0; k < 3; ++k) {
+          const glm::vec3 p = s.positions[s.indices[3 * t + k]];
+          for (int a = 0; a < 3; ++a) ok = ok && (p[a] == o.bounds.min[a] || p[a] == o.bounds.max[a]);
+        }
+        const glm::dvec3 n = tri_normal(s, t);
+        const glm::dvec3 centroid = (glm::dvec3(s.positions[s.indices[3 * t]]) + glm::dvec3(s.positions[s.indices[3 * t + 1]]) +
+                                     glm::dvec3(s.positions[s.indices[3 * t + 2]])) / 3.0;
+        ok = ok && glm::dot(n, centroid - c) > 0.0;
+        int axis = -1;
+        for (int a = 0; a < 3; ++a)
+          if (n[a] != 0.0) axis = axis == -1 ? a : 3;
+        ok = ok && axis >= 0 && axis < 3;
+        if (ok) area[2 * axis + (n[axis] > 0)] += std::fabs(n[axis]) * 0.5;
+      }
+      const glm::dvec3 e(o.bounds.extent());
+      const double want[3] = {e.y * e.z, e.x * e.z, e.x * e.y};
+      for (int f = 0; ok && f < 6; ++f) ok = std::fabs(area[f] - want[f / 2]) <= 1e-6 * (1 + want[f / 2]);
+      bad_box += !ok;
+    }
+  }
+  partition = partition && next == s.triangle_count();
+  PROBLEM(partition, "%s: objects do not partition the %zu triangles", name, s.triangle_count());
+  PROBLEM(loose == 0, "%s: %zu objects with bounds that are not tight", name, loose);
+  PROBLEM(bad_box == 0, "%s: %zu is_box objects are not 12 outward triangles of their bounds", name, bad_box);
+  PROBLEM(same_box(all, s.bounds), "%s: scene bounds are not the union of the object bounds", name);
+  return problems;
+}
+
+bool identical(const Scene& a, const Scene& b) {
+  if (a.positions.size() != b.positions.size() || a.indices.size() != b.indices.size() ||
+      a.objects.size() != b.objects.size())
+    return false;
+  if (std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(glm::vec3)) != 0) return false;
+  if (a.indices != b.indices) return false;
+  for (std::size_t i = 0; i < a.objects.size(); ++i) {
+    const SceneObject &x = a.objects[i], &y = b.objects[i];
+    if (x.name != y.name || x.first_triangle != y.first_triangle || x.triangle_count != y.triangle_count ||
+        !same_box(x.bounds, y.bounds) || x.major_occluder != y.major_occluder || x.is_box != y.is_box)
+      return false;
+  }
+  return true;
+}
+
+bool starts_with(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
+
+void test_add_helpers() {
+  Scene s;
+  s.name = "helpers";
+  const std::uint32_t b = s.add_box({{0, 0, 0}, {1, 2, 3}}, "box", true);
+  const std::uint32_t t = s.add_triangles({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}}, "tri");  // 4th corner ignored
+  const std::uint32_t m = s.add_mesh({{-1, 0, 0}, {0, -1, 0}, {0, 0, -1}}, {0, 1, 2, 2, 1, 0}, "mesh");
+  const std::uint32_t e = s.add_mesh({}, {0, 1, 2}, "empty");
+  CHECK(b == 0 && t == 1 && m == 2 && e == 3);
+  CHECK(s.objects[0].is_box && s.objects[0].major_occluder && s.objects[0].triangle_count == 12);
+  CHECK(!s.objects[1].is_box && !s.objects[1].major_occluder && s.objects[1].triangle_count == 1);
+  CHECK(s.objects[2].triangle_count == 2 && s.objects[2].first_triangle == 13);
+  CHECK(s.objects[3].triangle_count == 0 && is_empty(s.objects[3].bounds));
+  CHECK(s.triangle_count() == 15);
+  CHECK(same_box(s.bounds, Aabb{{-1, -1, -1}, {1, 2, 3}}));
+  CHECK(s.object_bounds().size() == 4 && same_box(s.object_bounds()[1], Aabb{{0, 0, 0}, {1, 1, 0}}));
+  CHECK(signed_volume(s, s.objects[0]) > 5.99 && signed_volume(s, s.objects[0]) < 6.01);
+  s.objects.pop_back();  // the empty object is allowed by add_mesh but not by validate
+  CHECK(validate(s) == 0);
+  // validate() notices broken scenes: a flipped box triangle, loose bounds, a bad index, a gap.
+  {
+    Scene bad = s;
+    std::swap(bad.indices[1], bad.indices[2]);
+    CHECK(validate(bad, true, false) > 0);
+  }
+  {
+    Scene bad = s;
+    bad.objects[1].bounds.max.x += 0.5f;
+    CHECK(validate(bad, true, false) > 0);
+  }
+  {
+    Scene bad = s;
+    bad.indices.back() = 99;
+    CHECK(validate(bad, true, false) > 0);
+  }
+  {
+    Scene bad = s;
+    bad.objects[1].triangle_count = 0;
+    CHECK(validate(bad, true, false) > 0);
+  }
+  {
+    Scene bad = s;
+    bad.bounds.min.y = -2;
+    CHECK(validate(bad, true, false) > 0);
+  }
+  const auto mv = s.mesh();
+  CHECK(mv.vertex_count == s.positions.size() && mv.index_count == s.indices.size());
+}
+
+void test_city() {
+  const Scene a = support::make_city(1, 8), b = support::make_city(1, 8), c = support::make_city(2, 8);
+  CHECK(validate(a) == 0);
+  CHECK(validate(c) == 0);
+  CHECK(identical(a, b));
+  CHECK(!identical(a, c));
+  CHECK(support::make_city(1, 0).triangle_count() == 0 && support::make_city(1, -3).objects.empty());
+  const Scene one = support::make_city(7, 1);
+  CHECK(validate(one) == 0);
+  CHECK(one.objects.size() >= 6);
+  const std::size_t n8 = a.triangle_count();
+  CHECK_MSG(n8 >= 3000 && n8 <= 16000, "make_city(1, 8): %zu triangles", n8);
+  const Scene big = support::make_city(1, 26);
+  CHECK(validate(big) == 0);
+  const double ratio = double(big.triangle_count()) / double(n8);
+  CHECK_MSG(ratio > 8 && ratio < 13, "make_city(1, 26) / make_city(1, 8) = %g", ratio);
+
+  // Buildings: boxes, major occluders, 8..80 m, standing on the ground; the props are not occluders.
+  std::map<std::string, const SceneObject*> buildings;
+  int tiles = 0, roof = 0, street = 0, towers = 0;
+  double tile_area = 0;
+  for (const SceneObject& o : a.objects) {
+    if (starts_with(o.name, "building_")) {
+      buildings[o.name] = &o;
+      CHECK(o.is_box && o.major_occluder);
+      CHECK(o.bounds.min.y == 0.0f && o.bounds.max.y >= 8.0f && o.bounds.max.y <= 80.0f);
+      towers += o.bounds.max.y > 40.0f;
+    } else {
+      CHECK_MSG(!o.major_occluder, "%s is flagged as a major occluder", o.name.c_str());
+    }
+    if (starts_with(o.name, "ground_")) {
+      ++tiles;
+      CHECK(o.bounds.min.y == 0.0f && o.bounds.max.y == 0.0f && o.triangle_count == 2);
+      for (std::uint32_t t = o.first_triangle; t < o.first_triangle + 2; ++t) {
+        const glm::dvec3 n = tri_normal(a, t);
+        CHECK(n.y > 0 && n.x == 0 && n.z == 0);
+      }
+      tile_area += double(o.bounds.extent().x) * o.bounds.extent().z;
+    }
+    if (starts_with(o.name, "lamp_") || starts_with(o.name, "bench_") || starts_with(o.name, "car_")) {
+      ++street;
+      CHECK(o.is_box && o.bounds.min.y == 0.0f);
+    }
+  }
+  CHECK(tiles == 64);
+  // The tiles pave the city's footprint exactly (no gaps, no overlaps: areas add up).
+  const double footprint = double(a.bounds.extent().x) * a.bounds.extent().z;
+  CHECK_MSG(std::fabs(tile_area - footprint) <= 1e-4 * footprint, "tiles %g vs footprint %g", tile_area, footprint);
+  CHECK(buildings.size() >= 64 * 2 && towers > 3);
+  CHECK(street >= 64 * 3);
+  for (const SceneObject& o : a.objects) {
+    if (!starts_with(o.name, "roof_")) continue;
+    ++roof;
+    const std::string owner = o.name.substr(o.name.find("building_"));
+    const auto it = buildings.find(owner);
+    CHECK_MSG(it != buildings.end(), "%s has no building", o.name.c_str());
+    if (it == buildings.end()) continue;
+    const Aabb& r = it->second->bounds;
+    CHECK_MSG(o.bounds.min.y == r.max.y, "%s floats or sinks: %.9g vs roof %.9g", o.name.c_str(), o.bounds.min.y, r.max.y);
+    CHECK_MSG(o.bounds.min.x >= r.min.x && o.bounds.max.x <= r.max.x && o.bounds.min.z >= r.min.z &&
+                  o.bounds.max.z <= r.max.z,
+              "%s overhangs its roof", o.name.c_str());
+  }
+  CHECK(roof >= 64);
+  // Nothing but rooftop props touches a building, and buildings do not overlap one another.
+  int clashes = 0;
+  for (const SceneObject& o : a.objects) {
+    if (starts_with(o.name, "ground_") || starts_with(o.name, "roof_")) continue;
+    for (const auto& [bn, bo] : buildings) {
+      if (bn == o.name) continue;
+      const Aabb i = intersection(o.bounds, bo->bounds);
+      if (i.min.x < i.max.x && i.min.y < i.max.y && i.min.z < i.max.z) ++clashes;
+    }
+  }
+  CHECK_MSG(clashes == 0, "%d objects intersect a building", clashes);
+  std::printf("city(1, 8): %zu triangles, %zu objects, %zu buildings; city(1, 26): %zu triangles\n", n8,
+              a.objects.size(), buildings.size(), big.triangle_count());
+}
+
+}  // namespace
+
+int main() {
+  test_add_helpers();
+  test_city();
+  return cullkit_test::report("test_scenes");
+}
