@@ -63,12 +63,13 @@ struct BoxProxy {
   std::uint8_t corner_count = 0;
   /// Closure planes in `faces`: 1..3 front faces (front_faces), 1 (center_plane), 0 without proxy.
   std::uint8_t face_count = 0;
-  /// The outline, counter-clockwise seen from the eye; the corners are exact box corners.
+  /// The outline, counter-clockwise seen from the eye; the corners are exact box corners. Entries
+  /// past `corner_count` hold filler (a box corner), never read them as outline.
   glm::vec3 corners[6] = {glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f),
                           glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f)};
   /// Closure planes, unit normals pointing INTO the box (away from the eye): `signed_distance >= 0`
   /// means behind that plane. Front-face planes are axis-aligned and exact. With center_plane,
-  /// faces[0] is the seed's plane through the centre.
+  /// faces[0] is the seed's plane through the centre. Entries past `face_count` hold filler.
   Plane faces[3] = {Plane{glm::vec3(0.0f), 0.0f}, Plane{glm::vec3(0.0f), 0.0f},
                     Plane{glm::vec3(0.0f), 0.0f}};
   /// The axis (0, 1, 2) each front face is perpendicular to; 3 for the seed's centre plane.
@@ -94,42 +95,49 @@ struct BoxProxy {
   return ix + 3 * iy + 9 * iz;
 }
 
+namespace detail {
+
+/// The table entry for `box` seen from `eye` after the degenerate cases (see the file comment), or
+/// nullptr when there is no proxy. Writes the eye's region to `region`.
+[[nodiscard]] inline const BoxOutlineEntry* box_outline_entry(const Aabb& box, const glm::vec3& eye,
+                                                              int& region) noexcept {
+  region = box_region(box, eye);
+  if (region == 13) return nullptr;
+  const int flat_axes = int(box.min.x == box.max.x) + int(box.min.y == box.max.y) + int(box.min.z == box.max.z);
+  if (flat_axes == 0) return &box_outline_table[region];  // the common case
+  if (flat_axes >= 2) return nullptr;                      // a segment or a point: no area from anywhere
+  // A rectangle: only its own two faces have area. Seen from within its plane it has none;
+  // otherwise the outline is the one face on the eye's side, which the table holds in the region
+  // that is "within" on the two other axes (same face, same winding from that side).
+  const int axis = box.min.x == box.max.x ? 0 : (box.min.y == box.max.y ? 1 : 2);
+  const int digit = axis == 0 ? region % 3 : (axis == 1 ? (region / 3) % 3 : region / 9);
+  if (digit == 1) return nullptr;
+  constexpr int stride[3] = {1, 3, 9};
+  return &box_outline_table[13 + (digit - 1) * stride[axis]];
+}
+
+/// Corner `id` of `box` without branches (the ids come from the table, in no predictable order).
+[[nodiscard]] CULLKIT_FORCEINLINE glm::vec3 box_corner_select(const glm::vec3 (&min_max)[2], int id) noexcept {
+  return glm::vec3(min_max[id & 1].x, min_max[(id >> 1) & 1].y, min_max[(id >> 2) & 1].z);
+}
+
+}  // namespace detail
+
 /// Builds the proxy of `box` seen from `eye`: outline corners from the region table, and the
 /// closure planes (`front_faces`: the 1..3 front-face planes; `center_plane`: the seed's plane).
 /// Returns a proxy with `valid() == false` (corner_count 0) for the degenerate cases in the file
-/// comment. Cost: a handful of comparisons, a table read, 4-6 corner copies; no allocation.
+/// comment. Cost: a handful of comparisons, a table read, 4-6 corner copies, no data-dependent
+/// branches in the common case; no allocation.
 [[nodiscard]] inline BoxProxy make_box_proxy(const Aabb& box, const glm::vec3& eye,
                                              ProxyClosure closure = ProxyClosure::front_faces) noexcept {
   BoxProxy proxy;
   proxy.closure = closure;
-  const int region = box_region(box, eye);
-  proxy.region = region;
-  if (region == 13) return proxy;
+  const detail::BoxOutlineEntry* entry = detail::box_outline_entry(box, eye, proxy.region);
+  if (entry == nullptr) return proxy;
 
-  int digit[3] = {region % 3, (region / 3) % 3, region / 9};
-  int flat_axes = 0, flat_axis = -1;
-  for (int a = 0; a < 3; ++a) {
-    if (box.min[a] == box.max[a]) {
-      ++flat_axes;
-      flat_axis = a;
-    }
-  }
-  int lookup = region;
-  if (flat_axes >= 2) return proxy;  // a segment or a point: no area from anywhere
-  if (flat_axes == 1) {
-    // A rectangle: only its own two faces have area. Seen from its plane it has none; otherwise
-    // the outline is the one face on the eye's side, which the table has in the region that is
-    // "within" on the two other axes (same face, same winding from that side).
-    if (digit[flat_axis] == 1) return proxy;
-    for (int a = 0; a < 3; ++a) {
-      if (a != flat_axis) digit[a] = 1;
-    }
-    lookup = digit[0] + 3 * digit[1] + 9 * digit[2];
-  }
-
-  const detail::BoxOutlineEntry& entry = detail::box_outline_table[lookup];
-  proxy.corner_count = entry.corner_count;
-  for (int i = 0; i < entry.corner_count; ++i) proxy.corners[i] = corner(box, entry.corners[i]);
+  const glm::vec3 min_max[2] = {box.min, box.max};
+  proxy.corner_count = entry->corner_count;
+  for (int i = 0; i < 6; ++i) proxy.corners[i] = detail::box_corner_select(min_max, entry->corners[i]);
 
   if (closure == ProxyClosure::center_plane) {
     const glm::vec3 center = box.center();
@@ -139,13 +147,14 @@ struct BoxProxy {
     if (!is_valid(proxy.faces[0])) proxy.corner_count = 0;  // unreachable for an eye outside the box
     return proxy;
   }
-  proxy.face_count = entry.face_count;
-  for (int f = 0; f < entry.face_count; ++f) {
-    const int axis = entry.faces[f] >> 1;
-    const bool max_side = (entry.faces[f] & 1) != 0;
+  proxy.face_count = entry->face_count;
+  for (int f = 0; f < 3; ++f) {  // all three, unused ones as filler: no data-dependent trip count
+    const int axis = entry->faces[f] >> 1;
+    const int side = entry->faces[f] & 1;  // 1: the max face, its inward normal is -axis
+    const float sign = float(1 - 2 * side);
     glm::vec3 n(0.0f);
-    n[axis] = max_side ? -1.0f : 1.0f;  // into the box
-    proxy.faces[f] = Plane{n, max_side ? box.max[axis] : -box.min[axis]};
+    n[axis] = sign;
+    proxy.faces[f] = Plane{n, -sign * min_max[side][axis]};
     proxy.face_axis[f] = static_cast<std::uint8_t>(axis);
   }
   return proxy;
@@ -154,13 +163,16 @@ struct BoxProxy {
 /// The corners of the box's outline as seen from `eye` (4 or 6; faces seen exactly edge-on count
 /// as facing away), counter-clockwise as seen from the eye, written to `out[0..n)`; returns n, or 0
 /// if the eye is inside or on the box, the box or eye is invalid, or the box has no area as seen from
-/// the eye (see the file comment on flat boxes). Pre: `out` points to room for 6 corners.
-/// Cost: as `make_box_proxy`; no allocation.
+/// the eye (see the file comment on flat boxes). `out[n..6)` may be overwritten. Pre: `out` points
+/// to room for 6 corners. Cost: as `make_box_proxy` without the planes; no allocation.
 inline std::size_t box_silhouette(const Aabb& box, const glm::vec3& eye, glm::vec3 out[6]) noexcept {
   CULLKIT_ASSERT(out != nullptr, "box_silhouette: out must point to room for 6 corners");
-  const BoxProxy proxy = make_box_proxy(box, eye);
-  for (int i = 0; i < proxy.corner_count; ++i) out[i] = proxy.corners[i];
-  return proxy.corner_count;
+  int region = 13;
+  const detail::BoxOutlineEntry* entry = detail::box_outline_entry(box, eye, region);
+  if (entry == nullptr) return 0;
+  const glm::vec3 min_max[2] = {box.min, box.max};
+  for (int i = 0; i < 6; ++i) out[i] = detail::box_corner_select(min_max, entry->corners[i]);
+  return entry->corner_count;
 }
 
 /// The planes of the outline's beam: plane i passes through `eye`, corners[i] and corners[i+1]
