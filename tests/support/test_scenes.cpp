@@ -262,10 +262,89 @@ void test_city() {
               a.objects.size(), buildings.size(), big.triangle_count());
 }
 
+void test_obj_tiny() {
+  namespace fs = std::filesystem;
+  const fs::path path = fs::temp_directory_path() /
+                        ("cullkit_test_scenes_" + std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()) + ".obj");
+  {
+    std::ofstream f(path);
+    f << "# written by test_scenes\n"
+         "mtllib missing.mtl\n"
+         "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n"
+         "o quad\nusemtl nothing\nf 1 2 3 4\n"
+         "g tri_neg\nv 5 5 5\nf -2/1 -5 -4\n"    // relative: vertices 5, 2, 3 (1-based)
+         "o bad\nf 1 2 99\nf 1//1 2//1 3//1 4//1 5//1\n"  // one face out of range, one pentagon
+         "o empty\nf 1 2 77\n";
+  }
+  support::ObjLoadStats stats;
+  const auto loaded = support::load_obj(path.string(), &stats);
+  std::error_code ec;
+  fs::remove(path, ec);
+  CHECK(loaded.has_value());
+  if (!loaded) return;
+  const Scene& s = *loaded;
+  CHECK(validate(s) == 0);
+  CHECK(s.name == path.stem().string());
+  CHECK(s.positions.size() == 6);
+  CHECK_MSG(s.objects.size() == 3, "%zu objects", s.objects.size());
+  if (s.objects.size() != 3) return;
+  CHECK(s.objects[0].name == "quad" && s.objects[1].name == "tri_neg" && s.objects[2].name == "bad");
+  CHECK(s.objects[0].triangle_count == 2 && s.objects[1].triangle_count == 1 && s.objects[2].triangle_count == 3);
+  // Fans keep the file's winding: the quad faces +z.
+  const std::vector<std::uint32_t> want = {0, 1, 2, 0, 2, 3, 4, 1, 2, 0, 1, 2, 0, 2, 3, 0, 3, 4};
+  CHECK(s.indices == want);
+  CHECK(tri_normal(s, 0).z > 0 && tri_normal(s, 1).z > 0);
+  CHECK(same_box(s.objects[1].bounds, Aabb{{0, 0, 0}, {1, 1, 1}}));
+  CHECK(same_box(s.bounds, Aabb{{0, 0, 0}, {1, 1, 1}}));  // vertex 6 is used by no face
+  CHECK_MSG(stats.faces == 5 && stats.skipped_faces == 2 && stats.empty_shapes == 1 && stats.nonfinite_vertices == 0,
+            "faces %zu, skipped %zu, empty %zu, non-finite %zu", stats.faces, stats.skipped_faces, stats.empty_shapes,
+            stats.nonfinite_vertices);
+  CHECK(!support::load_obj((fs::temp_directory_path() / "cullkit_no_such_file.obj").string()).has_value());
+  CHECK(!support::load_obj(fs::temp_directory_path().string()).has_value());
+}
+
+void test_real_scenes() {
+  const std::string dir = support::scenes_dir();
+  if (dir.empty()) {
+    std::printf("real scenes: none (no scenes folder), skipped\n");
+    return;
+  }
+  // The README's triangle and object counts (the first two triangle counts are rounded there).
+  struct Expect {
+    const char* file;
+    double triangles, objects;
+  };
+  const Expect expect[] = {{"lasdunasarena.obj", 363000, 594}, {"oacmpdm9.obj", 35000, 10229},
+                           {"fzk_haus.obj", 35906, 294},       {"sportsCar.obj", 300603, 1075},
+                           {"stanford-bunny.obj", 69451, 1}};
+  const auto files = support::real_scene_files();
+  CHECK(!files.empty());
+  for (const std::string& file : files) {
+    support::ObjLoadStats stats;
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto scene = support::load_obj(dir + "/" + file, &stats);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    CHECK_MSG(scene.has_value(), "%s did not load", file.c_str());
+    if (!scene) continue;
+    CHECK(validate(*scene) == 0);
+    std::printf("real scene %s: %zu triangles, %zu objects, %zu vertices, %zu faces skipped, %zu empty groups (%.0f ms)\n",
+                file.c_str(), scene->triangle_count(), scene->objects.size(), scene->positions.size(),
+                stats.skipped_faces, stats.empty_shapes, ms);
+    for (const Expect& e : expect) {
+      if (file != e.file) continue;
+      const double t = double(scene->triangle_count()), o = double(scene->objects.size());
+      CHECK_MSG(std::fabs(t - e.triangles) <= 0.02 * e.triangles, "%s: %g triangles, README says %g", e.file, t, e.triangles);
+      CHECK_MSG(std::fabs(o - e.objects) <= 0.02 * e.objects + 1, "%s: %g objects, README says %g", e.file, o, e.objects);
+    }
+  }
+}
+
 }  // namespace
 
 int main() {
   test_add_helpers();
   test_city();
+  test_obj_tiny();
+  test_real_scenes();
   return cullkit_test::report("test_scenes");
 }

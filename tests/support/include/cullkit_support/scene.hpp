@@ -71,7 +71,7 @@ extern const std::uint32_t kBoxTriangleCorners[36];
 struct ObjLoadStats {
   std::size_t faces = 0;               ///< faces read (polygons, before triangulation)
   std::size_t skipped_faces = 0;       ///< faces with an index out of range or fewer than 3 corners
-  std::size_t nonfinite_vertices = 0;  ///< vertices with NaN/inf coordinates (kept; excluded from bounds)
+  std::size_t nonfinite_vertices = 0;  ///< vertices with NaN/inf coordinates (faces using them are skipped)
   std::size_t empty_shapes = 0;        ///< `o`/`g` groups without a triangle (no object made)
 };
 /// As `load_obj(path)`, and reports what was skipped in `stats` (may be null).
