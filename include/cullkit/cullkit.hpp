@@ -5,3 +5,4 @@
 #include "geometry.hpp"
 #include "traits.hpp"
 #include "box_proxy.hpp"
+#include "adaptive_binary_tree.hpp"

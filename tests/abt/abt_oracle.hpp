@@ -1,0 +1,197 @@
+// tests/abt/abt_oracle.hpp: brute-force frustum oracle for the AdaptiveBinaryTree tests, written
+// independently of cullkit::Frustum: planes straight from the matrix rows in double, not
+// normalized, corners tested one by one (all eight) in double.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/ext/matrix_clip_space.hpp>
+#include <glm/ext/matrix_transform.hpp>
+#include <glm/mat4x4.hpp>
+
+#include <cullkit/cullkit.hpp>
+#include <cullkit_support/scene.hpp>
+
+namespace abt_test {
+
+/// A view in world space: a matrix and its depth range.
+struct View {
+  glm::mat4 view_proj;
+  cullkit::DepthRange depth;
+  glm::vec3 eye;
+  const char* kind;
+};
+
+/// Frustum planes of a matrix, in double, unnormalized. Degenerate planes (the far plane of an
+/// infinite projection: a normal that is zero up to rounding) are dropped: they lie at infinity.
+class OracleFrustum {
+ public:
+  OracleFrustum(const glm::mat4& m4, cullkit::DepthRange depth) {
+    double m[4][4];
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) m[r][c] = double(m4[c][r]);
+    // clip = M p; the volume is -w <= x, y <= w and (-w or 0) <= z <= w.
+    auto add = [&](double sx, int rx, double sw) {  // plane: sw * row3 + sx * row(rx)
+      double p[4];
+      for (int k = 0; k < 4; ++k) p[k] = sw * m[3][k] + sx * m[rx][k];
+      const double len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+      const double scale = std::fabs(p[0]) + std::fabs(p[1]) + std::fabs(p[2]) + std::fabs(p[3]);
+      if (!(len > 1e-6 * scale)) return;
+      planes_.push_back({p[0], p[1], p[2], p[3]});
+    };
+    add(1, 0, 1);
+    add(-1, 0, 1);
+    add(1, 1, 1);
+    add(-1, 1, 1);
+    if (depth == cullkit::DepthRange::zero_to_one) add(1, 2, 0);
+    else add(1, 2, 1);
+    add(-1, 2, 1);
+  }
+
+  /// True unless all eight corners are strictly outside one plane.
+  [[nodiscard]] bool meets(const cullkit::Aabb& b) const {
+    for (const auto& p : planes_) {
+      bool all_out = true;
+      for (int c = 0; c < 8 && all_out; ++c) {
+        const double x = (c & 1) ? b.max.x : b.min.x, y = (c & 2) ? b.max.y : b.min.y,
+                     z = (c & 4) ? b.max.z : b.min.z;
+        if (p[0] * x + p[1] * y + p[2] * z + p[3] >= 0.0) all_out = false;
+      }
+      if (all_out) return false;
+    }
+    return true;
+  }
+
+ private:
+  std::vector<std::array<double, 4>> planes_;
+};
+
+/// A random view of a region: perspective (finite / infinite far, both depth ranges, reversed-Z)
+/// or orthographic (NO / ZO), kind chosen by `k % 7`.
+inline View random_view(cullkit::support::Rng& rng, const cullkit::Aabb& region, int k) {
+  using cullkit::DepthRange;
+  const glm::vec3 lo = region.min, hi = region.max;
+  const glm::vec3 size = glm::max(hi - lo, glm::vec3(1.0f));
+  auto point = [&](float margin) {
+    return glm::vec3(rng.uniform(lo.x - margin * size.x, hi.x + margin * size.x),
+                     rng.uniform(lo.y - margin * size.y, hi.y + margin * size.y),
+                     rng.uniform(lo.z - margin * size.z, hi.z + margin * size.z));
+  };
+  const glm::vec3 eye = point(0.3f);
+  glm::vec3 target = point(0.0f);
+  if (glm::length(target - eye) < 1e-3f * glm::length(size)) target = eye + glm::vec3(1, 0, 0);
+  const float diag = glm::length(size);
+  const float fov = rng.uniform(10.0f, 110.0f);
+  const float near_plane = rng.uniform(0.01f, 0.05f) * diag;
+  const float far_plane = rng.uniform(0.2f, 1.5f) * diag;
+  const int kind = k % 7;
+  View v{};
+  v.eye = eye;
+  if (kind < 5) {
+    static const DepthRange depths[5] = {DepthRange::negative_one_to_one, DepthRange::zero_to_one,
+                                         DepthRange::zero_to_one, DepthRange::negative_one_to_one,
+                                         DepthRange::zero_to_one};
+    static const char* names[5] = {"persp_no", "persp_zo", "persp_zo_reversed", "persp_no_infinite",
+                                   "persp_zo_reversed_infinite"};
+    const bool reversed = kind == 2 || kind == 4;
+    const bool infinite = kind == 3 || kind == 4;
+    const cullkit::Camera cam = cullkit::support::make_camera(eye, target, fov, 640, 480, near_plane,
+                                                              infinite ? 0.0f : far_plane, depths[kind], reversed);
+    v.view_proj = cam.view_proj;
+    v.depth = cam.depth;
+    v.kind = names[kind];
+  } else {
+    const glm::vec3 fwd = glm::normalize(target - eye);
+    const glm::vec3 up = std::fabs(fwd.y) > 0.999f ? glm::vec3(0, 0, -1) : glm::vec3(0, 1, 0);
+    const glm::mat4 view = glm::lookAtRH(eye, target, up);
+    const float half = rng.uniform(0.05f, 0.5f) * diag;
+    const float aspect = rng.uniform(0.5f, 2.0f);
+    if (kind == 5) {
+      v.view_proj = glm::orthoRH_NO(-half * aspect, half * aspect, -half, half, near_plane, far_plane) * view;
+      v.depth = DepthRange::negative_one_to_one;
+      v.kind = "ortho_no";
+    } else {
+      v.view_proj = glm::orthoRH_ZO(-half * aspect, half * aspect, -half, half, near_plane, far_plane) * view;
+      v.depth = DepthRange::zero_to_one;
+      v.kind = "ortho_zo";
+    }
+  }
+  return v;
+}
+
+/// Random boxes in a cube of side `world`, sizes up to `max_size`.
+inline std::vector<cullkit::Aabb> random_boxes(cullkit::support::Rng& rng, std::size_t n, float world, float max_size) {
+  std::vector<cullkit::Aabb> boxes(n);
+  for (auto& b : boxes) {
+    const glm::vec3 c(rng.uniform(-world, world), rng.uniform(-world, world), rng.uniform(-world, world));
+    const glm::vec3 h(rng.uniform(0.0f, max_size), rng.uniform(0.0f, max_size), rng.uniform(0.0f, max_size));
+    b = cullkit::Aabb{c - h, c + h};
+  }
+  return boxes;
+}
+
+/// A minimal OBJ reader (v and f lines, fan-triangulated, negative indices allowed) so these tests
+/// do not depend on the optional tinyobjloader path of cullkit_support. Objects are not split:
+/// `object_bounds` come from `o`/`g` groups of faces.
+struct ObjMesh {
+  std::vector<glm::vec3> positions;
+  std::vector<std::uint32_t> indices;
+  std::vector<cullkit::Aabb> object_bounds;
+  cullkit::Aabb bounds = cullkit::Aabb::empty();
+  [[nodiscard]] std::size_t triangle_count() const { return indices.size() / 3; }
+  [[nodiscard]] cullkit::MeshView<glm::vec3> mesh() const {
+    return {positions.data(), positions.size(), indices.data(), indices.size()};
+  }
+};
+
+inline std::optional<ObjMesh> read_obj(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return std::nullopt;
+  ObjMesh m;
+  char line[4096];
+  cullkit::Aabb current = cullkit::Aabb::empty();
+  auto close_object = [&] {
+    if (!cullkit::is_empty(current)) m.object_bounds.push_back(current);
+    current = cullkit::Aabb::empty();
+  };
+  while (std::fgets(line, sizeof line, f)) {
+    if (line[0] == 'v' && line[1] == ' ') {
+      float x = 0, y = 0, z = 0;
+      if (std::sscanf(line + 2, "%f %f %f", &x, &y, &z) == 3) m.positions.emplace_back(x, y, z);
+    } else if ((line[0] == 'o' || line[0] == 'g') && line[1] == ' ') {
+      close_object();
+    } else if (line[0] == 'f' && line[1] == ' ') {
+      std::vector<std::uint32_t> face;
+      char* s = line + 2;
+      for (;;) {
+        char* end = nullptr;
+        const long v = std::strtol(s, &end, 10);
+        if (end == s) break;
+        const long idx = v < 0 ? long(m.positions.size()) + v : v - 1;
+        if (idx >= 0 && idx < long(m.positions.size())) face.push_back(std::uint32_t(idx));
+        s = end;
+        while (*s && *s != ' ' && *s != '\t' && *s != '\n' && *s != '\r') ++s;  // skip /vt/vn
+        while (*s == ' ' || *s == '\t') ++s;
+      }
+      for (std::size_t k = 2; k < face.size(); ++k) {
+        for (std::uint32_t i : {face[0], face[k - 1], face[k]}) {
+          m.indices.push_back(i);
+          current = cullkit::merge(current, m.positions[i]);
+          m.bounds = cullkit::merge(m.bounds, m.positions[i]);
+        }
+      }
+    }
+  }
+  close_object();
+  std::fclose(f);
+  return m;
+}
+
+}  // namespace abt_test
