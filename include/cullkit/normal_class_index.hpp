@@ -1,0 +1,980 @@
+// cullkit/normal_class_index.hpp: NormalClassIndex, pixel-driven near-to-far selection of the
+// triangles a camera sees (seed: Wei, Wang, Wu, "Fast selecting visible surfaces in high
+// precision", Journal of Software 17(10), 2006; DESIGN.md §8 gives the corrected algorithm).
+//
+// Preprocess: triangle normals are clustered on the unit sphere (spherical k-means, fixed seed);
+// each class keeps its normal cone and three sparse grids over the scene box, one per axis
+// (slices -> rows -> cells as sorted coordinates in flat arrays; only non-empty cells exist; a
+// triangle is listed in every cell it really overlaps, by a separating-axis test on slightly
+// inflated cells).
+//
+// Select: the grid whose axis the view looks along most is walked slice by slice outward from the
+// eye (two walks when the eye is inside the scene box). The screen is cut into tiles; each tile
+// keeps its unfinished pixels, finds the cells of the current slice inside the beam of those
+// pixels' rays by binary search, skips classes whose cone faces away from every ray of the tile,
+// and tests the cells' triangles against the rays with a watertight front-face test at pixel
+// centres (each triangle once per tile). A pixel is finished once its nearest hit lies before the
+// point where its ray enters the next slice; a tile is finished when all its pixels are.
+//
+// Conservative by construction: every pixel's reported triangle is its true first hit under the
+// watertight test (ties broken by the lower triangle index), so the visible set contains the first
+// hit of every pixel centre. Rounding is absorbed by inflating cells and slice bounds.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <thread>
+#include <type_traits>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include "config.hpp"
+#include "geometry/aabb.hpp"
+#include "geometry/camera.hpp"
+#include "traits.hpp"
+#include "detail/nci_kmeans.hpp"
+#include "detail/nci_overlap.hpp"
+#include "detail/nci_watertight.hpp"
+
+namespace cullkit {
+
+/// Configuration of a NormalClassIndex. Every field has a usable default.
+struct NciParams {
+  /// Normal classes (k of the spherical k-means). More classes: tighter cones, so more classes are
+  /// skipped per tile, but more grids to search. The seed measures 32, 128 and 512. Clamped to
+  /// [1, 4096]; classes that end up empty are dropped.
+  int classes = 32;
+  /// Cells along the scene box's longest axis (cubic cells). Finer: fewer triangles tested per
+  /// pixel, more memory and more slices to walk. Clamped to [1, 4096].
+  int grid = 64;
+  /// Worker threads for select_visible; 0: all hardware threads. Never changes the result.
+  unsigned threads = 0;
+  /// Worker threads for the build (per class); 0: all hardware threads. Never changes the index.
+  unsigned build_threads = 0;
+  /// Screen tile edge in pixels, clamped to [2, 16]. Each tile walks the slices on its own.
+  int tile_size = 16;
+  /// Seed of the k-means (sampling and re-seeding of empty classes). Same seed, same index.
+  std::uint64_t seed = 0x6e63692d6b6dULL;
+  /// Optional build progress report, called from the building thread with a fraction in [0, 1]
+  /// (monotone, 1 at the end). `progress_user` is passed through. nullptr: no reports.
+  void (*progress)(float fraction, void* user) = nullptr;
+  /// Passed to `progress` unchanged.
+  void* progress_user = nullptr;
+};
+
+/// The result of NormalClassIndex::select_visible.
+struct VisibleSet {
+  std::vector<std::uint32_t> triangles;  ///< sorted, unique triangle indices (the mesh's numbering)
+  std::size_t triangles_tested = 0;      ///< distinct triangles tested against at least one ray
+};
+
+/// Optional per-pixel output of select_visible: row-major from the top row, as the pixel rule.
+struct NciPixels {
+  static constexpr std::uint32_t miss = 0xFFFFFFFFu;
+  int width = 0, height = 0;
+  std::vector<std::uint32_t> triangle;  ///< first-hit triangle (mesh numbering) or `miss`
+  std::vector<float> depth;             ///< ray parameter t along the unit pixel ray; +inf on a miss
+};
+
+/// Build statistics of a NormalClassIndex.
+struct NciStats {
+  std::size_t triangles_input = 0;       ///< index_count / 3
+  std::size_t triangles_indexed = 0;     ///< triangles kept
+  std::size_t skipped_out_of_range = 0;  ///< an index >= vertex_count (or negative)
+  std::size_t skipped_non_finite = 0;    ///< a NaN or infinite coordinate
+  std::size_t skipped_degenerate = 0;    ///< zero area (collinear or repeated corners)
+  std::size_t classes = 0;               ///< non-empty normal classes
+  std::size_t cells = 0;                 ///< non-empty (class, cell) pairs
+  std::size_t cell_entries = 0;          ///< triangle references over all cells
+  int dims[3] = {0, 0, 0};               ///< cells along x, y, z
+  double cell_size = 0;                  ///< edge of a (cubic) cell
+  double build_seconds = 0;              ///< wall time of the constructor
+};
+
+/// Per-call statistics of select_visible (filled into an NciContext).
+struct NciSelectStats {
+  std::size_t ray_tests = 0;       ///< ray/triangle tests performed
+  std::size_t cells_visited = 0;   ///< cells whose triangles were looked at
+  std::size_t slices_walked = 0;   ///< (tile, slice) steps
+  int axis = 0;                    ///< grid axis walked
+};
+
+/// Reusable scratch for select_visible: keeps per-thread buffers between frames so a frame does
+/// not allocate once the buffers have grown. One context per concurrent caller; not thread-safe.
+class NciContext {
+ public:
+  NciSelectStats stats;  ///< statistics of the last call that used this context
+
+ private:
+  template <class, class, class>
+  friend class NormalClassIndex;
+  struct Thread {
+    std::vector<std::uint32_t> stamp;   // per triangle: last tile that tested it
+    std::uint32_t stamp_value = 0;
+    std::vector<std::uint32_t> tested;  // triangles tested (unique per tile)
+    std::vector<std::uint16_t> active_classes;
+    NciSelectStats stats;
+  };
+  std::vector<Thread> threads_;
+  std::vector<std::uint32_t> pixel_tri_;  // internal ids per pixel
+  std::vector<float> pixel_t_;
+  std::vector<std::uint32_t> seen_;        // per triangle: epoch of last tested-count
+  std::vector<std::uint32_t> shown_;       // per triangle: epoch of last visible mark
+  std::uint32_t epoch_ = 0;
+};
+
+/// Index of a static triangle mesh that answers "which triangles does this camera see", with the
+/// exact per-pixel answer (first hit of each pixel-centre ray, front faces only).
+///
+/// Build cost: O(n log n) for n triangles plus the separating-axis tests of triangles spanning
+/// cells; memory is reported by memory_bytes() (vertices, triangle corners, cell lists, grids).
+/// The index copies what it needs: the mesh need not outlive it. Queries are const and may run
+/// concurrently, each with its own NciContext.
+template <class Vertex, class Index = std::uint32_t, class Traits = VertexTraits<Vertex>>
+class NormalClassIndex {
+  static_assert(require_vertex_traits<Vertex, Traits>::value, "");
+  static_assert(std::is_integral_v<Index>, "cullkit: NormalClassIndex needs an integral Index type");
+
+ public:
+  /// Builds the index. Triangles with an out-of-range index, a non-finite coordinate or zero area
+  /// are skipped and counted in stats(); an empty or all-invalid mesh gives an index that selects
+  /// nothing. pre: mesh.vertices != nullptr when vertex_count > 0, mesh.indices likewise.
+  explicit NormalClassIndex(MeshView<Vertex, Index> mesh, const NciParams& params = {}) : params_(params) {
+    CULLKIT_ASSERT(mesh.vertices != nullptr || mesh.vertex_count == 0, "vertices present when vertex_count > 0");
+    CULLKIT_ASSERT(mesh.indices != nullptr || mesh.index_count == 0, "indices present when index_count > 0");
+    params_.classes = std::clamp(params_.classes, 1, 4096);
+    params_.grid = std::clamp(params_.grid, 1, 4096);
+    params_.tile_size = std::clamp(params_.tile_size, 2, 16);
+    const auto t0 = std::chrono::steady_clock::now();
+    build(mesh);
+    stats_.build_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+
+  /// The triangles that are the first front-facing surface hit by the ray of some pixel centre
+  /// (pixel rule on Camera), sorted and unique, and how many distinct triangles were tested.
+  /// A camera with a non-positive width or height gives an empty set. Allocates a context.
+  [[nodiscard]] VisibleSet select_visible(const Camera& camera) const {
+    NciContext context;
+    VisibleSet out;
+    select_visible(camera, context, out, nullptr);
+    return out;
+  }
+
+  /// The same, reusing `context` (no allocation once its buffers have grown), writing `out`, and
+  /// when `pixels` is not null also the per-pixel first-hit triangle and depth. The result never
+  /// depends on NciParams::threads. Cost: proportional to the rays times the triangles met near
+  /// the visible surfaces, divided over the threads.
+  void select_visible(const Camera& camera, NciContext& context, VisibleSet& out, NciPixels* pixels) const {
+    out.triangles.clear();
+    out.triangles_tested = 0;
+    context.stats = NciSelectStats{};
+    const int width = camera.width, height = camera.height;
+    if (pixels) {
+      pixels->width = std::max(0, width);
+      pixels->height = std::max(0, height);
+      pixels->triangle.clear();
+      pixels->depth.clear();
+    }
+    if (width <= 0 || height <= 0) return;
+    const std::size_t pixel_count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    context.pixel_tri_.assign(pixel_count, none_);
+    context.pixel_t_.assign(pixel_count, std::numeric_limits<float>::infinity());
+    if (triangle_count() > 0) {
+      Frame frame = make_frame(camera);
+      context.stats.axis = frame.axis;
+      const int tile = params_.tile_size;
+      const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
+      const std::size_t tile_count = static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y);
+      unsigned thread_count = params_.threads ? params_.threads : std::thread::hardware_concurrency();
+      thread_count = std::max(1u, std::min<unsigned>(thread_count, static_cast<unsigned>(std::min<std::size_t>(tile_count, 1024))));
+      if (context.threads_.size() < thread_count) context.threads_.resize(thread_count);
+      for (unsigned i = 0; i < thread_count; ++i) {
+        auto& th = context.threads_[i];
+        if (th.stamp.size() != triangle_count()) {
+          th.stamp.assign(triangle_count(), 0u);
+          th.stamp_value = 0;
+        }
+        th.tested.clear();
+        th.stats = NciSelectStats{};
+      }
+      std::atomic<std::size_t> next{0};
+      auto work = [&](unsigned index) {
+        auto& th = context.threads_[index];
+        for (;;) {
+          const std::size_t t = next.fetch_add(1, std::memory_order_relaxed);
+          if (t >= tile_count) break;
+          const int tx = static_cast<int>(t % static_cast<std::size_t>(tiles_x));
+          const int ty = static_cast<int>(t / static_cast<std::size_t>(tiles_x));
+          process_tile(frame, tx * tile, ty * tile, std::min(width, (tx + 1) * tile),
+                       std::min(height, (ty + 1) * tile), th, context);
+        }
+      };
+      if (thread_count == 1) {
+        work(0);
+      } else {
+        std::vector<std::thread> workers;
+        workers.reserve(thread_count - 1);
+        for (unsigned i = 1; i < thread_count; ++i) workers.emplace_back(work, i);
+        work(0);
+        for (auto& w : workers) w.join();
+      }
+      // Merge: distinct tested triangles and the visible set.
+      if (context.seen_.size() != triangle_count()) {
+        context.seen_.assign(triangle_count(), 0u);
+        context.shown_.assign(triangle_count(), 0u);
+        context.epoch_ = 0;
+      }
+      if (++context.epoch_ == 0) {
+        std::fill(context.seen_.begin(), context.seen_.end(), 0u);
+        std::fill(context.shown_.begin(), context.shown_.end(), 0u);
+        context.epoch_ = 1;
+      }
+      const std::uint32_t epoch = context.epoch_;
+      for (unsigned i = 0; i < thread_count; ++i) {
+        const auto& th = context.threads_[i];
+        for (std::uint32_t tri : th.tested) {
+          if (context.seen_[tri] != epoch) {
+            context.seen_[tri] = epoch;
+            ++out.triangles_tested;
+          }
+        }
+        context.stats.ray_tests += th.stats.ray_tests;
+        context.stats.cells_visited += th.stats.cells_visited;
+        context.stats.slices_walked += th.stats.slices_walked;
+      }
+      for (std::uint32_t tri : context.pixel_tri_) {
+        if (tri != none_ && context.shown_[tri] != epoch) {
+          context.shown_[tri] = epoch;
+          out.triangles.push_back(tri_original_[tri]);
+        }
+      }
+      std::sort(out.triangles.begin(), out.triangles.end());
+    }
+    if (pixels) {
+      pixels->triangle.resize(pixel_count);
+      pixels->depth.resize(pixel_count);
+      for (std::size_t i = 0; i < pixel_count; ++i) {
+        const std::uint32_t tri = context.pixel_tri_[i];
+        pixels->triangle[i] = tri == none_ ? NciPixels::miss : tri_original_[tri];
+        pixels->depth[i] = context.pixel_t_[i];
+      }
+    }
+  }
+
+  /// Build statistics (skipped triangles, classes, cells, build time).
+  [[nodiscard]] const NciStats& stats() const noexcept { return stats_; }
+  /// Bytes held by the index (capacity of every array).
+  [[nodiscard]] std::size_t memory_bytes() const noexcept {
+    return sizeof(*this) + bytes(vertices_) + bytes(tri_vertices_) + bytes(tri_original_) + bytes(class_axis_) +
+           bytes(class_sin_) + bytes(class_cos_) + bytes(cell_tri_begin_) + bytes(cell_tris_) + bytes(grid_base_) +
+           bytes(slice_rows_) + bytes(row_coord_) + bytes(row_begin_) + bytes(cell_col_) + bytes(cell_id_) +
+           bytes(class_of_);
+  }
+  /// Triangles kept by the build.
+  [[nodiscard]] std::size_t triangle_count() const noexcept { return tri_original_.size(); }
+  /// Normal class of a kept triangle, by the mesh's numbering; -1 for a skipped triangle.
+  [[nodiscard]] int triangle_class(std::uint32_t mesh_triangle) const noexcept {
+    const auto it = std::lower_bound(tri_original_.begin(), tri_original_.end(), mesh_triangle);
+    if (it == tri_original_.end() || *it != mesh_triangle) return -1;
+    return static_cast<int>(class_of_[static_cast<std::size_t>(it - tri_original_.begin())]);
+  }
+  /// Number of (non-empty) normal classes.
+  [[nodiscard]] std::size_t class_count() const noexcept { return class_axis_.size(); }
+  /// The parameters in use (after clamping).
+  [[nodiscard]] const NciParams& params() const noexcept { return params_; }
+  /// The scene box (of the kept triangles); Aabb::empty() when nothing was kept.
+  [[nodiscard]] Aabb bounds() const noexcept { return box_; }
+
+ private:
+  static constexpr std::uint32_t none_ = 0xFFFFFFFFu;
+
+  template <class T>
+  static std::size_t bytes(const std::vector<T>& v) noexcept {
+    return v.capacity() * sizeof(T);
+  }
+
+  // ---------------------------------------------------------------- build
+  void report(float f) const {
+    if (params_.progress) params_.progress(f, params_.progress_user);
+  }
+
+  void build(const MeshView<Vertex, Index>& mesh) {
+    stats_.triangles_input = mesh.triangle_count();
+    report(0.0f);
+    // 1. Valid triangles, their vertices (deduplicated through a remap) and normals.
+    std::vector<std::uint32_t> remap;
+    std::vector<glm::vec3> normals;
+    for (std::size_t t = 0; t < stats_.triangles_input; ++t) {
+      std::size_t idx[3];
+      bool in_range = true;
+      for (int k = 0; k < 3; ++k) {
+        const auto i = mesh.indices[3 * t + static_cast<std::size_t>(k)];
+        if constexpr (std::is_signed_v<Index>) {
+          if (i < 0) in_range = false;
+        }
+        idx[k] = static_cast<std::size_t>(i);
+        if (!in_range || idx[k] >= mesh.vertex_count) in_range = false;
+      }
+      if (!in_range) {
+        ++stats_.skipped_out_of_range;
+        continue;
+      }
+      glm::vec3 p[3];
+      bool finite = true;
+      for (int k = 0; k < 3; ++k) {
+        p[k] = glm::vec3(Traits::position(mesh.vertices[idx[k]]));
+        finite = finite && std::isfinite(p[k].x) && std::isfinite(p[k].y) && std::isfinite(p[k].z);
+      }
+      if (!finite) {
+        ++stats_.skipped_non_finite;
+        continue;
+      }
+      const glm::dvec3 e1 = glm::dvec3(p[1]) - glm::dvec3(p[0]);
+      const glm::dvec3 e2 = glm::dvec3(p[2]) - glm::dvec3(p[0]);
+      const glm::dvec3 n = glm::cross(e1, e2);
+      const double len = glm::length(n);
+      if (!(len > 0.0) || !std::isfinite(len)) {
+        ++stats_.skipped_degenerate;
+        continue;
+      }
+      if (remap.empty()) remap.assign(mesh.vertex_count, none_);
+      for (int k = 0; k < 3; ++k) {
+        std::uint32_t& r = remap[idx[k]];
+        if (r == none_) {
+          r = static_cast<std::uint32_t>(vertices_.size());
+          vertices_.push_back(p[k]);
+        }
+        tri_vertices_.push_back(r);
+      }
+      tri_original_.push_back(static_cast<std::uint32_t>(t));
+      normals.push_back(glm::vec3(n / len));
+      box_ = merge(box_, p[0]);
+      box_ = merge(box_, p[1]);
+      box_ = merge(box_, p[2]);
+    }
+    remap.clear();
+    remap.shrink_to_fit();
+    stats_.triangles_indexed = tri_original_.size();
+    const std::size_t n = tri_original_.size();
+    report(0.1f);
+    if (n == 0) {
+      report(1.0f);
+      return;
+    }
+
+    // 2. The grid: cubic cells, `grid` along the longest axis.
+    const glm::dvec3 lo(box_.min), hi(box_.max);
+    const glm::dvec3 ext = hi - lo;
+    const double longest = std::max({ext.x, ext.y, ext.z});
+    h_ = longest > 0 ? longest / params_.grid : 1.0;
+    for (int a = 0; a < 3; ++a) {
+      int d = std::max(1, static_cast<int>(std::ceil(ext[a] / h_)));
+      while (lo[a] + d * h_ < hi[a]) ++d;
+      dims_[a] = std::min(d, 65535);
+      stats_.dims[a] = dims_[a];
+    }
+    stats_.cell_size = h_;
+    lo_ = lo;
+    const double max_abs = std::max({std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z), std::fabs(hi.x),
+                                     std::fabs(hi.y), std::fabs(hi.z)});
+    delta_ = std::max(1e-3 * h_, 64.0 * double(std::numeric_limits<float>::epsilon()) * max_abs);
+
+    // 3. Normal classes.
+    detail::cluster_normals(normals, params_.classes, params_.seed, class_of_, class_axis_);
+    const std::size_t classes = class_axis_.size();
+    stats_.classes = classes;
+    {
+      // Recompute each axis as the mean of its members and measure the cone around it.
+      std::vector<glm::dvec3> sum(classes, glm::dvec3(0.0));
+      for (std::size_t i = 0; i < n; ++i) sum[class_of_[i]] += glm::dvec3(normals[i]);
+      for (std::size_t c = 0; c < classes; ++c) {
+        const double len = glm::length(sum[c]);
+        if (len > 1e-9) class_axis_[c] = glm::vec3(sum[c] / len);
+      }
+      std::vector<double> min_dot(classes, 1.0);
+      for (std::size_t i = 0; i < n; ++i) {
+        const double d = glm::dot(glm::dvec3(normals[i]), glm::dvec3(class_axis_[class_of_[i]]));
+        min_dot[class_of_[i]] = std::min(min_dot[class_of_[i]], d);
+      }
+      class_sin_.resize(classes);
+      class_cos_.resize(classes);
+      for (std::size_t c = 0; c < classes; ++c) {
+        // Half-angle plus a margin for the float normals and the float ray test.
+        const double angle = std::acos(std::clamp(min_dot[c], -1.0, 1.0)) + 2e-3;
+        if (angle >= 1.5707963267948966) {
+          class_sin_[c] = 2.0f;  // never skipped
+          class_cos_[c] = 0.0f;
+        } else {
+          class_sin_[c] = static_cast<float>(std::sin(angle));
+          class_cos_[c] = static_cast<float>(std::cos(angle));
+        }
+      }
+    }
+    normals.clear();
+    normals.shrink_to_fit();
+    report(0.2f);
+
+    // 4. Per class: cells by separating axes, then the three grids. Classes in parallel, merged in
+    // class order so the index does not depend on the thread count.
+    std::vector<std::uint32_t> class_begin(classes + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++class_begin[class_of_[i] + 1];
+    for (std::size_t c = 0; c < classes; ++c) class_begin[c + 1] += class_begin[c];
+    std::vector<std::uint32_t> by_class(n);
+    {
+      std::vector<std::uint32_t> fill(class_begin.begin(), class_begin.end() - 1);
+      for (std::size_t i = 0; i < n; ++i) by_class[fill[class_of_[i]]++] = static_cast<std::uint32_t>(i);
+    }
+    std::vector<ClassGrids> parts(classes);
+    std::atomic<std::size_t> next{0}, done{0};
+    unsigned build_threads = params_.build_threads ? params_.build_threads : std::thread::hardware_concurrency();
+    build_threads = std::max(1u, std::min<unsigned>(build_threads, static_cast<unsigned>(std::min<std::size_t>(classes, 64))));
+    auto work = [&](bool reporter) {
+      for (;;) {
+        const std::size_t c = next.fetch_add(1, std::memory_order_relaxed);
+        if (c >= classes) break;
+        build_class(by_class.data() + class_begin[c], class_begin[c + 1] - class_begin[c], parts[c]);
+        const std::size_t d = done.fetch_add(1) + 1;
+        if (reporter) report(0.2f + 0.7f * static_cast<float>(d) / static_cast<float>(classes));
+      }
+    };
+    if (build_threads == 1) {
+      work(true);
+    } else {
+      std::vector<std::thread> workers;
+      for (unsigned i = 1; i < build_threads; ++i) workers.emplace_back(work, false);
+      work(true);
+      for (auto& w : workers) w.join();
+    }
+
+    // 5. Merge into flat arrays.
+    std::size_t total_cells = 0, total_entries = 0, total_rows = 0, total_grid_cells = 0, total_slices = 0;
+    for (const auto& p : parts) {
+      total_cells += p.cell_tri_begin.size() - 1;
+      total_entries += p.cell_tris.size();
+      for (int a = 0; a < 3; ++a) {
+        total_rows += p.row_coord[a].size();
+        total_grid_cells += p.cell_col[a].size();
+        total_slices += p.slice_rows[a].size();
+      }
+    }
+    stats_.cells = total_cells;
+    stats_.cell_entries = total_entries;
+    cell_tri_begin_.reserve(total_cells + 1);
+    cell_tris_.reserve(total_entries);
+    slice_rows_.reserve(total_slices);
+    row_coord_.reserve(total_rows);
+    row_begin_.reserve(total_rows + 1);
+    cell_col_.reserve(total_grid_cells);
+    cell_id_.reserve(total_grid_cells);
+    grid_base_.reserve(classes * 3);
+    cell_tri_begin_.push_back(0);
+    for (std::size_t c = 0; c < classes; ++c) {
+      auto& p = parts[c];
+      const std::uint32_t cell_base = static_cast<std::uint32_t>(cell_tri_begin_.size() - 1);
+      const std::uint32_t entry_base = static_cast<std::uint32_t>(cell_tris_.size());
+      for (std::size_t k = 1; k < p.cell_tri_begin.size(); ++k) cell_tri_begin_.push_back(entry_base + p.cell_tri_begin[k]);
+      cell_tris_.insert(cell_tris_.end(), p.cell_tris.begin(), p.cell_tris.end());
+      for (int a = 0; a < 3; ++a) {
+        grid_base_.push_back(static_cast<std::uint32_t>(slice_rows_.size()));
+        const std::uint32_t row_base = static_cast<std::uint32_t>(row_coord_.size());
+        const std::uint32_t col_base = static_cast<std::uint32_t>(cell_col_.size());
+        for (std::uint32_t s : p.slice_rows[a]) slice_rows_.push_back(row_base + s);
+        row_coord_.insert(row_coord_.end(), p.row_coord[a].begin(), p.row_coord[a].end());
+        for (std::uint32_t b : p.row_begin[a]) row_begin_.push_back(col_base + b);
+        cell_col_.insert(cell_col_.end(), p.cell_col[a].begin(), p.cell_col[a].end());
+        for (std::uint32_t id : p.cell_id[a]) cell_id_.push_back(cell_base + id);
+      }
+      p = ClassGrids{};
+    }
+    row_begin_.push_back(static_cast<std::uint32_t>(cell_col_.size()));
+    report(1.0f);
+  }
+
+  // One class's cells and grids, with offsets local to the class.
+  struct ClassGrids {
+    std::vector<std::uint32_t> cell_tri_begin{0};
+    std::vector<std::uint32_t> cell_tris;
+    std::vector<std::uint32_t> slice_rows[3];  // dims[a] + 1 entries: row ranges per slice
+    std::vector<std::uint16_t> row_coord[3];
+    std::vector<std::uint32_t> row_begin[3];   // one per row (no sentinel; the next row's begin ends it)
+    std::vector<std::uint16_t> cell_col[3];
+    std::vector<std::uint32_t> cell_id[3];
+  };
+
+  [[nodiscard]] int cell_of(double x, int a) const noexcept {
+    const double f = std::floor((x - lo_[a]) / h_);
+    if (!(f >= 0.0)) return 0;
+    if (f >= dims_[a] - 1) return dims_[a] - 1;
+    return static_cast<int>(f);
+  }
+
+  void build_class(const std::uint32_t* tris, std::size_t count, ClassGrids& out) const {
+    struct Pair {
+      std::uint64_t key;
+      std::uint32_t tri;
+    };
+    std::vector<Pair> pairs;
+    pairs.reserve(count + count / 2);
+    const std::uint64_t ny = static_cast<std::uint64_t>(dims_[1]), nz = static_cast<std::uint64_t>(dims_[2]);
+    const double half[3] = {0.5 * h_ + delta_, 0.5 * h_ + delta_, 0.5 * h_ + delta_};
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::uint32_t tri = tris[i];
+      double v[3][3];
+      double mn[3], mx[3];
+      for (int k = 0; k < 3; ++k) {
+        const glm::vec3& p = vertices_[tri_vertices_[3 * tri + static_cast<std::uint32_t>(k)]];
+        for (int a = 0; a < 3; ++a) v[k][a] = p[a];
+      }
+      int c0[3], c1[3];
+      for (int a = 0; a < 3; ++a) {
+        mn[a] = std::min({v[0][a], v[1][a], v[2][a]});
+        mx[a] = std::max({v[0][a], v[1][a], v[2][a]});
+        c0[a] = cell_of(mn[a] - delta_, a);
+        c1[a] = cell_of(mx[a] + delta_, a);
+      }
+      const bool single = c0[0] == c1[0] && c0[1] == c1[1] && c0[2] == c1[2];
+      for (int x = c0[0]; x <= c1[0]; ++x) {
+        for (int y = c0[1]; y <= c1[1]; ++y) {
+          for (int z = c0[2]; z <= c1[2]; ++z) {
+            if (!single) {
+              const double center[3] = {lo_[0] + (x + 0.5) * h_, lo_[1] + (y + 0.5) * h_, lo_[2] + (z + 0.5) * h_};
+              if (!detail::triangle_box_overlap(center, half, v)) continue;
+            }
+            const std::uint64_t key = (static_cast<std::uint64_t>(x) * ny + static_cast<std::uint64_t>(y)) * nz +
+                                      static_cast<std::uint64_t>(z);
+            pairs.push_back(Pair{key, tri});
+          }
+        }
+      }
+    }
+    std::sort(pairs.begin(), pairs.end(),
+              [](const Pair& a, const Pair& b) { return a.key != b.key ? a.key < b.key : a.tri < b.tri; });
+    // Cells in (x, y, z) order.
+    std::vector<std::uint64_t> cell_key;
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      if (i == 0 || pairs[i].key != pairs[i - 1].key) {
+        if (i > 0) out.cell_tri_begin.push_back(static_cast<std::uint32_t>(out.cell_tris.size()));
+        cell_key.push_back(pairs[i].key);
+      }
+      out.cell_tris.push_back(pairs[i].tri);
+    }
+    if (!pairs.empty()) out.cell_tri_begin.push_back(static_cast<std::uint32_t>(out.cell_tris.size()));
+    pairs.clear();
+    pairs.shrink_to_fit();
+    const std::size_t cells = cell_key.size();
+    std::vector<std::array<std::uint16_t, 3>> coord(cells);
+    for (std::size_t i = 0; i < cells; ++i) {
+      const std::uint64_t k = cell_key[i];
+      coord[i][2] = static_cast<std::uint16_t>(k % nz);
+      coord[i][1] = static_cast<std::uint16_t>((k / nz) % ny);
+      coord[i][0] = static_cast<std::uint16_t>(k / nz / ny);
+    }
+    std::vector<std::uint32_t> order(cells);
+    for (int a = 0; a < 3; ++a) {
+      const int b = (a + 1) % 3, c = (a + 2) % 3;
+      for (std::size_t i = 0; i < cells; ++i) order[i] = static_cast<std::uint32_t>(i);
+      if (a != 0) {
+        std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
+          const auto& u = coord[p];
+          const auto& w = coord[q];
+          if (u[a] != w[a]) return u[a] < w[a];
+          if (u[b] != w[b]) return u[b] < w[b];
+          return u[c] < w[c];
+        });
+      }
+      auto& slice_rows = out.slice_rows[a];
+      slice_rows.assign(static_cast<std::size_t>(dims_[a]) + 1, 0u);
+      std::size_t i = 0;
+      for (int s = 0; s < dims_[a]; ++s) {
+        slice_rows[static_cast<std::size_t>(s)] = static_cast<std::uint32_t>(out.row_coord[a].size());
+        while (i < cells && coord[order[i]][a] == s) {
+          const std::uint16_t row = coord[order[i]][b];
+          out.row_coord[a].push_back(row);
+          out.row_begin[a].push_back(static_cast<std::uint32_t>(out.cell_col[a].size()));
+          while (i < cells && coord[order[i]][a] == s && coord[order[i]][b] == row) {
+            out.cell_col[a].push_back(coord[order[i]][c]);
+            out.cell_id[a].push_back(order[i]);
+            ++i;
+          }
+        }
+      }
+      slice_rows[static_cast<std::size_t>(dims_[a])] = static_cast<std::uint32_t>(out.row_coord[a].size());
+    }
+  }
+
+  // ---------------------------------------------------------------- select
+  struct Frame {
+    PixelRays rays;
+    glm::dvec3 eye;
+    glm::vec3 eye_f;
+    int axis = 2;
+    glm::dmat4 view_proj;
+    bool use_rect = false;   // screen rectangles of triangles may prune rays
+    double rect_min_distance = 0;  // ... only for triangles whose corners are at least this far
+    int width = 0, height = 0;
+  };
+
+  [[nodiscard]] Frame make_frame(const Camera& camera) const {
+    Frame f{PixelRays(camera), glm::dvec3(camera.eye), camera.eye, 2, glm::dmat4(camera.view_proj), false, 0.0,
+            camera.width, camera.height};
+    const Ray center = f.rays.ray_at(0.5 * camera.width, 0.5 * camera.height);
+    const glm::vec3 d = center.direction;
+    const float ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
+    f.axis = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
+    // The centre of projection C solves rows x, y, w of view_proj at (C, 1) = 0. Screen rectangles
+    // are used only when C is (nearly) the eye; triangles closer to the eye than 1e4 |C - eye| are
+    // tested against every ray of the tile, so the parallax stays far below a pixel.
+    const glm::dmat4& m = f.view_proj;
+    double A[3][3], rhs[3];
+    const int rows[3] = {0, 1, 3};
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) A[i][j] = m[j][rows[i]];
+      rhs[i] = -m[3][rows[i]];
+    }
+    const double det = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
+                       A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+                       A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
+    if (std::isfinite(det) && det != 0.0) {
+      glm::dvec3 c;
+      for (int k = 0; k < 3; ++k) {
+        double B[3][3];
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) B[i][j] = j == k ? rhs[i] : A[i][j];
+        c[k] = (B[0][0] * (B[1][1] * B[2][2] - B[1][2] * B[2][1]) - B[0][1] * (B[1][0] * B[2][2] - B[1][2] * B[2][0]) +
+                B[0][2] * (B[1][0] * B[2][1] - B[1][1] * B[2][0])) /
+               det;
+      }
+      const double off = glm::length(c - f.eye);
+      if (std::isfinite(off)) {
+        f.use_rect = true;
+        f.rect_min_distance = 1e4 * off + 1e-30;
+      }
+    }
+    return f;
+  }
+
+  struct TileRays {
+    glm::vec3 dir[256];
+    detail::WatertightRay<float> wray[256];
+    float best_t[256];
+    std::uint32_t best[256];
+    float slope_b[256], slope_c[256];
+    bool flat[256];
+  };
+
+  // Tests `tri` against the unfinished rays of the tile inside its screen rectangle.
+  void test_triangle(const Frame& f, std::uint32_t tri, int x0, int y0, int tw, int th, const std::uint16_t* live,
+                     TileRays& r, NciContext::Thread& thread) const {
+    const glm::vec3& p0 = vertices_[tri_vertices_[3 * tri]];
+    const glm::vec3& p1 = vertices_[tri_vertices_[3 * tri + 1]];
+    const glm::vec3& p2 = vertices_[tri_vertices_[3 * tri + 2]];
+    int rx0 = 0, ry0 = 0, rx1 = tw - 1, ry1 = th - 1;
+    if (f.use_rect) {
+      const glm::vec3* p[3] = {&p0, &p1, &p2};
+      bool ok = true;
+      double mnx = std::numeric_limits<double>::infinity(), mny = mnx, mxx = -mnx, mxy = -mnx;
+      for (int k = 0; k < 3 && ok; ++k) {
+        const glm::dvec4 q(glm::dvec3(*p[k]), 1.0);
+        if (!(glm::length(glm::dvec3(*p[k]) - f.eye) > f.rect_min_distance)) {
+          ok = false;
+          break;
+        }
+        const glm::dvec4 c = f.view_proj * q;
+        if (!(c.w > 0.0)) {
+          ok = false;
+          break;
+        }
+        // Pixel-centre coordinates: pixel i has ndc (2i + 1) / width - 1.
+        const double px = ((c.x / c.w + 1.0) * f.width - 1.0) * 0.5;
+        const double py = ((1.0 - c.y / c.w) * f.height - 1.0) * 0.5;
+        mnx = std::min(mnx, px);
+        mxx = std::max(mxx, px);
+        mny = std::min(mny, py);
+        mxy = std::max(mxy, py);
+      }
+      if (ok && std::isfinite(mnx) && std::isfinite(mxx) && std::isfinite(mny) && std::isfinite(mxy)) {
+        const double lx0 = std::floor(mnx) - 2.0 - x0, lx1 = std::ceil(mxx) + 2.0 - x0;
+        const double ly0 = std::floor(mny) - 2.0 - y0, ly1 = std::ceil(mxy) + 2.0 - y0;
+        if (lx1 < 0.0 || ly1 < 0.0 || lx0 > tw - 1 || ly0 > th - 1) return;
+        rx0 = std::max(rx0, static_cast<int>(lx0));
+        rx1 = std::min(rx1, static_cast<int>(lx1));
+        ry0 = std::max(ry0, static_cast<int>(ly0));
+        ry1 = std::min(ry1, static_cast<int>(ly1));
+      }
+    }
+    const float a[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};
+    const float b[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
+    const float c[3] = {p2.x - f.eye_f.x, p2.y - f.eye_f.y, p2.z - f.eye_f.z};
+    const std::uint32_t span = ((1u << (rx1 - rx0 + 1)) - 1u) << rx0;
+    for (int y = ry0; y <= ry1; ++y) {
+      std::uint32_t bits = live[y] & span;
+      while (bits) {
+        const int x = __builtin_ctz(bits);
+        bits &= bits - 1;
+        const int i = y * 16 + x;
+        ++thread.stats.ray_tests;
+        float t;
+        if (detail::watertight_hit(r.wray[i], a, b, c, t)) {
+          if (t < r.best_t[i] || (t == r.best_t[i] && tri < r.best[i])) {
+            r.best_t[i] = t;
+            r.best[i] = tri;
+          }
+        }
+      }
+    }
+  }
+
+  void process_tile(const Frame& f, int x0, int y0, int x1, int y1, NciContext::Thread& thread,
+                    NciContext& context) const {
+    TileRays r;
+    const int tw = x1 - x0, th = y1 - y0;
+    const int a = f.axis, b = (a + 1) % 3, c = (a + 2) % 3;
+    std::uint16_t live[16] = {};  // unfinished rays, both walks
+    std::uint16_t walk_mask[2][16] = {};  // [0]: toward +axis (and flat), [1]: toward -axis
+    const glm::dvec3 blo = glm::dvec3(box_.min) - delta_, bhi = glm::dvec3(box_.max) + delta_;
+    glm::dvec3 cone_sum(0.0);
+    for (int y = 0; y < th; ++y) {
+      for (int x = 0; x < tw; ++x) {
+        const int i = y * 16 + x;
+        const Ray ray = f.rays.ray(x0 + x, y0 + y);
+        r.dir[i] = ray.direction;
+        r.wray[i] = detail::WatertightRay<float>::make(ray.direction);
+        r.best_t[i] = std::numeric_limits<float>::infinity();
+        r.best[i] = none_;
+        if (!r.wray[i].valid) continue;
+        // Does the ray reach the (inflated) scene box at all?
+        const glm::dvec3 d(ray.direction);
+        double tmin = 0.0, tmax = std::numeric_limits<double>::infinity();
+        bool hit = true;
+        for (int k = 0; k < 3 && hit; ++k) {
+          if (d[k] == 0.0) {
+            if (f.eye[k] < blo[k] || f.eye[k] > bhi[k]) hit = false;
+            continue;
+          }
+          double t0 = (blo[k] - f.eye[k]) / d[k], t1 = (bhi[k] - f.eye[k]) / d[k];
+          if (t0 > t1) std::swap(t0, t1);
+          tmin = std::max(tmin, t0 - 1e-9 * std::fabs(t0));
+          tmax = std::min(tmax, t1 + 1e-9 * std::fabs(t1));
+          if (tmin > tmax) hit = false;
+        }
+        if (!hit) continue;
+        const double da = d[a];
+        r.flat[i] = std::fabs(da) < 1e-6;
+        r.slope_b[i] = r.flat[i] ? 0.0f : static_cast<float>(d[b] / da);
+        r.slope_c[i] = r.flat[i] ? 0.0f : static_cast<float>(d[c] / da);
+        live[y] = static_cast<std::uint16_t>(live[y] | (1u << x));
+        walk_mask[da >= 0.0 ? 0 : 1][y] = static_cast<std::uint16_t>(walk_mask[da >= 0.0 ? 0 : 1][y] | (1u << x));
+        cone_sum += d;
+      }
+    }
+    bool any = false;
+    for (int y = 0; y < th; ++y) any = any || live[y] != 0;
+    if (!any) {
+      write_tile(f, r, x0, y0, tw, th, context);
+      return;
+    }
+
+    // Classes that may face some ray of the tile: skip a class only when every normal of its cone
+    // and every live ray direction make an angle below 90 degrees (a back face for all of them).
+    auto& active = thread.active_classes;
+    active.clear();
+    {
+      const double len = glm::length(cone_sum);
+      double cos_psi = -1.0;
+      glm::dvec3 axis(0.0);
+      if (len > 1e-12) {
+        axis = cone_sum / len;
+        cos_psi = 1.0;
+        for (int y = 0; y < th; ++y)
+          for (int x = 0; x < tw; ++x)
+            if (live[y] & (1u << x)) cos_psi = std::min(cos_psi, glm::dot(axis, glm::dvec3(r.dir[y * 16 + x])));
+      }
+      const double psi = std::acos(std::clamp(cos_psi, -1.0, 1.0)) + 2e-3;
+      const bool can_skip = psi < 1.5707963267948966;
+      const double sp = std::sin(psi), cp = std::cos(psi);
+      for (std::size_t k = 0; k < class_axis_.size(); ++k) {
+        bool skip = false;
+        if (can_skip && class_sin_[k] <= 1.0f) {
+          // angle(axis_k, tile axis) < 90 - theta - psi  <=>  dot > sin(theta + psi), if theta + psi < 90.
+          const double st = class_sin_[k], ct = class_cos_[k];
+          const double cos_sum = ct * cp - st * sp;  // cos(theta + psi)
+          if (cos_sum > 0.0) {
+            const double sin_sum = st * cp + ct * sp;
+            skip = glm::dot(glm::dvec3(class_axis_[k]), axis) > sin_sum + 1e-6;
+          }
+        }
+        if (!skip) active.push_back(static_cast<std::uint16_t>(k));
+      }
+    }
+
+    if (++thread.stamp_value == 0) {
+      std::fill(thread.stamp.begin(), thread.stamp.end(), 0u);
+      thread.stamp_value = 1;
+    }
+    const std::uint32_t stamp = thread.stamp_value;
+    const double ea = f.eye[a], eb = f.eye[b], ec = f.eye[c];
+    const int na = dims_[a], nb = dims_[b], nc = dims_[c];
+
+    for (int walk = 0; walk < 2; ++walk) {
+      std::uint16_t* mask = walk_mask[walk];
+      const int step = walk == 0 ? 1 : -1;
+      const int start = cell_of(ea, a);
+      for (int s = start; s >= 0 && s < na; s += step) {
+        bool pending = false;
+        for (int y = 0; y < th; ++y) pending = pending || mask[y] != 0;
+        if (!pending) break;
+        ++thread.stats.slices_walked;
+        // The part of the slab this walk's rays cross, inflated like the cells.
+        double s0 = lo_[a] + s * h_ - delta_, s1 = lo_[a] + (s + 1) * h_ + delta_;
+        if (walk == 0) s0 = std::max(s0, ea);
+        else s1 = std::min(s1, ea);
+        if (s0 <= s1) {
+          // Beam of the walk's unfinished rays across [s0, s1].
+          double bmin = std::numeric_limits<double>::infinity(), bmax = -bmin, cmin = bmin, cmax = -bmin;
+          bool full = false;
+          float smin_b = std::numeric_limits<float>::infinity(), smax_b = -smin_b, smin_c = smin_b, smax_c = -smin_b;
+          for (int y = 0; y < th; ++y) {
+            std::uint32_t bits = mask[y];
+            while (bits) {
+              const int x = __builtin_ctz(bits);
+              bits &= bits - 1;
+              const int i = y * 16 + x;
+              if (r.flat[i]) full = true;
+              smin_b = std::min(smin_b, r.slope_b[i]);
+              smax_b = std::max(smax_b, r.slope_b[i]);
+              smin_c = std::min(smin_c, r.slope_c[i]);
+              smax_c = std::max(smax_c, r.slope_c[i]);
+            }
+          }
+          int rlo = 0, rhi = nb - 1, clo = 0, chi = nc - 1;
+          if (!full) {
+            const double ends[2] = {s0 - ea, s1 - ea};
+            for (double e : ends) {
+              bmin = std::min({bmin, eb + e * double(smin_b), eb + e * double(smax_b)});
+              bmax = std::max({bmax, eb + e * double(smin_b), eb + e * double(smax_b)});
+              cmin = std::min({cmin, ec + e * double(smin_c), ec + e * double(smax_c)});
+              cmax = std::max({cmax, ec + e * double(smin_c), ec + e * double(smax_c)});
+            }
+            // Slopes were rounded to float: widen by their relative error over the slab's reach.
+            const double reach = std::max(std::fabs(ends[0]), std::fabs(ends[1]));
+            const double wb = delta_ + 1e-6 * reach * (1.0 + std::max(std::fabs(double(smin_b)), std::fabs(double(smax_b))));
+            const double wc = delta_ + 1e-6 * reach * (1.0 + std::max(std::fabs(double(smin_c)), std::fabs(double(smax_c))));
+            bmin -= wb;
+            bmax += wb;
+            cmin -= wc;
+            cmax += wc;
+            if (bmax < lo_[b] || cmax < lo_[c] || bmin > lo_[b] + nb * h_ || cmin > lo_[c] + nc * h_) {
+              rlo = 1;
+              rhi = 0;  // beam outside the box in this slice
+            } else {
+              rlo = cell_of(bmin, b);
+              rhi = cell_of(bmax, b);
+              clo = cell_of(cmin, c);
+              chi = cell_of(cmax, c);
+            }
+          }
+          if (rlo <= rhi && clo <= chi) {
+            for (std::uint16_t k : active) {
+              const std::size_t base = grid_base_[static_cast<std::size_t>(k) * 3 + static_cast<std::size_t>(a)];
+              const std::uint32_t row_first = slice_rows_[base + static_cast<std::size_t>(s)];
+              const std::uint32_t row_last = slice_rows_[base + static_cast<std::size_t>(s) + 1];
+              if (row_first == row_last) continue;
+              auto row_it = std::lower_bound(row_coord_.begin() + row_first, row_coord_.begin() + row_last,
+                                             static_cast<std::uint16_t>(rlo));
+              for (; row_it != row_coord_.begin() + row_last && *row_it <= rhi; ++row_it) {
+                const std::size_t row = static_cast<std::size_t>(row_it - row_coord_.begin());
+                const std::uint32_t cf = row_begin_[row], cl = row_begin_[row + 1];
+                auto cell_it = std::lower_bound(cell_col_.begin() + cf, cell_col_.begin() + cl,
+                                                static_cast<std::uint16_t>(clo));
+                for (; cell_it != cell_col_.begin() + cl && *cell_it <= chi; ++cell_it) {
+                  const std::uint32_t cell = cell_id_[static_cast<std::size_t>(cell_it - cell_col_.begin())];
+                  ++thread.stats.cells_visited;
+                  for (std::uint32_t e = cell_tri_begin_[cell]; e < cell_tri_begin_[cell + 1]; ++e) {
+                    const std::uint32_t tri = cell_tris_[e];
+                    if (thread.stamp[tri] == stamp) continue;
+                    thread.stamp[tri] = stamp;
+                    thread.tested.push_back(tri);
+                    test_triangle(f, tri, x0, y0, tw, th, live, r, thread);
+                  }
+                }
+              }
+            }
+          }
+        }
+        // Finish the rays whose nearest hit lies before the next slice (with margins that only
+        // keep rays unfinished longer).
+        const bool last = walk == 0 ? s + 1 >= na : s == 0;
+        const double next_plane = walk == 0 ? lo_[a] + (s + 1) * h_ : lo_[a] + s * h_;
+        for (int y = 0; y < th; ++y) {
+          std::uint32_t bits = mask[y];
+          while (bits) {
+            const int x = __builtin_ctz(bits);
+            bits &= bits - 1;
+            const int i = y * 16 + x;
+            bool done = last || r.dir[i][a] == 0.0f;
+            if (!done && r.best[i] != none_) {
+              const double reach = double(r.best_t[i]) * (1.0 + 1e-5) * double(r.dir[i][a]);
+              const double margin = 0.25 * delta_ - 1e-6 * std::fabs(reach);
+              done = walk == 0 ? ea + reach < next_plane + margin : ea + reach > next_plane - margin;
+            }
+            if (done) {
+              mask[y] = static_cast<std::uint16_t>(mask[y] & ~(1u << x));
+              live[y] = static_cast<std::uint16_t>(live[y] & ~(1u << x));
+            }
+          }
+        }
+      }
+      for (int y = 0; y < th; ++y) {  // a walk that ran out of slices finishes its rays
+        live[y] = static_cast<std::uint16_t>(live[y] & ~mask[y]);
+        mask[y] = 0;
+      }
+    }
+    write_tile(f, r, x0, y0, tw, th, context);
+  }
+
+  static void write_tile(const Frame& f, const TileRays& r, int x0, int y0, int tw, int th, NciContext& context) {
+    const std::size_t width = static_cast<std::size_t>(f.width);
+    for (int y = 0; y < th; ++y) {
+      for (int x = 0; x < tw; ++x) {
+        const std::size_t p = static_cast<std::size_t>(y0 + y) * width + static_cast<std::size_t>(x0 + x);
+        context.pixel_tri_[p] = r.best[y * 16 + x];
+        context.pixel_t_[p] = r.best_t[y * 16 + x];
+      }
+    }
+  }
+
+  NciParams params_;
+  NciStats stats_;
+  Aabb box_ = Aabb::empty();
+  glm::dvec3 lo_{0.0};
+  double h_ = 1.0;
+  double delta_ = 0.0;
+  int dims_[3] = {1, 1, 1};
+  std::vector<glm::vec3> vertices_;
+  std::vector<std::uint32_t> tri_vertices_;   // 3 per kept triangle, into vertices_
+  std::vector<std::uint32_t> tri_original_;   // kept triangle -> mesh triangle (increasing)
+  std::vector<std::uint32_t> class_of_;       // kept triangle -> class
+  std::vector<glm::vec3> class_axis_;
+  std::vector<float> class_sin_, class_cos_;  // cone half-angle (with margin); sin > 1: never skip
+  std::vector<std::uint32_t> cell_tri_begin_; // cells + 1
+  std::vector<std::uint32_t> cell_tris_;      // kept triangle ids per cell
+  std::vector<std::uint32_t> grid_base_;      // (class, axis) -> first entry in slice_rows_
+  std::vector<std::uint32_t> slice_rows_;     // per grid dims[axis] + 1 row offsets
+  std::vector<std::uint16_t> row_coord_;
+  std::vector<std::uint32_t> row_begin_;      // rows + 1 (global sentinel)
+  std::vector<std::uint16_t> cell_col_;
+  std::vector<std::uint32_t> cell_id_;
+};
+
+}  // namespace cullkit

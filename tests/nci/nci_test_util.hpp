@@ -1,0 +1,127 @@
+// tests/nci/nci_test_util.hpp: brute-force oracles and cameras shared by the NormalClassIndex tests.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include <cullkit/cullkit.hpp>
+#include <cullkit/normal_class_index.hpp>
+#include <cullkit_support/scene.hpp>
+
+namespace nci_test {
+
+constexpr std::uint32_t miss = 0xFFFFFFFFu;
+
+/// Per-pixel nearest front-face hit over ALL triangles, with the same float watertight test and
+/// tie rule as the index (smaller t, then smaller triangle index). Skips invalid triangles the same
+/// way (out of range, non-finite, zero area in double).
+struct BruteHits {
+  std::vector<std::uint32_t> tri;
+  std::vector<float> t;
+};
+
+template <class Real>
+inline BruteHits brute_force(const cullkit::support::Scene& scene, const cullkit::Camera& cam) {
+  const cullkit::PixelRays rays(cam);
+  const std::size_t n = scene.triangle_count();
+  std::vector<char> ok(n, 0);
+  std::vector<Real> rel(9 * n);
+  for (std::size_t t = 0; t < n; ++t) {
+    glm::vec3 p[3];
+    if (!cullkit::triangle_positions(scene.mesh(), t, p)) continue;
+    bool finite = true;
+    for (auto& v : p) finite = finite && std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+    if (!finite) continue;
+    const glm::dvec3 nrm = glm::cross(glm::dvec3(p[1]) - glm::dvec3(p[0]), glm::dvec3(p[2]) - glm::dvec3(p[0]));
+    const double len = glm::length(nrm);
+    if (!(len > 0.0) || !std::isfinite(len)) continue;
+    ok[t] = 1;
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 3; ++a) {
+        // float: exactly what the index computes (float corner minus float eye); double: exact-ish.
+        if constexpr (std::is_same_v<Real, float>) rel[9 * t + 3 * k + a] = p[k][a] - cam.eye[a];
+        else rel[9 * t + 3 * k + a] = double(p[k][a]) - double(cam.eye[a]);
+      }
+  }
+  BruteHits out;
+  out.tri.assign(static_cast<std::size_t>(cam.width) * cam.height, miss);
+  out.t.assign(out.tri.size(), std::numeric_limits<float>::infinity());
+  for (int y = 0; y < cam.height; ++y) {
+    for (int x = 0; x < cam.width; ++x) {
+      const auto wr = cullkit::detail::WatertightRay<Real>::make(rays.ray(x, y).direction);
+      Real best = std::numeric_limits<Real>::infinity();
+      std::uint32_t best_tri = miss;
+      for (std::size_t t = 0; t < n; ++t) {
+        if (!ok[t]) continue;
+        Real th;
+        if (cullkit::detail::watertight_hit(wr, &rel[9 * t], &rel[9 * t + 3], &rel[9 * t + 6], th) && th < best) {
+          best = th;
+          best_tri = static_cast<std::uint32_t>(t);
+        }
+      }
+      const std::size_t p = static_cast<std::size_t>(y) * cam.width + x;
+      out.tri[p] = best_tri;
+      out.t[p] = static_cast<float>(best);
+    }
+  }
+  return out;
+}
+
+/// Our own float test of one mesh triangle against one pixel ray (for the tie rule).
+inline bool own_hit(const cullkit::support::Scene& scene, const cullkit::Camera& cam, std::uint32_t tri, int x, int y,
+                    float& t) {
+  glm::vec3 p[3];
+  if (!cullkit::triangle_positions(scene.mesh(), tri, p)) return false;
+  const cullkit::PixelRays rays(cam);
+  const auto wr = cullkit::detail::WatertightRay<float>::make(rays.ray(x, y).direction);
+  float r[3][3];
+  for (int k = 0; k < 3; ++k)
+    for (int a = 0; a < 3; ++a) r[k][a] = p[k][a] - cam.eye[a];
+  return cullkit::detail::watertight_hit(wr, r[0], r[1], r[2], t);
+}
+
+/// Cameras around and inside a box: outside looking in, inside looking every way, axis-aligned
+/// views (rays nearly parallel to slices), and a few at grazing heights.
+inline std::vector<cullkit::Camera> cameras_for(const cullkit::Aabb& box, int count, int width, int height,
+                                                std::uint64_t seed) {
+  using cullkit::support::make_camera;
+  cullkit::support::Rng rng(seed);
+  std::vector<cullkit::Camera> cams;
+  const glm::vec3 c = box.center(), e = box.extent();
+  const float r = glm::length(e) * 0.5f + 1e-3f;
+  for (int i = 0; i < count; ++i) {
+    glm::vec3 eye, target;
+    const int kind = i % 5;
+    if (kind == 0) {  // outside, looking at the centre
+      glm::vec3 d(rng.uniform(-1, 1), rng.uniform(-0.2f, 1), rng.uniform(-1, 1));
+      if (glm::length(d) < 1e-3f) d = glm::vec3(1, 0.5f, 0.3f);
+      eye = c + glm::normalize(d) * r * rng.uniform(1.1f, 2.5f);
+      target = c + glm::vec3(rng.uniform(-0.2f, 0.2f), rng.uniform(-0.2f, 0.2f), rng.uniform(-0.2f, 0.2f)) * e;
+    } else if (kind == 1 || kind == 2) {  // inside the box, random direction
+      eye = box.min + glm::vec3(rng.uniform(), rng.uniform(0.02f, 0.5f), rng.uniform()) * e;
+      target = eye + glm::vec3(rng.uniform(-1, 1), rng.uniform(-0.5f, 0.5f), rng.uniform(-1, 1));
+    } else if (kind == 3) {  // inside, looking exactly along an axis (rays nearly parallel to slices)
+      eye = box.min + glm::vec3(rng.uniform(0.1f, 0.9f), rng.uniform(0.05f, 0.4f), rng.uniform(0.1f, 0.9f)) * e;
+      glm::vec3 d(0.0f);
+      d[rng.range(0, 2) == 1 ? 0 : 2] = rng.uniform() < 0.5f ? -1.0f : 1.0f;
+      target = eye + d;
+    } else {  // low grazing view from outside along a diagonal
+      eye = glm::vec3(box.min.x - 0.3f * e.x, box.min.y + 0.02f * e.y + 0.5f, box.min.z - 0.3f * e.z);
+      target = glm::vec3(box.max.x, box.min.y + 0.02f * e.y, box.max.z);
+      eye += glm::vec3(rng.uniform(-0.1f, 0.1f), 0.0f, rng.uniform(-0.1f, 0.1f)) * e;
+    }
+    if (glm::length(target - eye) < 1e-4f) target = eye + glm::vec3(0, 0, -1);
+    const float fov = rng.uniform(40.0f, 90.0f);
+    const bool zo = (i % 7) == 3;
+    cams.push_back(make_camera(eye, target, fov, width, height, 0.05f, (i % 3 == 0) ? 0.0f : 5000.0f,
+                               zo ? cullkit::DepthRange::zero_to_one : cullkit::DepthRange::negative_one_to_one,
+                               (i % 11) == 5));
+  }
+  return cams;
+}
+
+}  // namespace nci_test
