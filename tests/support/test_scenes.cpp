@@ -262,6 +262,123 @@ void test_city() {
               a.objects.size(), buildings.size(), big.triangle_count());
 }
 
+void test_office() {
+  const Scene a = support::make_office(1, 10, 8), b = support::make_office(1, 10, 8), c = support::make_office(2, 10, 8);
+  CHECK(validate(a) == 0);
+  CHECK(validate(c) == 0);
+  CHECK(identical(a, b));
+  CHECK(!identical(a, c));
+  CHECK(support::make_office(1, 0, 5).objects.empty() && support::make_office(1, 3, -1).objects.empty());
+  const Scene one = support::make_office(3, 1, 1);
+  CHECK(validate(one) == 0);
+  const std::size_t n = a.triangle_count();
+  CHECK_MSG(n >= 25000 && n <= 36000, "make_office(1, 10, 8): %zu triangles (the seed's office: 30,343)", n);
+  int floors = 0, lintels = 0, walls = 0, furniture = 0, clashes = 0;
+  std::vector<const SceneObject*> wall_objects;
+  for (const SceneObject& o : a.objects) {
+    if (starts_with(o.name, "wall_")) {
+      ++walls;
+      wall_objects.push_back(&o);
+      CHECK(o.is_box && o.major_occluder && o.bounds.max.y == 3.0f);
+      lintels += o.name.find("_lintel") != std::string::npos;
+      if (o.name.find("_lintel") != std::string::npos) CHECK(o.bounds.min.y > 2.0f);
+      else CHECK(o.bounds.min.y == 0.0f);
+    } else {
+      CHECK_MSG(!o.major_occluder, "%s is flagged as a major occluder", o.name.c_str());
+      if (starts_with(o.name, "floor_")) ++floors;
+      else ++furniture;
+      CHECK(o.bounds.min.y == 0.0f || starts_with(o.name, "monitor_"));
+    }
+  }
+  CHECK(floors == 80);
+  CHECK(lintels == 9 * 8 + 10 * 7);  // one door in every wall between two rooms
+  CHECK(walls >= 80 * 2 + 18 && furniture >= 80 * 6);
+  // Furniture keeps clear of the walls.
+  for (const SceneObject& o : a.objects) {
+    if (starts_with(o.name, "wall_") || starts_with(o.name, "floor_")) continue;
+    for (const SceneObject* w : wall_objects) {
+      const Aabb i = intersection(o.bounds, w->bounds);
+      clashes += i.min.x < i.max.x && i.min.y < i.max.y && i.min.z < i.max.z;
+    }
+  }
+  CHECK_MSG(clashes == 0, "%d furniture objects run into a wall", clashes);
+  // Every furniture piece is made of closed, outward boxes: positive volume.
+  int inward = 0;
+  for (const SceneObject& o : a.objects)
+    if (!starts_with(o.name, "floor_")) inward += !(signed_volume(a, o) > 0.0);
+  CHECK(inward == 0);
+  std::printf("office(1, 10, 8): %zu triangles, %zu objects, %d wall boxes\n", n, a.objects.size(), walls);
+}
+
+// Height of the terrain surface under (x, z), by brute force over every terrain triangle (double).
+bool terrain_height(const Scene& s, double x, double z, double& y) {
+  for (const SceneObject& o : s.objects) {
+    if (!starts_with(o.name, "terrain_")) continue;
+    for (std::uint32_t t = o.first_triangle; t < o.first_triangle + o.triangle_count; ++t) {
+      const glm::dvec3 a(s.positions[s.indices[3 * t]]), b(s.positions[s.indices[3 * t + 1]]), c(s.positions[s.indices[3 * t + 2]]);
+      const double det = (b.x - a.x) * (c.z - a.z) - (c.x - a.x) * (b.z - a.z);
+      if (det == 0) continue;
+      const double u = ((x - a.x) * (c.z - a.z) - (c.x - a.x) * (z - a.z)) / det;
+      const double v = ((b.x - a.x) * (z - a.z) - (x - a.x) * (b.z - a.z)) / det;
+      if (u < -1e-9 || v < -1e-9 || u + v > 1 + 1e-9) continue;
+      y = a.y + u * (b.y - a.y) + v * (c.y - a.y);
+      return true;
+    }
+  }
+  return false;
+}
+
+void test_forest() {
+  const Scene a = support::make_forest(1, 64, 300), b = support::make_forest(1, 64, 300), c = support::make_forest(2, 64, 300);
+  CHECK(validate(a) == 0);
+  CHECK(validate(c) == 0);
+  CHECK(identical(a, b));
+  CHECK(!identical(a, c));
+  CHECK(support::make_forest(1, 0, 10).objects.empty());
+  const Scene odd = support::make_forest(5, 13, 0);  // chunks of 8 and 5 cells
+  CHECK(validate(odd) == 0);
+  CHECK(odd.objects.size() == 4 && odd.triangle_count() == 2u * 13 * 13);
+  CHECK(a.triangle_count() == 2u * 64 * 64 + 300u * (12 + 16));
+  int chunks = 0, trunks = 0, crowns = 0, floating = 0, down = 0, bad_crown = 0;
+  double min_y = 1e9, max_y = -1e9;
+  for (const SceneObject& o : a.objects) {
+    if (starts_with(o.name, "terrain_")) {
+      ++chunks;
+      for (std::uint32_t t = o.first_triangle; t < o.first_triangle + o.triangle_count; ++t) down += !(tri_normal(a, t).y > 0);
+      min_y = std::min(min_y, double(o.bounds.min.y));
+      max_y = std::max(max_y, double(o.bounds.max.y));
+    } else if (starts_with(o.name, "trunk_")) {
+      ++trunks;
+      CHECK(o.is_box && !o.major_occluder);
+      const glm::vec3 cxz = o.bounds.center();
+      double ground = 0;
+      const bool found = terrain_height(a, cxz.x, cxz.z, ground);
+      // The trunk starts 0.5 m below the surface under its centre.
+      if (!found || std::fabs(double(o.bounds.min.y) + 0.5 - ground) > 1e-3) ++floating;
+      // Its crown (the next object) starts exactly at its top and is a closed outward cone.
+      const SceneObject& crown = *(&o + 1);
+      CHECK(starts_with(crown.name, "crown_") && crown.bounds.min.y == o.bounds.max.y);
+      const double vol = signed_volume(a, crown);
+      // Octagon of circumradius r: area 2*sqrt(2)*r^2; r from the base ring's first vertex
+      // (crown vertices: apex, base centre, ring).
+      const glm::dvec3 centre(a.positions[a.indices[3 * crown.first_triangle + 5]]);
+      const glm::dvec3 ring(a.positions[a.indices[3 * crown.first_triangle]]);
+      const double r = glm::length(ring - centre);
+      const double cone = 2.0 * std::sqrt(2.0) * r * r * crown.bounds.extent().y / 3.0;
+      if (!(vol > 0.999 * cone && vol < 1.001 * cone)) ++bad_crown;
+    } else if (starts_with(o.name, "crown_")) {
+      ++crowns;
+    }
+  }
+  CHECK(chunks == 64 && trunks == 300 && crowns == 300);
+  CHECK_MSG(down == 0, "%d terrain triangles face down", down);
+  CHECK_MSG(floating == 0, "%d trunks are not planted 0.5 m into the terrain", floating);
+  CHECK_MSG(bad_crown == 0, "%d crowns are not closed outward cones", bad_crown);
+  CHECK_MSG(max_y - min_y > 5.0, "terrain is flat: %g .. %g", min_y, max_y);
+  std::printf("forest(1, 64, 300): %zu triangles, %zu objects, terrain %.1f .. %.1f m\n", a.triangle_count(),
+              a.objects.size(), min_y, max_y);
+}
+
 void test_obj_tiny() {
   namespace fs = std::filesystem;
   const fs::path path = fs::temp_directory_path() /
@@ -344,6 +461,8 @@ void test_real_scenes() {
 int main() {
   test_add_helpers();
   test_city();
+  test_office();
+  test_forest();
   test_obj_tiny();
   test_real_scenes();
   return cullkit_test::report("test_scenes");
