@@ -259,16 +259,16 @@ void test_random_vs_brute() {
       }
     // ...and 80 random triangles in random windings.
     for (int t = 0; t < 80; ++t) {
-      const glm::vec3 c(rng.uniform(-5, 5), rng.uniform(-3, 4), rng.uniform(-5, 5));
+      const glm::vec3 c{rng.uniform(-5, 5), rng.uniform(-3, 4), rng.uniform(-5, 5)};  // braces: left to right
       for (int k = 0; k < 3; ++k) {
         idx.push_back(static_cast<std::uint32_t>(p.size()));
-        p.push_back(c + glm::vec3(rng.uniform(-1.5f, 1.5f), rng.uniform(-1.5f, 1.5f), rng.uniform(-1.5f, 1.5f)));
+        p.push_back(c + glm::vec3{rng.uniform(-1.5f, 1.5f), rng.uniform(-1.5f, 1.5f), rng.uniform(-1.5f, 1.5f)});
       }
     }
     EmbreeScene s;
     s.add_mesh(p.data(), p.size(), idx.data(), idx.size());
     s.commit();
-    const glm::vec3 eye(rng.uniform(-12, 12), rng.uniform(4, 10), rng.uniform(-12, 12));
+    const glm::vec3 eye{rng.uniform(-12, 12), rng.uniform(4, 10), rng.uniform(-12, 12)};
     const Camera cam = support::make_camera(eye, {0, -1, 0}, 70, 96, 72, 0.1f, 100);
     const PixelRays rays(cam);
     const HitBuffer h = s.render(cam);
@@ -301,7 +301,7 @@ void test_random_vs_brute() {
       }
     CHECK_MSG(wrong == 0, "seed %u: %d pixels disagree with brute force (%d ties, %d agree)", seed, wrong, ties, agree);
     CHECK_MSG(ties <= 10, "seed %u: %d ties is too many", seed, ties);
-    CHECK_MSG(hits > 96 * 72 / 4, "seed %u: only %d hit pixels, the scene is not in view", seed, hits);
+    CHECK_MSG(hits > 96 * 72 / 8, "seed %u: only %d hit pixels, the scene is not in view", seed, hits);
     std::printf("random scene seed %u: %d pixels agree, %d edge/depth ties, %d hits\n", seed, agree, ties, hits);
   }
 }

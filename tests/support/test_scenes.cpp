@@ -133,6 +133,23 @@ bool identical(const Scene& a, const Scene& b) {
   return true;
 }
 
+// FNV-1a over positions, indices and object ranges: printed, so builds by different compilers can be
+// compared (the generators must not depend on argument evaluation order or library distributions).
+std::uint64_t fingerprint(const Scene& s) {
+  std::uint64_t h = 1469598103934665603ull;
+  auto eat = [&](const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
+  };
+  eat(s.positions.data(), s.positions.size() * sizeof(glm::vec3));
+  eat(s.indices.data(), s.indices.size() * sizeof(std::uint32_t));
+  for (const SceneObject& o : s.objects) {
+    eat(&o.first_triangle, sizeof o.first_triangle);
+    eat(o.name.data(), o.name.size());
+  }
+  return h;
+}
+
 bool starts_with(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
 
 void test_add_helpers() {
@@ -258,8 +275,8 @@ void test_city() {
     }
   }
   CHECK_MSG(clashes == 0, "%d objects intersect a building", clashes);
-  std::printf("city(1, 8): %zu triangles, %zu objects, %zu buildings; city(1, 26): %zu triangles\n", n8,
-              a.objects.size(), buildings.size(), big.triangle_count());
+  std::printf("city(1, 8): %zu triangles, %zu objects, %zu buildings, fingerprint %016llx; city(1, 26): %zu triangles\n",
+              n8, a.objects.size(), buildings.size(), static_cast<unsigned long long>(fingerprint(a)), big.triangle_count());
 }
 
 void test_office() {
@@ -307,7 +324,8 @@ void test_office() {
   for (const SceneObject& o : a.objects)
     if (!starts_with(o.name, "floor_")) inward += !(signed_volume(a, o) > 0.0);
   CHECK(inward == 0);
-  std::printf("office(1, 10, 8): %zu triangles, %zu objects, %d wall boxes\n", n, a.objects.size(), walls);
+  std::printf("office(1, 10, 8): %zu triangles, %zu objects, %d wall boxes, fingerprint %016llx\n", n, a.objects.size(),
+              walls, static_cast<unsigned long long>(fingerprint(a)));
 }
 
 // Height of the terrain surface under (x, z), by brute force over every terrain triangle (double).
@@ -375,8 +393,8 @@ void test_forest() {
   CHECK_MSG(floating == 0, "%d trunks are not planted 0.5 m into the terrain", floating);
   CHECK_MSG(bad_crown == 0, "%d crowns are not closed outward cones", bad_crown);
   CHECK_MSG(max_y - min_y > 5.0, "terrain is flat: %g .. %g", min_y, max_y);
-  std::printf("forest(1, 64, 300): %zu triangles, %zu objects, terrain %.1f .. %.1f m\n", a.triangle_count(),
-              a.objects.size(), min_y, max_y);
+  std::printf("forest(1, 64, 300): %zu triangles, %zu objects, terrain %.1f .. %.1f m, fingerprint %016llx\n",
+              a.triangle_count(), a.objects.size(), min_y, max_y, static_cast<unsigned long long>(fingerprint(a)));
 }
 
 void test_obj_tiny() {
