@@ -621,45 +621,44 @@ class NormalClassIndex {
     int axis = 2;
     glm::dmat4 view_proj;
     bool use_rect = false;   // screen rectangles of triangles may prune rays
-    double rect_min_distance = 0;  // ... only for triangles whose corners are at least this far
+    glm::dvec4 target_plane{0.0};  // plane holding the pixel rays' target points (world space)
     int width = 0, height = 0;
   };
 
   [[nodiscard]] Frame make_frame(const Camera& camera) const {
-    Frame f{PixelRays(camera), glm::dvec3(camera.eye), camera.eye, 2, glm::dmat4(camera.view_proj), false, 0.0,
-            camera.width, camera.height};
+    Frame f{PixelRays(camera), glm::dvec3(camera.eye), camera.eye, 2, glm::dmat4(camera.view_proj), false,
+            glm::dvec4(0.0), camera.width, camera.height};
     const Ray center = f.rays.ray_at(0.5 * camera.width, 0.5 * camera.height);
     const glm::vec3 d = center.direction;
     const float ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
     f.axis = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
-    // The centre of projection C solves rows x, y, w of view_proj at (C, 1) = 0. Screen rectangles
-    // are used only when C is (nearly) the eye; triangles closer to the eye than 1e4 |C - eye| are
-    // tested against every ray of the tile, so the parallax stays far below a pixel.
-    const glm::dmat4& m = f.view_proj;
-    double A[3][3], rhs[3];
-    const int rows[3] = {0, 1, 3};
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) A[i][j] = m[j][rows[i]];
-      rhs[i] = -m[3][rows[i]];
+    // Screen rectangles. A pixel ray runs from the eye toward a target point on one plane of the
+    // projection (far, or near when far is at infinity); the pixel a point X can be seen at is
+    // found by projecting X from the eye onto that plane and reading the plane point's pixel. This
+    // holds even when `eye` is not exactly the matrix's centre of projection (float matrices).
+    // Used only when the same plane serves the whole screen, as PixelRays decides it.
+    const glm::dmat4 inv = glm::inverse(f.view_proj);
+    const glm::dvec4 far_h = inv[2] + inv[3];
+    const double near_z = camera.depth == DepthRange::zero_to_one ? 0.0 : -1.0;
+    int uses_far = 0, uses_near = 0;
+    for (int k = 0; k < 5; ++k) {
+      const double u = k == 4 ? 0.0 : ((k & 1) ? 1.0 : -1.0), v = k == 4 ? 0.0 : ((k & 2) ? 1.0 : -1.0);
+      const glm::dvec4 h = inv[0] * u + inv[1] * v + far_h;
+      const double mag = std::fabs(h.x) + std::fabs(h.y) + std::fabs(h.z);
+      // A margin around PixelRays' threshold: pixels near the switch would be ambiguous.
+      if (std::fabs(h.w) > 1e-6 * mag && h.w > 0.0) ++uses_far;
+      else if (!(std::fabs(h.w) > 1e-12 * mag)) ++uses_near;
     }
-    const double det = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
-                       A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
-                       A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
-    if (std::isfinite(det) && det != 0.0) {
-      glm::dvec3 c;
-      for (int k = 0; k < 3; ++k) {
-        double B[3][3];
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) B[i][j] = j == k ? rhs[i] : A[i][j];
-        c[k] = (B[0][0] * (B[1][1] * B[2][2] - B[1][2] * B[2][1]) - B[0][1] * (B[1][0] * B[2][2] - B[1][2] * B[2][0]) +
-                B[0][2] * (B[1][0] * B[2][1] - B[1][1] * B[2][0])) /
-               det;
+    if (uses_far == 5 || uses_near == 5) {
+      const double z0 = uses_far == 5 ? 1.0 : near_z;
+      glm::dvec4 row2, row3;
+      for (int j = 0; j < 4; ++j) {
+        row2[j] = f.view_proj[j][2];
+        row3[j] = f.view_proj[j][3];
       }
-      const double off = glm::length(c - f.eye);
-      if (std::isfinite(off)) {
-        f.use_rect = true;
-        f.rect_min_distance = 1e4 * off + 1e-30;
-      }
+      f.target_plane = row2 - z0 * row3;
+      const double on_eye = glm::dot(f.target_plane, glm::dvec4(f.eye, 1.0));
+      f.use_rect = std::isfinite(on_eye) && on_eye != 0.0;
     }
     return f;
   }
@@ -673,24 +672,36 @@ class NormalClassIndex {
     bool flat[256];
   };
 
-  // Tests `tri` against the unfinished rays of the tile inside its screen rectangle.
-  void test_triangle(const Frame& f, std::uint32_t tri, int x0, int y0, int tw, int th, const std::uint16_t* live,
+  // Tests `tri` against the unfinished rays of the tile inside its screen rectangle; false when no
+  // ray was tested (a back face seen from the eye, or no live pixel under its rectangle).
+  bool test_triangle(const Frame& f, std::uint32_t tri, int x0, int y0, int tw, int th, const std::uint16_t* live,
                      TileRays& r, NciContext::Thread& thread) const {
     const glm::vec3& p0 = vertices_[tri_vertices_[3 * tri]];
     const glm::vec3& p1 = vertices_[tri_vertices_[3 * tri + 1]];
     const glm::vec3& p2 = vertices_[tri_vertices_[3 * tri + 2]];
+    {
+      // Back face seen from the eye (so from every ray): skip, with a margin that keeps triangles
+      // seen nearly edge-on, where the float ray test could still decide either way.
+      const glm::dvec3 q0(p0);
+      const glm::dvec3 n = glm::cross(glm::dvec3(p1) - q0, glm::dvec3(p2) - q0);
+      const glm::dvec3 to_eye = f.eye - q0;
+      const double d = glm::dot(n, to_eye);
+      if (d < -1e-5 * glm::length(n) * glm::length(to_eye)) return false;
+    }
     int rx0 = 0, ry0 = 0, rx1 = tw - 1, ry1 = th - 1;
     if (f.use_rect) {
       const glm::vec3* p[3] = {&p0, &p1, &p2};
       bool ok = true;
       double mnx = std::numeric_limits<double>::infinity(), mny = mnx, mxx = -mnx, mxy = -mnx;
+      const double eye_side = -glm::dot(f.target_plane, glm::dvec4(f.eye, 1.0));
       for (int k = 0; k < 3 && ok; ++k) {
-        const glm::dvec4 q(glm::dvec3(*p[k]), 1.0);
-        if (!(glm::length(glm::dvec3(*p[k]) - f.eye) > f.rect_min_distance)) {
+        const glm::dvec3 dx = glm::dvec3(*p[k]) - f.eye;
+        const double s = eye_side / glm::dot(f.target_plane, glm::dvec4(dx, 0.0));
+        if (!(s > 0.0) || !std::isfinite(s)) {  // behind the eye, or beside it (parallel to the plane)
           ok = false;
           break;
         }
-        const glm::dvec4 c = f.view_proj * q;
+        const glm::dvec4 c = f.view_proj * glm::dvec4(f.eye + s * dx, 1.0);
         if (!(c.w > 0.0)) {
           ok = false;
           break;
@@ -704,9 +715,12 @@ class NormalClassIndex {
         mxy = std::max(mxy, py);
       }
       if (ok && std::isfinite(mnx) && std::isfinite(mxx) && std::isfinite(mny) && std::isfinite(mxy)) {
-        const double lx0 = std::floor(mnx) - 2.0 - x0, lx1 = std::ceil(mxx) + 2.0 - x0;
-        const double ly0 = std::floor(mny) - 2.0 - y0, ly1 = std::ceil(mxy) + 2.0 - y0;
-        if (lx1 < 0.0 || ly1 < 0.0 || lx0 > tw - 1 || ly0 > th - 1) return;
+        // A pixel centre can see the triangle only inside its projection; the margin (a twentieth
+        // of a pixel) covers the float rounding of the ray directions.
+        const double m = 0.05;
+        const double lx0 = std::ceil(mnx - m) - x0, lx1 = std::floor(mxx + m) - x0;
+        const double ly0 = std::ceil(mny - m) - y0, ly1 = std::floor(mxy + m) - y0;
+        if (lx1 < 0.0 || ly1 < 0.0 || lx0 > tw - 1 || ly0 > th - 1) return false;
         rx0 = std::max(rx0, static_cast<int>(lx0));
         rx1 = std::min(rx1, static_cast<int>(lx1));
         ry0 = std::max(ry0, static_cast<int>(ly0));
@@ -717,6 +731,7 @@ class NormalClassIndex {
     const float b[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
     const float c[3] = {p2.x - f.eye_f.x, p2.y - f.eye_f.y, p2.z - f.eye_f.z};
     const std::uint32_t span = ((1u << (rx1 - rx0 + 1)) - 1u) << rx0;
+    bool any = false;
     for (int y = ry0; y <= ry1; ++y) {
       std::uint32_t bits = live[y] & span;
       while (bits) {
@@ -724,6 +739,7 @@ class NormalClassIndex {
         bits &= bits - 1;
         const int i = y * 16 + x;
         ++thread.stats.ray_tests;
+        any = true;
         float t;
         if (detail::watertight_hit(r.wray[i], a, b, c, t)) {
           if (t < r.best_t[i] || (t == r.best_t[i] && tri < r.best[i])) {
@@ -733,6 +749,7 @@ class NormalClassIndex {
         }
       }
     }
+    return any;
   }
 
   void process_tile(const Frame& f, int x0, int y0, int x1, int y1, NciContext::Thread& thread,
@@ -904,8 +921,7 @@ class NormalClassIndex {
                     const std::uint32_t tri = cell_tris_[e];
                     if (thread.stamp[tri] == stamp) continue;
                     thread.stamp[tri] = stamp;
-                    thread.tested.push_back(tri);
-                    test_triangle(f, tri, x0, y0, tw, th, live, r, thread);
+                    if (test_triangle(f, tri, x0, y0, tw, th, live, r, thread)) thread.tested.push_back(tri);
                   }
                 }
               }

@@ -120,6 +120,16 @@ int main() {
     p.tile_size = 5;
     compare("soup/512/200/t5", soup, p, cams, 104);
   }
+  {
+    // Far from the origin: float cameras whose matrices put the centre of projection slightly off
+    // the eye (the screen rectangles must follow the eye's rays, not the matrix's centre).
+    Scene soup = random_soup(15, 300, 0.0f);
+    for (auto& p : soup.positions) p += glm::vec3(5000.0f, 20.0f, -7000.0f);
+    soup.bounds.min += glm::vec3(5000.0f, 20.0f, -7000.0f);
+    soup.bounds.max += glm::vec3(5000.0f, 20.0f, -7000.0f);
+    const auto cams = nci_test::cameras_for(soup.bounds, 12, W, H, 105);
+    compare("far soup", soup, NciParams{}, cams, 105);
+  }
   std::printf("double-oracle ties accepted: %d\n", g_ties);
   return cullkit_test::report("test_nci_bruteforce");
 }

@@ -2,3 +2,5 @@
 find_package(Threads REQUIRED)
 cullkit_add_test(test_nci_bruteforce SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_bruteforce.cpp
                  LIBS Threads::Threads)
+cullkit_add_test(test_nci_embree SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_embree.cpp EMBREE
+                 LIBS Threads::Threads)
