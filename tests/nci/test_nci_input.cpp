@@ -1,0 +1,160 @@
+// NormalClassIndex on bad and edge-case input: empty meshes, NaN/inf corners, out-of-range and
+// negative indices, zero-area triangles (all skipped and counted, never hit), a custom vertex type
+// with 16-bit indices, degenerate cameras, determinism across build threads, progress reports.
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <vector>
+
+#include "check.hpp"
+#include "nci_test_util.hpp"
+
+using namespace cullkit;
+
+namespace {
+
+struct MyVertex {
+  float p[3];
+  float uv[2];
+};
+
+}  // namespace
+
+template <>
+struct cullkit::VertexTraits<MyVertex> {
+  static glm::vec3 position(const MyVertex& v) noexcept { return glm::vec3(v.p[0], v.p[1], v.p[2]); }
+};
+
+namespace {
+
+Camera front_camera(int w, int h) { return support::make_camera({0, 0, 10}, {0, 0, 0}, 60, w, h, 0.1f, 100); }
+
+void test_empty() {
+  const std::vector<glm::vec3> none;
+  const std::vector<std::uint32_t> no_idx;
+  const NormalClassIndex<glm::vec3> index(MeshView<glm::vec3>{none.data(), 0, no_idx.data(), 0});
+  CHECK(index.triangle_count() == 0);
+  CHECK(index.stats().triangles_input == 0);
+  const VisibleSet s = index.select_visible(front_camera(32, 24));
+  CHECK(s.triangles.empty());
+  CHECK(s.triangles_tested == 0);
+  NciContext ctx;
+  VisibleSet out;
+  NciPixels px;
+  index.select_visible(front_camera(8, 4), ctx, out, &px);
+  CHECK(px.triangle.size() == 32u && px.depth.size() == 32u);
+  for (auto t : px.triangle) CHECK(t == NciPixels::miss);
+  for (auto d : px.depth) CHECK(std::isinf(d));
+}
+
+void test_bad_triangles() {
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  // A good quad facing +z (the camera), then bad triangles that would cover the screen if used.
+  std::vector<glm::vec3> v = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0},      // 0..3 good quad
+                              {-50, -50, 1}, {50, -50, 1}, {0, 50, 1},              // 4..6 big, in front
+                              {nan, 0, 1}, {0, inf, 1}, {-inf, 0, 1},               // 7..9 non-finite
+                              {-50, -50, 2}, {0, 0, 2}, {50, 50, 2}};               // 10..12 collinear
+  std::vector<std::int32_t> idx = {0, 1, 2,  0, 2, 3,      // good: 0, 1
+                                   4, 5, 99,               // out of range: 2
+                                   4, 5, -1,               // negative: 3
+                                   4, 7, 6,                // NaN: 4
+                                   8, 5, 6,                // inf: 5
+                                   9, 5, 6,                // -inf: 6
+                                   10, 11, 12,             // collinear: 7
+                                   4, 4, 5,                // repeated corner: 8
+                                   4, 5, 6,                // good big one in front: 9
+                                   0, 1};                  // trailing partial triangle: ignored
+  const MeshView<glm::vec3, std::int32_t> mesh{v.data(), v.size(), idx.data(), idx.size()};
+  const NormalClassIndex<glm::vec3, std::int32_t> index(mesh);
+  const NciStats& st = index.stats();
+  CHECK(st.triangles_input == 10);
+  CHECK(st.skipped_out_of_range == 2);
+  CHECK(st.skipped_non_finite == 3);
+  CHECK(st.skipped_degenerate == 2);
+  CHECK(st.triangles_indexed == 3);
+  CHECK(index.triangle_class(4) == -1 && index.triangle_class(9) >= 0);
+  const VisibleSet s = index.select_visible(front_camera(40, 30));
+  // Only the big good triangle (9) is in front of the quad and covers the centre.
+  CHECK(std::binary_search(s.triangles.begin(), s.triangles.end(), 9u));
+  for (auto t : s.triangles) CHECK_MSG(t == 0 || t == 1 || t == 9, "invalid triangle %u reported", t);
+  CHECK(!std::binary_search(s.triangles.begin(), s.triangles.end(), 0u));  // hidden behind 9
+}
+
+void test_custom_vertex() {
+  std::vector<MyVertex> v = {{{-1, -1, 0}, {0, 0}}, {{1, -1, 0}, {1, 0}}, {{1, 1, 0}, {1, 1}}, {{-1, 1, 0}, {0, 1}}};
+  std::vector<std::uint16_t> idx = {0, 1, 2, 0, 2, 3, 0, 2, 1};  // last one faces away
+  const NormalClassIndex<MyVertex, std::uint16_t> index(MeshView<MyVertex, std::uint16_t>{v.data(), v.size(), idx.data(), idx.size()});
+  const VisibleSet s = index.select_visible(front_camera(64, 48));
+  CHECK(s.triangles == std::vector<std::uint32_t>({0, 1}));
+  // Seen from behind: nothing (back faces are never hits).
+  const VisibleSet back = index.select_visible(support::make_camera({0, 0, -10}, {0, 0, 0}, 60, 64, 48, 0.1f, 100));
+  CHECK(back.triangles == std::vector<std::uint32_t>({2}));
+}
+
+void test_cameras() {
+  const auto city = support::make_city(31, 2);
+  const NormalClassIndex<glm::vec3> index(city.mesh());
+  Camera c = front_camera(0, 10);
+  CHECK(index.select_visible(c).triangles.empty());
+  c = front_camera(-5, -5);
+  CHECK(index.select_visible(c).triangles.empty());
+  c = front_camera(16, 16);
+  c.view_proj = glm::mat4(0.0f);  // singular: every ray has a zero direction, hits nothing
+  CHECK(index.select_visible(c).triangles.empty());
+  c.view_proj = glm::mat4(std::numeric_limits<float>::quiet_NaN());
+  CHECK(index.select_visible(c).triangles.empty());
+  // Extreme aspect ratios and a 1x1 screen agree with the brute force.
+  for (auto wh : {std::array<int, 2>{1, 1}, std::array<int, 2>{300, 2}, std::array<int, 2>{3, 200}}) {
+    const Camera cam = support::make_camera(city.bounds.center() + glm::vec3(0, 5, 0),
+                                            city.bounds.center() + glm::vec3(30, 0, 11), 70, wh[0], wh[1], 0.1f, 0);
+    const auto brute = nci_test::brute_force<float>(city, cam);
+    NciContext ctx;
+    VisibleSet s;
+    NciPixels px;
+    index.select_visible(cam, ctx, s, &px);
+    CHECK_MSG(px.triangle == brute.tri, "aspect %dx%d differs from brute force", wh[0], wh[1]);
+  }
+}
+
+std::vector<float> g_progress;
+void on_progress(float f, void* user) {
+  ++*static_cast<int*>(user);
+  g_progress.push_back(f);
+}
+
+void test_determinism_and_progress() {
+  const auto office = support::make_office(32, 2, 3);
+  NciParams a;
+  a.build_threads = 1;
+  int calls = 0;
+  a.progress = on_progress;
+  a.progress_user = &calls;
+  NciParams b;
+  b.build_threads = 4;
+  b.classes = 32;
+  const NormalClassIndex<glm::vec3> ia(office.mesh(), a), ib(office.mesh(), b);
+  CHECK(calls >= 2);
+  CHECK(!g_progress.empty() && g_progress.front() == 0.0f && g_progress.back() == 1.0f);
+  CHECK(std::is_sorted(g_progress.begin(), g_progress.end()));
+  CHECK(ia.stats().cells == ib.stats().cells && ia.stats().cell_entries == ib.stats().cell_entries);
+  CHECK(ia.memory_bytes() > 0 && ia.stats().classes > 0 && ia.stats().classes <= 32);
+  for (std::size_t t = 0; t < office.triangle_count(); ++t)
+    CHECK(ia.triangle_class(static_cast<std::uint32_t>(t)) == ib.triangle_class(static_cast<std::uint32_t>(t)));
+  const auto cams = nci_test::cameras_for(office.bounds, 6, 40, 30, 301);
+  for (const auto& cam : cams) {
+    const VisibleSet sa = ia.select_visible(cam), sb = ib.select_visible(cam);
+    CHECK(sa.triangles == sb.triangles && sa.triangles_tested == sb.triangles_tested);
+  }
+}
+
+}  // namespace
+
+int main() {
+  test_empty();
+  test_bad_triangles();
+  test_custom_vertex();
+  test_cameras();
+  test_determinism_and_progress();
+  return cullkit_test::report("test_nci_input");
+}
