@@ -435,6 +435,14 @@ void test_obj_tiny() {
             "faces %zu, skipped %zu, empty %zu, non-finite %zu", stats.faces, stats.skipped_faces, stats.empty_shapes,
             stats.nonfinite_vertices);
   CHECK(!support::load_obj((fs::temp_directory_path() / "cullkit_no_such_file.obj").string()).has_value());
+  {  // An index of 0 is not OBJ: tinyobjloader stops, and so the load fails (documented).
+    std::ofstream(path) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n";
+    CHECK(!support::load_obj(path.string()).has_value());
+    std::ofstream(path) << "";  // an empty file is an empty scene
+    const auto empty = support::load_obj(path.string());
+    CHECK(empty.has_value() && empty->triangle_count() == 0 && empty->objects.empty());
+    fs::remove(path, ec);
+  }
   CHECK(!support::load_obj(fs::temp_directory_path().string()).has_value());
 }
 
