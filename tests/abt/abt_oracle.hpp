@@ -40,7 +40,7 @@ class OracleFrustum {
     // clip = M p; the volume is -w <= x, y <= w and (-w or 0) <= z <= w.
     auto add = [&](double sx, int rx, double sw) {  // plane: sw * row3 + sx * row(rx)
       double p[4];
-      for (int k = 0; k < 4; ++k) p[k] = sw * m[3][k] + sx * m[rx][k];
+      for (int k = 0; k < 4; ++k) p[k] = (sw != 0.0 ? sw * m[3][k] : 0.0) + sx * m[rx][k];
       const double len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
       const double scale = std::fabs(p[0]) + std::fabs(p[1]) + std::fabs(p[2]) + std::fabs(p[3]);
       if (!(len > 1e-6 * scale)) return;
