@@ -5,3 +5,8 @@ if(CULLKIT_STB_INCLUDE)
   # With stb present, writing a PNG must succeed (without it, write_png returns false by contract).
   target_compile_definitions(test_image PRIVATE CULLKIT_TEST_HAVE_STB=1)
 endif()
+# A picture tool for eyeballing scenes (not a test): render_scene <city|office|forest|file.obj> <prefix>
+if(TARGET cullkit_oracle)
+  add_executable(render_scene ${_support}/render_scene.cpp)
+  target_link_libraries(render_scene PRIVATE cullkit::cullkit cullkit_warnings cullkit_support cullkit_oracle)
+endif()
