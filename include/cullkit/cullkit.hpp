@@ -6,3 +6,4 @@
 #include "traits.hpp"
 #include "box_proxy.hpp"
 #include "adaptive_binary_tree.hpp"
+#include "occlusion_tree.hpp"

@@ -1,0 +1,122 @@
+// cullkit/detail/occlusion_geometry.hpp: eye-relative helpers for OcclusionTree (not public API).
+//
+// The occlusion tree works in coordinates relative to its eye: every plane through the eye then has
+// d == 0 exactly, and plane normals are computed in double precision from float corners (the
+// difference of two floats is exact in double for all but absurd exponent gaps), then rounded once.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+#include <glm/ext/vector_double3.hpp>
+
+#include "../geometry/aabb.hpp"
+#include "../geometry/convex_polygon.hpp"
+#include "../geometry/plane.hpp"
+
+namespace cullkit::detail {
+
+/// Sum of absolute coordinates: a cheap upper bound of the Euclidean length, used for margins.
+[[nodiscard]] inline float norm1(const glm::vec3& v) noexcept {
+  return std::fabs(v.x) + std::fabs(v.y) + std::fabs(v.z);
+}
+
+[[nodiscard]] inline bool finite3(const glm::vec3& v) noexcept {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+/// The unit normal `n` rounded to float, as a plane through the origin (the eye). Zero plane if the
+/// normal vanished.
+[[nodiscard]] inline Plane eye_plane_from_normal(const glm::dvec3& n) noexcept {
+  const double len = glm::length(n);
+  if (!(len > 0.0) || !std::isfinite(len)) return Plane{glm::vec3(0.0f), 0.0f};
+  return Plane{glm::vec3(n / len), 0.0f};
+}
+
+/// Edge planes of the beam from the origin through a convex polygon (eye-relative corners).
+///
+/// Corners whose direction from the eye is within `min_angle` (radians, as a sine) of the previous
+/// kept corner are dropped: a beam through fewer corners is a subset of the original beam, so this
+/// only ever shrinks an occluder. Writes one plane per kept corner into `out` (inside: toward the
+/// polygon) and returns how many, or 0 when fewer than 3 corners survive or the polygon has no area
+/// as seen from the eye (then the fragment must be dropped, which is also safe).
+/// pre: `out` has room for `poly.size()` planes.
+template <std::size_t Capacity>
+[[nodiscard]] inline std::size_t beam_planes(const BasicConvexPolygon<Capacity>& poly, float min_angle,
+                                             Plane* out) noexcept {
+  glm::dvec3 kept[Capacity];
+  std::size_t n = 0;
+  const double min_sin = static_cast<double>(min_angle);
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const glm::dvec3 p(poly[i]);
+    const double len = glm::length(p);
+    if (!(len > 0.0) || !std::isfinite(len)) return 0;  // a corner at the eye or non-finite
+    if (n > 0) {
+      const glm::dvec3& q = kept[n - 1];
+      const double s = glm::length(glm::cross(q, p)) / (glm::length(q) * len);
+      if (s <= min_sin && glm::dot(q, p) > 0.0) continue;
+    }
+    kept[n++] = p;
+  }
+  // The cycle closes: the last kept corner may duplicate the first.
+  while (n >= 2) {
+    const glm::dvec3& q = kept[n - 1];
+    const glm::dvec3& p = kept[0];
+    const double s = glm::length(glm::cross(q, p)) / (glm::length(q) * glm::length(p));
+    if (s <= min_sin && glm::dot(q, p) > 0.0) --n;
+    else break;
+  }
+  if (n < 3) return 0;
+  // Orientation: sum of cross products is twice the area vector; its sign against the centroid
+  // direction says whether the corners turn clockwise or counter-clockwise as seen from the eye.
+  glm::dvec3 area(0.0), centroid(0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    area += glm::cross(kept[i], kept[(i + 1) % n]);
+    centroid += kept[i];
+  }
+  const double facing = glm::dot(area, centroid);
+  const double scale = glm::length(area) * glm::length(centroid);
+  if (!(std::fabs(facing) > min_sin * scale)) return 0;  // seen edge-on: no area from the eye
+  const double sign = facing < 0.0 ? -1.0 : 1.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i] = eye_plane_from_normal(sign * glm::cross(kept[i], kept[(i + 1) % n]));
+    if (!is_valid(out[i])) return 0;
+  }
+  return n;
+}
+
+/// Corners of the box faces the eye sees (eye-relative), as up to 3 quads, and the distinct front
+/// corners. Returns the number of faces (0 when the eye is inside or on the box).
+/// `faces` has room for 3; `points` for 8 (written: the distinct corners of the front faces).
+template <std::size_t Capacity>
+[[nodiscard]] inline int box_front_faces(const Aabb& box, const glm::vec3& eye,
+                                         BasicConvexPolygon<Capacity>* faces, glm::vec3* points,
+                                         int& point_count) noexcept {
+  int nfaces = 0;
+  unsigned corner_mask = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    int side;  // 0: the min face is seen, 1: the max face
+    if (eye[axis] < box.min[axis]) side = 0;
+    else if (eye[axis] > box.max[axis]) side = 1;
+    else continue;
+    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+    // Corners of that face in a cycle (winding does not matter to the tree).
+    const int base = side << axis;
+    const int cyc[4] = {base, base | (1 << a1), base | (1 << a1) | (1 << a2), base | (1 << a2)};
+    BasicConvexPolygon<Capacity>& f = faces[nfaces++];
+    f.clear();
+    for (int k = 0; k < 4; ++k) {
+      f.push_back(corner(box, cyc[k]) - eye);
+      corner_mask |= 1u << cyc[k];
+    }
+  }
+  point_count = 0;
+  for (int c = 0; c < 8; ++c)
+    if (corner_mask & (1u << c)) points[point_count++] = corner(box, c) - eye;
+  return nfaces;
+}
+
+}  // namespace cullkit::detail

@@ -1,0 +1,594 @@
+// cullkit/occlusion_tree.hpp: the occlusion tree, a binary tree of planes for one eye that holds the
+// union of the regions hidden behind inserted occluders, and answers "is this box entirely hidden?".
+//
+// Seed: 基于主要遮挡物的动态可见性算法 (dynamic visibility with major occluders), §3.1-3.4, as corrected
+// in DESIGN.md §7. An occluder polygon becomes a chain of planes: one plane through the eye and each
+// edge (inside: toward the polygon), then the polygon's own plane (inside: away from the eye), then
+// an explicit hidden leaf. A solid box becomes its outline's edge planes, then its 1-3 front-face
+// planes (cullkit::BoxProxy), then hidden. Inserting pushes the occluder down the tree, splitting it
+// where it straddles a plane: fragments reaching an empty slot grow a new chain there, fragments
+// reaching a hidden leaf are dropped. A query pushes the box's front faces down the same way; the box
+// is hidden only if every fragment ends in a hidden leaf. Unlike the seed, a query fragment that
+// straddles an occluder's own plane is split rather than declared visible.
+//
+// Coordinates. The tree stores its planes relative to the eye, so planes through the eye have d = 0
+// exactly; plane normals are computed in double precision and rounded once.
+//
+// Epsilon policy (one rule, OcclusionParams::margin, relative). Correctness rests on one fact: every
+// hidden leaf is reached only through the complete chain of the fragment that created it, and that
+// chain describes a region truly hidden by that fragment. So only one decision can hide something
+// visible: sending a query fragment to the *inside* of a plane. A query fragment goes inside only
+// when every corner lies at least `m = margin * (S + |d|)` inside the plane, where S bounds the
+// distance of the query box (and the eye) from the origin; that margin absorbs every float rounding
+// of corners, plane normals and split points (about 1e-7 relative, margin 1e-5). Fragments that are
+// not clearly inside go outside, or are split along the plane shifted inward by m (both pieces
+// kept). Occluders may lose area freely (that is always safe): their corners seen from nearly the
+// same direction are merged, fragments with no area seen from the eye are dropped, and a slightly
+// non-planar occluder's own plane is pushed back behind its farthest corner.
+//
+// Thread safety: queries are const and may run concurrently; insert/reset need exclusive access.
+// Allocation: insertion grows flat arrays (none once warm, since `reset` keeps capacity); queries
+// never allocate (their work stack is a fixed local array; if it fills, the answer is "visible").
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+#include <glm/ext/vector_double3.hpp>
+
+#include "box_proxy.hpp"
+#include "config.hpp"
+#include "detail/occlusion_geometry.hpp"
+#include "geometry/aabb.hpp"
+#include "geometry/convex_polygon.hpp"
+#include "geometry/plane.hpp"
+
+namespace cullkit {
+
+/// Construction parameters of an OcclusionTree. Every field has a documented default; the defaults
+/// are a sound choice for scenes from centimetres to tens of kilometres.
+struct OcclusionParams {
+  /// Relative safety margin of every "inside" decision a query makes (see the file comment). A query
+  /// corner must lie `margin * (S + |d|)` inside a plane to count as inside, S being the query's
+  /// distance scale. Default 1e-5: 100x float rounding. Larger: more boxes near occluder silhouettes
+  /// are called visible. Values below 1e-6 (or not finite) are raised to 1e-6, so rounding can
+  /// never hide a visible sliver.
+  float margin = 1e-5f;
+  /// A polygon occluder whose corners deviate from their best plane by more than `planarity` times
+  /// the polygon's diameter is skipped (counted in `stats().occluders_skipped`). Default 1e-4.
+  /// Accepted polygons have their own plane pushed back by the measured deviation (safe).
+  float planarity = 1e-4f;
+  /// Occluder corners whose directions from the eye differ by less than this angle (radians) are
+  /// merged, and occluder fragments that subtend less are dropped as having no area. Default 1e-6.
+  float min_angle = 1e-6f;
+  /// Two-level tree: number of fixed planes through the eye and the `up` axis, evenly spaced in
+  /// azimuth (they cut the surroundings into 2 * azimuth_planes wedges), built before any occluder
+  /// so the tree stays shallow whatever order occluders arrive in (seed §3.4.3). Default 0: none.
+  int azimuth_planes = 0;
+  /// Two-level tree: planes per azimuth wedge that cut it by elevation (evenly spaced between
+  /// straight down and straight up). Needs azimuth_planes >= 1. Default 0.
+  int elevation_planes = 0;
+  /// The up axis of the top-level planes (need not be unit). Default +Y. Unused without top planes.
+  glm::vec3 up = glm::vec3(0.0f, 1.0f, 0.0f);
+  /// Azimuth origin of the top-level planes (its part perpendicular to `up` is used). Default -Z.
+  glm::vec3 forward = glm::vec3(0.0f, 0.0f, -1.0f);
+};
+
+/// What kind of plane a node holds.
+enum class OcclusionNodeKind : std::uint8_t {
+  top,          ///< a fixed top-level plane through the eye (two-level tree), not from an occluder
+  edge,         ///< a plane through the eye and an occluder edge; inside is toward the occluder
+  polygon,      ///< a polygon occluder's own plane; inside is away from the eye
+  box_face,     ///< a front-face plane of a box occluder; inside is into the box
+};
+
+/// A node of the tree (read-only view through `OcclusionTree::nodes()`). Planes are eye-relative:
+/// the signed distance of world point w is `dot(plane.normal, w - eye) + plane.d`.
+struct OcclusionNode {
+  Plane plane;             ///< inside = positive side
+  std::uint32_t inside;    ///< child on the positive side: node index, or a leaf code
+  std::uint32_t outside;   ///< child on the negative side: node index, or a leaf code
+  std::uint32_t depth;     ///< root = 0
+  OcclusionNodeKind kind;
+};
+
+/// Statistics since construction or the last `reset`.
+struct OcclusionStats {
+  std::uint32_t nodes = 0;              ///< nodes in the tree (top-level ones included)
+  std::uint32_t top_nodes = 0;          ///< fixed top-level nodes
+  std::uint32_t depth = 0;              ///< deepest node (root = 0; 0 for an empty tree)
+  std::uint32_t occluders_inserted = 0; ///< occluders accepted (polygons and boxes)
+  std::uint32_t occluders_skipped = 0;  ///< rejected: non-finite, < 3 corners, non-planar, no area
+                                        ///< from the eye, eye inside or on a box
+  std::uint32_t fragments = 0;          ///< occluder fragments that grew a chain
+  std::uint32_t fragments_hidden = 0;   ///< fragments dropped because already hidden
+  std::uint32_t fragments_degenerate = 0;  ///< fragments dropped as too thin seen from the eye
+};
+
+/// A query's answer.
+enum class OcclusionAnswer : std::uint8_t {
+  visible,  ///< some part may be visible
+  hidden,   ///< every point is hidden by the occluders inserted so far
+  clear,    ///< no part reached any hidden region (only reported when asked for; else `visible`)
+};
+
+/// A query's answer and where the whole query shape last went down the tree undivided.
+struct OcclusionQueryResult {
+  OcclusionAnswer answer = OcclusionAnswer::visible;
+  /// The deepest node at which the query's corners were still all on one side of every plane above
+  /// it, or `OcclusionTree::whole_tree` when that is the root slot. A query for a shape contained in
+  /// this one (an ABT child box inside its parent box) may start there (seed §3.4.2, refinement 2).
+  std::uint32_t together = 0xFFFFFFFFu;
+};
+
+/// The occlusion tree for one eye position (see the file comment).
+class OcclusionTree {
+ public:
+  /// Leaf codes in `OcclusionNode::inside/outside`.
+  static constexpr std::uint32_t visible_leaf = 0xFFFFFFFFu;  ///< empty: nothing hides this region
+  static constexpr std::uint32_t hidden_leaf = 0xFFFFFFFEu;   ///< everything here is hidden
+  /// "Start at the root" for `query`.
+  static constexpr std::uint32_t whole_tree = 0xFFFFFFFFu;
+  /// Pending fragments a query can hold; beyond that the query answers "visible".
+  static constexpr int query_stack_size = 48;
+
+  /// An empty tree for `eye` (hides nothing) with default parameters.
+  explicit OcclusionTree(const glm::vec3& eye) : OcclusionTree(eye, OcclusionParams{}) {}
+  /// An empty tree for `eye` with the given parameters (top-level planes are built now).
+  /// A non-finite eye gives a tree that accepts no occluder and hides nothing.
+  OcclusionTree(const glm::vec3& eye, const OcclusionParams& params) : params_(params) {
+    params_.azimuth_planes = std::clamp(params_.azimuth_planes, 0, 64);
+    params_.elevation_planes = params_.azimuth_planes > 0 ? std::clamp(params_.elevation_planes, 0, 64) : 0;
+    if (!(params_.margin >= 1e-6f) || !std::isfinite(params_.margin)) params_.margin = 1e-6f;
+    reset(eye);
+  }
+
+  /// Clears the tree for a new eye, keeping the memory (no allocation once warm), and rebuilds the
+  /// top-level planes. Invalidates node indices from earlier queries.
+  void reset(const glm::vec3& eye) {
+    eye_ = eye;
+    eye_ok_ = detail::finite3(eye);
+    eye_scale_ = eye_ok_ ? detail::norm1(eye) : 0.0f;
+    nodes_.clear();
+    stats_ = OcclusionStats{};
+    root_ = visible_leaf;
+    if (eye_ok_) build_top_level();
+    stats_.top_nodes = stats_.nodes = static_cast<std::uint32_t>(nodes_.size());
+  }
+
+  [[nodiscard]] const glm::vec3& eye() const noexcept { return eye_; }
+  [[nodiscard]] const OcclusionParams& params() const noexcept { return params_; }
+  [[nodiscard]] const OcclusionStats& stats() const noexcept { return stats_; }
+  /// Every node; children are referenced by index or leaf code. Root: `root()`.
+  [[nodiscard]] const std::vector<OcclusionNode>& nodes() const noexcept { return nodes_; }
+  /// The root: a node index, or a leaf code for a tree without nodes.
+  [[nodiscard]] std::uint32_t root() const noexcept { return root_; }
+  /// True if no occluder has been inserted (the tree hides nothing).
+  [[nodiscard]] bool empty() const noexcept { return stats_.fragments == 0; }
+
+  /// Inserts a convex polygon occluder (world coordinates, either winding, planar within
+  /// `params().planarity`). Skipped and counted (stats().occluders_skipped) when a corner is not
+  /// finite, `count < 3`, it is not planar, or it has no area as seen from the eye (the eye on or
+  /// very near its plane). More than 32 corners: the first 32 are used (a subset: safe).
+  /// pre: `polygon` points to `count` corners (may be null when count is 0).
+  /// Cost: O(fragments x depth) plane tests; allocates only while the node array grows.
+  void insert_occluder(const glm::vec3* polygon, std::size_t count) {
+    if (!eye_ok_ || count < 3 || polygon == nullptr) return skip();
+    const std::size_t n = std::min<std::size_t>(count, ConvexPolygon::capacity);
+    glm::dvec3 a[ConvexPolygon::capacity];
+    const glm::dvec3 e(eye_);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!detail::finite3(polygon[i])) return skip();
+      a[i] = glm::dvec3(polygon[i]) - e;
+    }
+    glm::dvec3 normal(0.0), center(0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      normal += glm::cross(a[i], a[(i + 1) % n]);
+      center += a[i];
+    }
+    center /= static_cast<double>(n);
+    const double len = glm::length(normal);
+    if (!(len > 0.0) || !std::isfinite(len)) return skip();
+    glm::dvec3 unit = normal / len;
+    double d = -glm::dot(unit, center);
+    double deviation = 0.0, diameter = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      deviation = std::max(deviation, std::fabs(glm::dot(unit, a[i]) + d));
+      diameter = std::max(diameter, glm::length(a[i] - a[0]));
+    }
+    if (!(deviation <= double(params_.planarity) * diameter)) return skip();
+    // The eye is the origin: its signed distance is d. Inside must be away from the eye.
+    if (d > 0.0) {
+      unit = -unit;
+      d = -d;
+    }
+    // No area seen from the eye: the eye (nearly) in the polygon's plane.
+    if (!(-d > deviation + double(params_.min_angle) * (glm::length(center) + diameter))) return skip();
+    // Behind every corner: push the plane back by the deviation (and its own rounding).
+    const Plane own{glm::vec3(unit), static_cast<float>(d - deviation)};
+    if (!is_valid(own)) return skip();
+
+    ConvexPolygon frag;
+    float scale = 0.0f;
+    for (std::size_t i = 0; i < n; ++i) {
+      frag.push_back(glm::vec3(a[i]));
+      scale = std::max(scale, detail::norm1(frag[i]));
+    }
+    current_ = Current{};
+    current_.edge_count = detail::beam_planes(frag, params_.min_angle, current_.edges);
+    if (current_.edge_count == 0) return skip();
+    current_.is_box = false;
+    current_.closing[0] = own;
+    current_.closing_count = 1;
+    current_.split_epsilon = params_.margin * scale;
+    ++stats_.occluders_inserted;
+    insert_fragment(frag);
+  }
+
+  /// Inserts a solid box occluder through its outline (cullkit::make_box_proxy, front-face closure).
+  /// Skipped and counted when the box is invalid, flat on two axes, or the eye is inside or on it.
+  /// Cost and allocation as `insert_occluder`.
+  void insert_box_occluder(const Aabb& box) {
+    if (!eye_ok_) return skip();
+    const BoxProxy proxy = make_box_proxy(box, eye_);
+    if (!proxy.valid()) return skip();
+    ConvexPolygon frag;
+    float scale = 0.0f;
+    for (int i = 0; i < proxy.corner_count; ++i) {
+      frag.push_back(proxy.corners[i] - eye_);
+      scale = std::max(scale, detail::norm1(frag[static_cast<std::size_t>(i)]));
+    }
+    current_ = Current{};
+    current_.edge_count = detail::beam_planes(frag, params_.min_angle, current_.edges);
+    if (current_.edge_count == 0) return skip();
+    current_.is_box = true;
+    for (int f = 0; f < proxy.face_count; ++f) {
+      const Plane& p = proxy.faces[f];  // world plane, normal into the box
+      const double d = double(p.d) + glm::dot(glm::dvec3(p.normal), glm::dvec3(eye_));
+      current_.closing[f] = Plane{p.normal, static_cast<float>(d)};
+    }
+    current_.closing_count = proxy.face_count;
+    ConvexPolygon faces[3];
+    (void)detail::box_front_faces(box, eye_, faces, current_.box_points, current_.box_point_count);
+    current_.split_epsilon = params_.margin * scale;
+    ++stats_.occluders_inserted;
+    insert_fragment(frag);
+  }
+
+  /// True only if every point of `box` is hidden from the eye by the occluders inserted so far.
+  /// False for an invalid box (NaN, infinite, min > max) and when the eye is inside or on the box.
+  /// Cost: O(depth) plane tests while the box stays whole, more where occluder boundaries cut it.
+  /// No allocation; safe to call concurrently.
+  [[nodiscard]] bool is_occluded(const Aabb& box) const {
+    return query(box).answer == OcclusionAnswer::hidden;
+  }
+
+  /// True only if every point of `polygon` (world coordinates, convex, planar) is hidden. False for
+  /// an empty, overflowed or non-finite polygon. No allocation; safe to call concurrently.
+  [[nodiscard]] bool is_occluded(const ConvexPolygon& polygon) const {
+    return query(polygon).answer == OcclusionAnswer::hidden;
+  }
+
+  /// The full query: is the box hidden, and (with `want_clear`) is it clear of every hidden region.
+  /// `start`: `whole_tree`, or the `together` node of an earlier query, in this tree since the last
+  /// `reset`, for a box that contained this one (then the walk starts there; seed §3.4.2). With
+  /// `want_clear` the walk does not stop at the first visible fragment, so it can report `clear`.
+  /// Returns where the box last went down the tree whole. No allocation; safe concurrently.
+  [[nodiscard]] OcclusionQueryResult query(const Aabb& box, std::uint32_t start = whole_tree,
+                                           bool want_clear = false) const {
+    OcclusionQueryResult result;
+    result.together = start;
+    if (!eye_ok_ || !is_valid(box) || contains(box, eye_)) return result;
+    ConvexPolygon faces[3];
+    glm::vec3 points[8];
+    int point_count = 0;
+    const int nfaces = detail::box_front_faces(box, eye_, faces, points, point_count);
+    if (nfaces == 0) return result;
+    float scale = 0.0f;
+    for (int c = 0; c < 8; ++c) scale = std::max(scale, detail::norm1(corner(box, c) - eye_));
+    return run_query(faces, nfaces, points, point_count, scale + eye_scale_, start, want_clear);
+  }
+
+  /// The same for a convex planar polygon in world coordinates.
+  [[nodiscard]] OcclusionQueryResult query(const ConvexPolygon& polygon, std::uint32_t start = whole_tree,
+                                           bool want_clear = false) const {
+    OcclusionQueryResult result;
+    result.together = start;
+    if (!eye_ok_ || polygon.empty() || polygon.overflow()) return result;
+    ConvexPolygon local;
+    float scale = 0.0f;
+    for (std::size_t i = 0; i < polygon.size(); ++i) {
+      if (!detail::finite3(polygon[i])) return result;
+      local.push_back(polygon[i] - eye_);
+      scale = std::max(scale, detail::norm1(local[i]));
+    }
+    return run_query(&local, 1, local.data(), static_cast<int>(local.size()), scale + eye_scale_, start,
+                     want_clear);
+  }
+
+ private:
+  // What the occluder being inserted closes its chain with.
+  struct Current {
+    Plane edges[ConvexPolygon::capacity] = {};  // the whole occluder's beam planes
+    std::size_t edge_count = 0;
+    bool is_box = false;
+    Plane closing[3] = {};
+    int closing_count = 0;
+    glm::vec3 box_points[8] = {};  // eye-relative front corners of a box occluder
+    int box_point_count = 0;
+    float split_epsilon = 0.0f;
+  };
+  struct InsertItem {
+    std::uint32_t parent;  // node whose child slot this is; whole_tree: the root slot
+    bool inside;
+    ConvexPolygon polygon;
+  };
+
+  void skip() { ++stats_.occluders_skipped; }
+
+  [[nodiscard]] std::uint32_t slot_value(std::uint32_t parent, bool inside) const {
+    if (parent == whole_tree) return root_;
+    return inside ? nodes_[parent].inside : nodes_[parent].outside;
+  }
+  void set_slot(std::uint32_t parent, bool inside, std::uint32_t value) {
+    if (parent == whole_tree) root_ = value;
+    else if (inside) nodes_[parent].inside = value;
+    else nodes_[parent].outside = value;
+  }
+  [[nodiscard]] std::uint32_t slot_depth(std::uint32_t parent) const {
+    return parent == whole_tree ? 0u : nodes_[parent].depth + 1u;
+  }
+
+  std::uint32_t add_node(const Plane& plane, OcclusionNodeKind kind, std::uint32_t depth) {
+    const auto index = static_cast<std::uint32_t>(nodes_.size());
+    nodes_.push_back(OcclusionNode{plane, visible_leaf, visible_leaf, depth, kind});
+    stats_.depth = std::max(stats_.depth, depth);
+    return index;
+  }
+
+  // Pushes one occluder (its first fragment) down the tree.
+  void insert_fragment(const ConvexPolygon& first) {
+    work_.clear();
+    work_.push_back(InsertItem{whole_tree, false, first});
+    ConvexPolygon in_piece, out_piece;
+    while (!work_.empty()) {
+      InsertItem item = work_.back();
+      work_.pop_back();
+      for (;;) {
+        const std::uint32_t ref = slot_value(item.parent, item.inside);
+        if (ref == hidden_leaf) {
+          ++stats_.fragments_hidden;
+          break;
+        }
+        if (ref == visible_leaf) {
+          grow_chain(item.parent, item.inside);
+          break;
+        }
+        const OcclusionNode& node = nodes_[ref];
+        const bool through_eye = node.kind == OcclusionNodeKind::top || node.kind == OcclusionNodeKind::edge;
+        if (!through_eye && current_.is_box) {
+          // A box fragment is its outline, not a surface: against a plane off the eye it goes whole
+          // to the side its surface is on (inside only if all of the box's front is behind).
+          bool behind = true;
+          for (int i = 0; i < current_.box_point_count; ++i)
+            behind = behind && signed_distance(node.plane, current_.box_points[i]) >= 0.0f;
+          item.parent = ref;
+          item.inside = behind;
+          continue;
+        }
+        const PolygonSide side = item.polygon.split(node.plane, current_.split_epsilon, in_piece, out_piece);
+        if (side == PolygonSide::front) {
+          item.parent = ref;
+          item.inside = true;
+        } else if (side == PolygonSide::back) {
+          item.parent = ref;
+          item.inside = false;
+        } else if (side == PolygonSide::straddling) {
+          // NaN distances give no pieces: drop (losing occluder area is safe).
+          if (in_piece.size() < 3 || out_piece.size() < 3) {
+            ++stats_.fragments_degenerate;
+            break;
+          }
+          work_.push_back(InsertItem{ref, true, in_piece});
+          item.parent = ref;
+          item.inside = false;
+          item.polygon = out_piece;
+        } else {
+          // Coplanar with a plane through the eye (no area) or with another occluder's own plane
+          // (it hides nothing more there): drop. Empty: nothing to do.
+          ++stats_.fragments_degenerate;
+          break;
+        }
+      }
+    }
+  }
+
+  // The chain of a fragment is the beam of the WHOLE occluder (its original edges, not the cut
+  // edges of the fragment), closed by its own plane(s). Its region is then truly hidden on its own,
+  // wherever it hangs in the tree, and two fragments of one occluder leave no seam between them:
+  // a query piece sent across a cut plane within the margin still meets the same beam.
+  void grow_chain(std::uint32_t parent, bool inside) {
+    const std::size_t n = current_.edge_count;
+    const Plane* edges = current_.edges;
+    ++stats_.fragments;
+    std::uint32_t depth = slot_depth(parent);
+    const auto first = static_cast<std::uint32_t>(nodes_.size());
+    std::uint32_t previous = whole_tree;
+    const auto link = [&](std::uint32_t node) {
+      if (previous != whole_tree) nodes_[previous].inside = node;
+      previous = node;
+    };
+    for (std::size_t i = 0; i < n; ++i) link(add_node(edges[i], OcclusionNodeKind::edge, depth++));
+    const OcclusionNodeKind closing_kind = current_.is_box ? OcclusionNodeKind::box_face : OcclusionNodeKind::polygon;
+    for (int f = 0; f < current_.closing_count; ++f) link(add_node(current_.closing[f], closing_kind, depth++));
+    nodes_[previous].inside = hidden_leaf;
+    set_slot(parent, inside, first);
+    stats_.nodes = static_cast<std::uint32_t>(nodes_.size());
+  }
+
+  struct QueryItem {
+    std::uint32_t ref;
+    ConvexPolygon polygon;
+  };
+
+  [[nodiscard]] OcclusionQueryResult run_query(const ConvexPolygon* faces, int nfaces, const glm::vec3* points,
+                                               int point_count, float scale, std::uint32_t start,
+                                               bool want_clear) const {
+    OcclusionQueryResult result;
+    const float eps = params_.margin;
+    // Phase 1: the whole shape goes down while its corners stay on one side.
+    std::uint32_t ref = start == whole_tree ? root_ : start;
+    result.together = start;
+    while (ref < hidden_leaf) {
+      const OcclusionNode& node = nodes_[ref];
+      const float m = eps * (scale + std::fabs(node.plane.d));
+      float lo = signed_distance(node.plane, points[0]), hi = lo;
+      for (int i = 1; i < point_count; ++i) {
+        const float dist = signed_distance(node.plane, points[i]);
+        lo = std::min(lo, dist);
+        hi = std::max(hi, dist);
+      }
+      if (lo >= m) {
+        result.together = ref;
+        ref = node.inside;
+      } else if (hi <= m) {
+        result.together = ref;
+        ref = node.outside;
+      } else {
+        break;  // straddles (or NaN): split the faces from here
+      }
+    }
+    if (ref == hidden_leaf) {
+      result.answer = OcclusionAnswer::hidden;
+      return result;
+    }
+    if (ref == visible_leaf) {
+      result.answer = want_clear ? OcclusionAnswer::clear : OcclusionAnswer::visible;
+      return result;
+    }
+    result.together = ref;
+    // Phase 2: split the faces.
+    QueryItem stack[query_stack_size];
+    int top = 0;
+    for (int f = 0; f < nfaces; ++f) stack[top++] = QueryItem{ref, faces[f]};
+    bool any_hidden = false, any_visible = false;
+    ConvexPolygon in_piece, out_piece;
+    while (top > 0) {
+      QueryItem item = stack[--top];
+      for (;;) {
+        if (item.ref == hidden_leaf) {
+          any_hidden = true;
+          break;
+        }
+        if (item.ref == visible_leaf) {
+          any_visible = true;
+          break;
+        }
+        const OcclusionNode& node = nodes_[item.ref];
+        const float m = eps * (scale + std::fabs(node.plane.d));
+        const Plane shifted{node.plane.normal, node.plane.d - m};
+        const PolygonSide side = item.polygon.split(shifted, 0.0f, in_piece, out_piece);
+        if (side == PolygonSide::front) {
+          item.ref = node.inside;
+        } else if (side == PolygonSide::back || side == PolygonSide::coplanar) {
+          item.ref = node.outside;
+        } else if (side == PolygonSide::straddling) {
+          if (in_piece.overflow() || out_piece.overflow() || in_piece.empty() || out_piece.empty() ||
+              top >= query_stack_size) {
+            any_visible = true;  // cannot be decided (or NaN): visible
+            break;
+          }
+          stack[top++] = QueryItem{node.inside, in_piece};
+          item.ref = node.outside;
+          item.polygon = out_piece;
+        } else {
+          break;  // empty fragment: nothing to show
+        }
+      }
+      if (any_visible && !want_clear) break;
+    }
+    if (any_visible) result.answer = (want_clear && !any_hidden) ? OcclusionAnswer::clear : OcclusionAnswer::visible;
+    else result.answer = any_hidden ? OcclusionAnswer::hidden : OcclusionAnswer::visible;
+    return result;
+  }
+
+  // Top-level planes (seed §3.4.3): azimuth wedges around `up`, then elevation bands in each wedge.
+  // Plane k (k = 0..K-1) contains `up` and the horizontal direction at azimuth psi_k = pi k / K; its
+  // inside holds the azimuths in (psi_k, psi_k + pi). Plane 0 is the root; in each half the other
+  // planes' cut rays are sorted by k, so a balanced tree over k needs no scratch memory.
+  void build_top_level() {
+    const int ka = std::min(params_.azimuth_planes, 64);
+    if (ka <= 0) return;
+    glm::dvec3 up(params_.up);
+    if (!(glm::length(up) > 0.0) || !std::isfinite(glm::length(up))) up = glm::dvec3(0, 1, 0);
+    up = glm::normalize(up);
+    glm::dvec3 fwd = glm::dvec3(params_.forward);
+    fwd -= up * glm::dot(up, fwd);
+    if (!(glm::length(fwd) > 1e-6) || !std::isfinite(glm::length(fwd))) {
+      fwd = std::fabs(up.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 0, 1);
+      fwd -= up * glm::dot(up, fwd);
+    }
+    fwd = glm::normalize(fwd);
+    up_ = up;
+    fwd_ = fwd;
+    right_ = glm::cross(fwd, up);
+    const double pi = 3.14159265358979323846;
+    const std::uint32_t root = add_node(azimuth_plane(0, ka), OcclusionNodeKind::top, 0);
+    root_ = root;
+    const std::uint32_t first_half = build_azimuth(1, ka, ka, false, 0.0, pi, 1);
+    const std::uint32_t second_half = build_azimuth(1, ka, ka, true, pi, 2 * pi, 1);
+    nodes_[root].inside = first_half;
+    nodes_[root].outside = second_half;
+  }
+  [[nodiscard]] Plane azimuth_plane(int k, int ka) const {
+    const double psi = 3.14159265358979323846 * k / ka;
+    return detail::eye_plane_from_normal(-std::sin(psi) * fwd_ + std::cos(psi) * right_);
+  }
+  std::uint32_t build_azimuth(int lo, int hi, int ka, bool second_half, double a, double b, std::uint32_t depth) {
+    if (lo >= hi) return build_elevation(0.5 * (a + b), 0, params_.elevation_planes, depth);
+    const int mid = (lo + hi) / 2;
+    const double pi = 3.14159265358979323846;
+    const double angle = pi * mid / ka + (second_half ? pi : 0.0);
+    const std::uint32_t node = add_node(azimuth_plane(mid, ka), OcclusionNodeKind::top, depth);
+    const std::uint32_t below = build_azimuth(lo, mid, ka, second_half, a, angle, depth + 1);
+    const std::uint32_t above = build_azimuth(mid + 1, hi, ka, second_half, angle, b, depth + 1);
+    // First half: larger azimuths are inside plane k; second half: they are outside.
+    nodes_[node].inside = second_half ? below : above;
+    nodes_[node].outside = second_half ? above : below;
+    return node;
+  }
+  std::uint32_t build_elevation(double azimuth, int lo, int hi, std::uint32_t depth) {
+    if (lo >= hi || params_.elevation_planes <= 0) return visible_leaf;
+    const int count = params_.elevation_planes;
+    const int mid = (lo + hi) / 2;
+    const double pi = 3.14159265358979323846;
+    const double theta = -0.5 * pi + pi * (mid + 1) / (count + 1);
+    const glm::dvec3 h = std::cos(azimuth) * fwd_ + std::sin(azimuth) * right_;
+    // Contains the horizontal direction across the wedge; inside = above elevation theta.
+    const Plane p = detail::eye_plane_from_normal(-std::sin(theta) * h + std::cos(theta) * up_);
+    const std::uint32_t node = add_node(p, OcclusionNodeKind::top, depth);
+    const std::uint32_t below = build_elevation(azimuth, lo, mid, depth + 1);
+    const std::uint32_t above = build_elevation(azimuth, mid + 1, hi, depth + 1);
+    nodes_[node].inside = above;
+    nodes_[node].outside = below;
+    return node;
+  }
+
+  OcclusionParams params_;
+  glm::vec3 eye_ = glm::vec3(0.0f);
+  bool eye_ok_ = false;
+  float eye_scale_ = 0.0f;
+  std::uint32_t root_ = visible_leaf;
+  std::vector<OcclusionNode> nodes_;
+  std::vector<InsertItem> work_;
+  OcclusionStats stats_;
+  Current current_;
+  glm::dvec3 up_ = glm::dvec3(0, 1, 0), fwd_ = glm::dvec3(0, 0, -1), right_ = glm::dvec3(1, 0, 0);
+};
+
+}  // namespace cullkit

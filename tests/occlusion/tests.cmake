@@ -1,0 +1,2 @@
+set(_occ ${CMAKE_CURRENT_LIST_DIR})
+cullkit_add_test(test_occlusion_bruteforce SOURCES ${_occ}/test_occlusion_bruteforce.cpp)
