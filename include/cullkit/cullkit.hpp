@@ -7,3 +7,4 @@
 #include "box_proxy.hpp"
 #include "adaptive_binary_tree.hpp"
 #include "occlusion_tree.hpp"
+#include "occlusion_culling.hpp"
