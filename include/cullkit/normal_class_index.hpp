@@ -114,6 +114,10 @@ struct NciSelectStats {
 class NciContext {
  public:
   NciSelectStats stats;  ///< statistics of the last call that used this context
+  /// Triangles ray-tested per screen tile in the last call (row-major tiles of
+  /// NciParams::tile_size pixels; `tiles_x` tiles per row): the heat map of the method's work.
+  std::vector<std::uint32_t> tile_tested;
+  int tiles_x = 0;  ///< tiles per row of `tile_tested`
 
  private:
   template <class, class, class>
@@ -208,6 +212,8 @@ class NormalClassIndex {
         th.tested.clear();
         th.stats = NciSelectStats{};
       }
+      context.tile_tested.assign(tile_count, 0u);
+      context.tiles_x = tiles_x;
       std::atomic<std::size_t> next{0};
       auto work = [&](unsigned index) {
         auto& th = context.threads_[index];
@@ -216,8 +222,10 @@ class NormalClassIndex {
           if (t >= tile_count) break;
           const int tx = static_cast<int>(t % static_cast<std::size_t>(tiles_x));
           const int ty = static_cast<int>(t / static_cast<std::size_t>(tiles_x));
+          const std::size_t before = th.tested.size();
           process_tile(frame, tx * tile, ty * tile, std::min(width, (tx + 1) * tile),
                        std::min(height, (ty + 1) * tile), th, context);
+          context.tile_tested[t] = static_cast<std::uint32_t>(th.tested.size() - before);
         }
       };
       if (thread_count == 1) {
@@ -679,15 +687,8 @@ class NormalClassIndex {
     const glm::vec3& p0 = vertices_[tri_vertices_[3 * tri]];
     const glm::vec3& p1 = vertices_[tri_vertices_[3 * tri + 1]];
     const glm::vec3& p2 = vertices_[tri_vertices_[3 * tri + 2]];
-    {
-      // Back face seen from the eye (so from every ray): skip, with a margin that keeps triangles
-      // seen nearly edge-on, where the float ray test could still decide either way.
-      const glm::dvec3 q0(p0);
-      const glm::dvec3 n = glm::cross(glm::dvec3(p1) - q0, glm::dvec3(p2) - q0);
-      const glm::dvec3 to_eye = f.eye - q0;
-      const double d = glm::dot(n, to_eye);
-      if (d < -1e-5 * glm::length(n) * glm::length(to_eye)) return false;
-    }
+    // A back face (or one seen exactly edge-on) from the eye is one from every ray: never a hit.
+    if (!detail::faces_eye(p0, p1, p2, f.eye)) return false;
     int rx0 = 0, ry0 = 0, rx1 = tw - 1, ry1 = th - 1;
     if (f.use_rect) {
       const glm::vec3* p[3] = {&p0, &p1, &p2};
@@ -721,10 +722,11 @@ class NormalClassIndex {
         const double lx0 = std::ceil(mnx - m) - x0, lx1 = std::floor(mxx + m) - x0;
         const double ly0 = std::ceil(mny - m) - y0, ly1 = std::floor(mxy + m) - y0;
         if (lx1 < 0.0 || ly1 < 0.0 || lx0 > tw - 1 || ly0 > th - 1) return false;
-        rx0 = std::max(rx0, static_cast<int>(lx0));
-        rx1 = std::min(rx1, static_cast<int>(lx1));
-        ry0 = std::max(ry0, static_cast<int>(ly0));
-        ry1 = std::min(ry1, static_cast<int>(ly1));
+        // Clamp in double first: the projected corners may be far off screen.
+        rx0 = static_cast<int>(std::max(0.0, lx0));
+        rx1 = static_cast<int>(std::min(double(tw - 1), lx1));
+        ry0 = static_cast<int>(std::max(0.0, ly0));
+        ry1 = static_cast<int>(std::min(double(th - 1), ly1));
       }
     }
     const float a[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};

@@ -39,6 +39,7 @@ inline BruteHits brute_force(const cullkit::support::Scene& scene, const cullkit
     const glm::dvec3 nrm = glm::cross(glm::dvec3(p[1]) - glm::dvec3(p[0]), glm::dvec3(p[2]) - glm::dvec3(p[0]));
     const double len = glm::length(nrm);
     if (!(len > 0.0) || !std::isfinite(len)) continue;
+    if (!cullkit::detail::faces_eye(p[0], p[1], p[2], glm::dvec3(cam.eye))) continue;  // the index's front rule
     ok[t] = 1;
     for (int k = 0; k < 3; ++k)
       for (int a = 0; a < 3; ++a) {
@@ -76,6 +77,7 @@ inline bool own_hit(const cullkit::support::Scene& scene, const cullkit::Camera&
                     float& t) {
   glm::vec3 p[3];
   if (!cullkit::triangle_positions(scene.mesh(), tri, p)) return false;
+  if (!cullkit::detail::faces_eye(p[0], p[1], p[2], glm::dvec3(cam.eye))) return false;
   const cullkit::PixelRays rays(cam);
   const auto wr = cullkit::detail::WatertightRay<float>::make(rays.ray(x, y).direction);
   float r[3][3];

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
 namespace cullkit::detail {
@@ -80,6 +81,17 @@ template <class Real>
   if (!(r >= Real(0)) || !std::isfinite(r)) return false;
   t = r;
   return true;
+}
+
+/// The NormalClassIndex's front-face rule beside the ray test: the eye lies strictly on the front
+/// side of the triangle's plane, evaluated in double. A triangle whose plane passes through the
+/// eye is seen exactly edge-on and is never a hit, whatever the rounding of the ray test says
+/// (this keeps the per-class cone skipping and the per-triangle test in agreement).
+[[nodiscard]] inline bool faces_eye(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
+                                    const glm::dvec3& eye) noexcept {
+  const glm::dvec3 q0(p0);
+  const glm::dvec3 n = glm::cross(glm::dvec3(p1) - q0, glm::dvec3(p2) - q0);
+  return glm::dot(n, eye - q0) > 0.0;
 }
 
 }  // namespace cullkit::detail

@@ -1,0 +1,308 @@
+// bench_nci: NormalClassIndex against Embree in one process, same thread count.
+//  1. precision (distinct triangles tested / triangles truly visible, truth from Embree) for
+//     classes x grid (the seed's Figure 10), with memory per triangle and build time against an
+//     Embree BVH build (the seed's Table 1 layout);
+//  2. time of select_visible against Embree casting one ray per pixel (rtcIntersect1) and 4x4
+//     packets (rtcIntersect16), at 640x480 and 1024x768, on real scenes and a generated one of
+//     >= 10M triangles (full runs only; `--no-big` skips it).
+// CSV on stdout. CULLKIT_BENCH_SMOKE=1: a tiny city at 64x48, one setting.
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <embree3/rtcore.h>
+
+#include <cullkit/normal_class_index.hpp>
+#include <cullkit_support/scene.hpp>
+
+#include "race.hpp"
+
+using namespace cullkit;
+using cullkit::support::Scene;
+
+namespace {
+
+std::atomic<long long> g_embree_bytes{0};
+bool memory_monitor(void*, ssize_t bytes, bool) {
+  g_embree_bytes += bytes;
+  return true;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// A plain Embree scene for racing: default (two-sided) triangles, medium build quality.
+struct Embree {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  double build_seconds = 0;
+  long long bytes = 0;
+  Embree(const Scene& s, unsigned threads) {
+    const std::string cfg = "threads=" + std::to_string(threads);
+    device = rtcNewDevice(cfg.c_str());
+    rtcSetDeviceMemoryMonitorFunction(device, memory_monitor, nullptr);
+    const long long before = g_embree_bytes.load();
+    const auto t0 = std::chrono::steady_clock::now();
+    scene = rtcNewScene(device);
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                          3 * sizeof(float), s.positions.size()));
+    std::memcpy(v, s.positions.data(), s.positions.size() * 3 * sizeof(float));
+    auto* ix = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                              3 * sizeof(unsigned), s.triangle_count()));
+    std::memcpy(ix, s.indices.data(), s.indices.size() * sizeof(unsigned));
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(scene, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(scene);
+    build_seconds = seconds_since(t0);
+    bytes = g_embree_bytes.load() - before;
+  }
+  ~Embree() {
+    rtcReleaseScene(scene);
+    rtcReleaseDevice(device);
+  }
+
+  // One ray per pixel; returns the number of hits (so the work cannot be dropped).
+  long long render1(const Camera& cam, unsigned threads) const {
+    std::atomic<long long> hits{0};
+    const PixelRays rays(cam);
+    auto work = [&](unsigned k) {
+      RTCIntersectContext ctx;
+      rtcInitIntersectContext(&ctx);
+      long long n = 0;
+      for (int y = static_cast<int>(k); y < cam.height; y += static_cast<int>(threads)) {
+        for (int x = 0; x < cam.width; ++x) {
+          const Ray r = rays.ray(x, y);
+          RTCRayHit rh;
+          rh.ray.org_x = r.origin.x;
+          rh.ray.org_y = r.origin.y;
+          rh.ray.org_z = r.origin.z;
+          rh.ray.dir_x = r.direction.x;
+          rh.ray.dir_y = r.direction.y;
+          rh.ray.dir_z = r.direction.z;
+          rh.ray.tnear = 0.0f;
+          rh.ray.tfar = 3.0e38f;
+          rh.ray.mask = 0xFFFFFFFFu;
+          rh.ray.time = 0.0f;
+          rh.ray.flags = 0;
+          rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+          rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+          rtcIntersect1(scene, &ctx, &rh);
+          n += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+        }
+      }
+      hits += n;
+    };
+    run_threads(threads, work);
+    return hits.load();
+  }
+
+  // 4x4 pixel packets.
+  long long render16(const Camera& cam, unsigned threads) const {
+    std::atomic<long long> hits{0};
+    const PixelRays rays(cam);
+    const int bx = (cam.width + 3) / 4, by = (cam.height + 3) / 4;
+    auto work = [&](unsigned k) {
+      RTCIntersectContext ctx;
+      rtcInitIntersectContext(&ctx);
+      long long n = 0;
+      for (int b = static_cast<int>(k); b < bx * by; b += static_cast<int>(threads)) {
+        alignas(64) RTCRayHit16 rh;
+        alignas(64) int valid[16];
+        const int x0 = (b % bx) * 4, y0 = (b / bx) * 4;
+        for (int i = 0; i < 16; ++i) {
+          const int x = x0 + (i & 3), y = y0 + (i >> 2);
+          valid[i] = (x < cam.width && y < cam.height) ? -1 : 0;
+          const Ray r = rays.ray(std::min(x, cam.width - 1), std::min(y, cam.height - 1));
+          rh.ray.org_x[i] = r.origin.x;
+          rh.ray.org_y[i] = r.origin.y;
+          rh.ray.org_z[i] = r.origin.z;
+          rh.ray.dir_x[i] = r.direction.x;
+          rh.ray.dir_y[i] = r.direction.y;
+          rh.ray.dir_z[i] = r.direction.z;
+          rh.ray.tnear[i] = 0.0f;
+          rh.ray.tfar[i] = 3.0e38f;
+          rh.ray.mask[i] = 0xFFFFFFFFu;
+          rh.ray.time[i] = 0.0f;
+          rh.ray.flags[i] = 0;
+          rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+          rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect16(valid, scene, &ctx, &rh);
+        for (int i = 0; i < 16; ++i) n += valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
+      }
+      hits += n;
+    };
+    run_threads(threads, work);
+    return hits.load();
+  }
+
+  // Front-face first hits per pixel (truth for precision): two-sided hits whose geometric normal
+  // faces the ray are dropped by continuing past them.
+  std::vector<std::uint32_t> visible(const Camera& cam, const Scene& s) const {
+    const PixelRays rays(cam);
+    std::vector<char> seen(s.triangle_count(), 0);
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    for (int y = 0; y < cam.height; ++y) {
+      for (int x = 0; x < cam.width; ++x) {
+        const Ray r = rays.ray(x, y);
+        float tnear = 0.0f;
+        for (int guard = 0; guard < 64; ++guard) {
+          RTCRayHit rh;
+          rh.ray.org_x = r.origin.x;
+          rh.ray.org_y = r.origin.y;
+          rh.ray.org_z = r.origin.z;
+          rh.ray.dir_x = r.direction.x;
+          rh.ray.dir_y = r.direction.y;
+          rh.ray.dir_z = r.direction.z;
+          rh.ray.tnear = tnear;
+          rh.ray.tfar = 3.0e38f;
+          rh.ray.mask = 0xFFFFFFFFu;
+          rh.ray.time = 0.0f;
+          rh.ray.flags = 0;
+          rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+          rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+          rtcIntersect1(scene, &ctx, &rh);
+          if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
+          const float d = rh.hit.Ng_x * r.direction.x + rh.hit.Ng_y * r.direction.y + rh.hit.Ng_z * r.direction.z;
+          // Embree's Ng is (e1 x e2) with e1 = v0 - v1, e2 = v2 - v0: the same direction as
+          // (v1 - v0) x (v2 - v0); a front face has it against the ray.
+          if (d < 0.0f) {
+            seen[rh.hit.primID] = 1;
+            break;
+          }
+          tnear = std::nextafter(rh.ray.tfar, 3.0e38f);
+        }
+      }
+    }
+    std::vector<std::uint32_t> out;
+    for (std::size_t i = 0; i < seen.size(); ++i)
+      if (seen[i]) out.push_back(static_cast<std::uint32_t>(i));
+    return out;
+  }
+
+  template <class F>
+  static void run_threads(unsigned threads, F& work) {
+    std::vector<std::thread> pool;
+    for (unsigned k = 1; k < threads; ++k) pool.emplace_back(work, k);
+    work(0);
+    for (auto& t : pool) t.join();
+  }
+};
+
+std::vector<Camera> views(const Scene& s, int w, int h) {
+  const Aabb b = s.bounds;
+  const glm::vec3 c = b.center(), e = b.extent();
+  std::vector<Camera> cams;
+  // Outside, looking at the centre from a raised diagonal.
+  cams.push_back(support::make_camera(c + glm::vec3(0.8f, 0.5f, 0.9f) * glm::length(e) * 0.6f, c, 60, w, h,
+                                      0.1f, 0.0f));
+  // Inside the box near the floor, looking across (the walk-through view).
+  cams.push_back(support::make_camera(b.min + e * glm::vec3(0.3f, 0.08f, 0.35f),
+                                      b.min + e * glm::vec3(0.8f, 0.05f, 0.7f), 70, w, h, 0.1f, 0.0f));
+  return cams;
+}
+
+void precision_table(const std::string& name, const Scene& s, unsigned threads, bool smoke) {
+  const Embree embree(s, threads);
+  std::printf("embree_build,%s,%zu,%.3f,%.1f\n", name.c_str(), s.triangle_count(), embree.build_seconds,
+              double(embree.bytes) / double(s.triangle_count()));
+  const int w = smoke ? 64 : 640, h = smoke ? 48 : 480;
+  const auto cams = views(s, w, h);
+  std::vector<std::vector<std::uint32_t>> truth;
+  for (const auto& c : cams) truth.push_back(embree.visible(c, s));
+  const std::vector<int> classes = smoke ? std::vector<int>{32} : std::vector<int>{32, 128, 512};
+  const std::vector<int> grids = smoke ? std::vector<int>{64} : std::vector<int>{32, 64, 128};
+  for (int k : classes) {
+    for (int g : grids) {
+      NciParams p;
+      p.classes = k;
+      p.grid = g;
+      p.threads = threads;
+      p.build_threads = threads;
+      const NormalClassIndex<glm::vec3> index(s.mesh(), p);
+      std::size_t tested = 0, visible = 0, ours = 0;
+      for (std::size_t i = 0; i < cams.size(); ++i) {
+        const VisibleSet v = index.select_visible(cams[i]);
+        tested += v.triangles_tested;
+        ours += v.triangles.size();
+        visible += truth[i].size();
+      }
+      std::printf("nci_precision,%s,%zu,%d,%d,%.3f,%.2f,%.1f,%zu,%zu,%zu\n", name.c_str(), s.triangle_count(), k, g,
+                  index.stats().build_seconds, double(tested) / double(std::max<std::size_t>(1, visible)),
+                  double(index.memory_bytes()) / double(s.triangle_count()), tested, visible, ours);
+      std::fflush(stdout);
+    }
+  }
+}
+
+void speed(const std::string& name, const Scene& s, unsigned threads, bool smoke) {
+  const Embree embree(s, threads);
+  NciParams p;
+  p.threads = threads;
+  p.build_threads = threads;
+  const NormalClassIndex<glm::vec3> index(s.mesh(), p);
+  const std::vector<std::pair<int, int>> sizes =
+      smoke ? std::vector<std::pair<int, int>>{{64, 48}} : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}};
+  for (auto [w, h] : sizes) {
+    const auto cams = views(s, w, h);
+    for (std::size_t ci = 0; ci < cams.size(); ++ci) {
+      const Camera cam = cams[ci];
+      NciContext ctx;
+      VisibleSet out;
+      const std::string race = name + "/" + std::to_string(w) + "x" + std::to_string(h) + "/view" +
+                               std::to_string(ci) + "/threads" + std::to_string(threads);
+      cullkit_bench::race(race,
+                          {{"embree_rtcIntersect1", [&] { cullkit_bench::keep(embree.render1(cam, threads)); }},
+                           {"embree_rtcIntersect16", [&] { cullkit_bench::keep(embree.render16(cam, threads)); }},
+                           {"nci_select_visible", [&] {
+                              index.select_visible(cam, ctx, out, nullptr);
+                              cullkit_bench::keep(out.triangles.size());
+                            }}},
+                          smoke ? 2 : 9);
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const bool smoke = cullkit_bench::smoke();
+  bool big = !smoke, precision = true, timing = true;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--no-big")) big = false;
+    if (!std::strcmp(argv[i], "--only-big")) precision = timing = false;
+    if (!std::strcmp(argv[i], "--no-precision")) precision = false;
+  }
+  const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+  std::printf("# threads=%u\n", threads);
+  std::printf("# nci_precision,scene,triangles,classes,grid,build_s,tested_per_visible,bytes_per_triangle,tested,"
+              "visible,selected\n# embree_build,scene,triangles,build_s,bytes_per_triangle\n");
+  std::vector<std::pair<std::string, Scene>> scenes;
+  scenes.emplace_back("city", support::make_city(7, smoke ? 3 : 20));
+  if (!smoke) {
+    for (const auto& f : support::real_scene_files()) {
+      auto s = support::load_obj(support::scenes_dir() + "/" + f);
+      if (s) scenes.emplace_back(f, std::move(*s));
+    }
+  }
+  for (const auto& [name, s] : scenes) {
+    if (precision) precision_table(name, s, threads, smoke);
+    if (timing) speed(name, s, threads, smoke);
+  }
+  if (big) {
+    // >= 10M triangles: a large generated city.
+    Scene s = support::make_city(8, 200);
+    std::printf("# big scene: %zu triangles\n", s.triangle_count());
+    precision_table("bigcity", s, threads, smoke);
+    speed("bigcity", s, threads, smoke);
+  }
+  return 0;
+}
