@@ -205,9 +205,9 @@ int main() {
                                              c, 60, 1280, 720, 0.5f, 4.0f * glm::length(b.extent()));
     cull_race("cull_triangles_" + scene->name + "_overview", boxes, frustum_of(over));
   }
-  // Build over ~1M triangles.
+  // Build over ~1M triangles (90 x 90 city blocks).
   {
-    const support::Scene city = support::make_city(5, smoke ? 2 : 64);
+    const support::Scene city = support::make_city(5, smoke ? 2 : 90);  // ~1M triangles
     build_race(city);
   }
   std::fprintf(stderr, "\nsummary (time ratios, lower is better for the ABT):\n");

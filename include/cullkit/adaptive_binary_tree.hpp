@@ -38,6 +38,7 @@
 #include <glm/vec3.hpp>
 
 #include "config.hpp"
+#include "detail/abt_leaf.hpp"
 #include "detail/abt_split.hpp"
 #include "geometry/aabb.hpp"
 #include "geometry/frustum.hpp"
@@ -58,9 +59,12 @@ enum class AbtCandidates : std::uint8_t {
 
 /// Build parameters. Every field has a documented default; `AbtParams{}` is a sound choice.
 struct AbtParams {
-  /// A node with at most this many objects becomes a leaf. Default 4. Smaller leaves cull tighter
-  /// but make more nodes (about 2n / max_leaf_size). 0 is treated as 1.
-  std::uint32_t max_leaf_size = 4;
+  /// A node with at most this many objects becomes a leaf. Default 16: a straddling leaf tests its
+  /// objects 16 at a time (vectorized), so leaves of 16 cull fastest in bench_abt (60k boxes: 0.22x
+  /// the SoA scan, against 0.43x with leaves of 4) and need fewer nodes (about 2n / max_leaf_size).
+  /// Culling answers per object whatever the leaf size; smaller leaves give finer draw ranges.
+  /// 0 is treated as 1.
+  std::uint32_t max_leaf_size = 16;
   /// Deepest level (the root is level 0); a node there becomes a leaf whatever its size.
   /// Default 48; values above `AdaptiveBinaryTree::depth_limit` (64) are clamped to it.
   std::uint32_t max_depth = 48;
@@ -76,6 +80,10 @@ struct AbtParams {
   float weight_count = 1.0f;
   /// Weight of f4 = (objects whose box straddles the plane) / n. Default 1. 0 also skips counting.
   float weight_straddle = 1.0f;
+  /// Nodes with more objects than this score their candidates on an evenly strided subset of about
+  /// this many objects (the split itself is always exact). Default 8192; raise it for slightly
+  /// better top levels at a higher build cost. Values below 64 are treated as 64.
+  std::uint32_t score_sample_limit = 8192;
   /// Seed of the sampling generator (unused by binning). Default 0x5eed.
   std::uint64_t seed = 0x5eedu;
   /// Worker threads for the build: 0 or 1 build on the calling thread only (default 0). With N > 1,
@@ -207,11 +215,11 @@ class AdaptiveBinaryTree {
         continue;
       }
       if (node.is_leaf()) {
-        for (std::uint32_t i = node.begin; i < node.end; ++i) {
-          PlaneMask m = mask;
-          if (frustum.classify(bounds_[i], m) == Containment::outside) continue;
-          if (!call(visitor, i, i + 1, m == 0 ? Containment::inside : Containment::intersecting)) return;
-        }
+        // Objects one by one, only the planes the leaf straddles, several objects per step.
+        const bool go_on = leaf_boxes_.test(frustum, mask, node.begin, node.end, [&](std::uint32_t i, Containment c) {
+          return call(visitor, i, i + 1, c);
+        });
+        if (!go_on) return;
         continue;
       }
       stack[top++] = Entry{node.left + 1, mask};
@@ -311,6 +319,7 @@ class AdaptiveBinaryTree {
       const Aabb b = get_bounds(order_[i]);
       if (is_valid(b)) {
         bounds_[i] = b;
+        leaf_boxes_.set(static_cast<std::uint32_t>(i), b);
       } else {
         ++stats_.refit_invalid;
       }
@@ -482,7 +491,19 @@ class AdaptiveBinaryTree {
   struct Task {
     std::uint32_t node;  // index in the top-level node array (a placeholder until stitched)
     std::uint32_t begin, end, depth;
+    Aabb box, centroids;
   };
+
+  // Bounds of items [begin, end) and of their centroids.
+  static void range_bounds(const detail::AbtBuildItem* items, std::uint32_t begin, std::uint32_t end, Aabb& box,
+                           Aabb& centroids) {
+    box = Aabb::empty();
+    centroids = Aabb::empty();
+    for (std::uint32_t i = begin; i < end; ++i) {
+      box = merge(box, items[i].box);
+      centroids = merge(centroids, items[i].centroid);
+    }
+  }
 
   struct BuildContext {
     detail::AbtBuildItem* items = nullptr;
@@ -513,14 +534,12 @@ class AdaptiveBinaryTree {
   }
 
   // Builds the subtree of `nodes[node]` over items [begin, end). Children are appended as pairs.
+  // `box` and `centroids` are the bounds of the items and of their centroids (from the parent's
+  // partition pass, so each level reads the items twice: once to score, once to partition).
   static void build_node(std::vector<AbtNode>& nodes, std::uint32_t node, std::uint32_t begin, std::uint32_t end,
-                         std::uint32_t depth, const BuildContext& ctx, detail::AbtSplitScratch& scratch) {
+                         std::uint32_t depth, const Aabb& box, const Aabb& centroids, const BuildContext& ctx,
+                         detail::AbtSplitScratch& scratch) {
     detail::AbtBuildItem* items = ctx.items;
-    Aabb box = Aabb::empty(), centroids = Aabb::empty();
-    for (std::uint32_t i = begin; i < end; ++i) {
-      box = merge(box, items[i].box);
-      centroids = merge(centroids, items[i].centroid);
-    }
     {
       AbtNode& n = nodes[node];
       n.bounds = box;
@@ -533,7 +552,7 @@ class AdaptiveBinaryTree {
     }
     const std::uint32_t count = end - begin;
     if (ctx.grain > 0 && count < ctx.grain) {
-      ctx.tasks->push_back(Task{node, begin, end, depth});
+      ctx.tasks->push_back(Task{node, begin, end, depth, box, centroids});
       return;
     }
     if (count <= ctx.leaf_size || depth >= ctx.max_depth) {
@@ -548,11 +567,24 @@ class AdaptiveBinaryTree {
     }
     const int axis = split.axis;
     const float pos = split.position;
-    detail::AbtBuildItem* mid =
-        std::partition(items + begin, items + end, [axis, pos](const detail::AbtBuildItem& it) {
-          return it.centroid[axis] < pos;
-        });
-    const auto m = static_cast<std::uint32_t>(mid - items);
+    // Partition (centroid < pos goes left), gathering both children's bounds on the way.
+    Aabb lbox = Aabb::empty(), lcen = Aabb::empty(), rbox = Aabb::empty(), rcen = Aabb::empty();
+    std::uint32_t i = begin, j = end;
+    for (;;) {
+      while (i < j && items[i].centroid[axis] < pos) {
+        lbox = merge(lbox, items[i].box);
+        lcen = merge(lcen, items[i].centroid);
+        ++i;
+      }
+      while (i < j && !(items[j - 1].centroid[axis] < pos)) {
+        rbox = merge(rbox, items[j - 1].box);
+        rcen = merge(rcen, items[j - 1].centroid);
+        --j;
+      }
+      if (i >= j) break;
+      std::swap(items[i], items[j - 1]);  // now items[i] goes left, items[j - 1] right
+    }
+    const std::uint32_t m = i;
     if (m == begin || m == end) {  // rounding left one side empty: nothing separates
       report_leaf(ctx, count);
       return;
@@ -563,8 +595,8 @@ class AdaptiveBinaryTree {
     nodes[node].split = pos;
     nodes.emplace_back();
     nodes.emplace_back();
-    build_node(nodes, left, begin, m, depth + 1, ctx, scratch);
-    build_node(nodes, left + 1, m, end, depth + 1, ctx, scratch);
+    build_node(nodes, left, begin, m, depth + 1, lbox, lcen, ctx, scratch);
+    build_node(nodes, left + 1, m, end, depth + 1, rbox, rcen, ctx, scratch);
   }
 
   template <class Getter>
@@ -572,6 +604,7 @@ class AdaptiveBinaryTree {
     nodes_.clear();
     order_.clear();
     bounds_.clear();
+    leaf_boxes_.assign(bounds_);
     stats_ = AbtStats{};
     refitted_ = false;
     constexpr std::size_t max_count = std::numeric_limits<std::uint32_t>::max() - 1u;
@@ -603,6 +636,7 @@ class AdaptiveBinaryTree {
     ctx.cfg.candidates = std::clamp<std::uint32_t>(params.candidate_count, 1u, 1024u);
     ctx.cfg.sampling = params.candidates == AbtCandidates::sampling;
     ctx.cfg.seed = params.seed;
+    ctx.cfg.sample_limit = params.score_sample_limit;
     ctx.leaf_size = std::max<std::uint32_t>(1u, params.max_leaf_size);
     ctx.max_depth = std::min(params.max_depth, depth_limit);
     std::atomic<std::uint32_t> done{0};
@@ -620,10 +654,12 @@ class AdaptiveBinaryTree {
     raw.reserve(2 * (n / ctx.leaf_size + 1));
     detail::AbtSplitScratch scratch;
     scratch.reserve(ctx.cfg.candidates);
+    Aabb root_box, root_centroids;
+    range_bounds(items.data(), 0, n, root_box, root_centroids);
     const unsigned threads = params.threads;
     const std::uint32_t grain = std::max<std::uint32_t>(params.parallel_grain, 2u * ctx.leaf_size + 2u);
     if (threads <= 1 || n < 2 * grain) {
-      build_node(raw, 0, 0, n, 0, ctx, scratch);
+      build_node(raw, 0, 0, n, 0, root_box, root_centroids, ctx, scratch);
     } else {
       // Top levels on this thread, deferring subtrees smaller than the grain; then the deferred
       // subtrees on a pool, each into its own array; then stitched. Split choices depend only on a
@@ -632,7 +668,7 @@ class AdaptiveBinaryTree {
       std::vector<Task> tasks;
       ctx.grain = grain;
       ctx.tasks = &tasks;
-      build_node(raw, 0, 0, n, 0, ctx, scratch);
+      build_node(raw, 0, 0, n, 0, root_box, root_centroids, ctx, scratch);
       ctx.grain = 0;
       ctx.tasks = nullptr;
       std::vector<std::vector<AbtNode>> local(tasks.size());
@@ -645,7 +681,7 @@ class AdaptiveBinaryTree {
           if (t >= tasks.size()) return;
           std::vector<AbtNode>& sub = local[t];
           sub.resize(1);
-          build_node(sub, 0, tasks[t].begin, tasks[t].end, tasks[t].depth, ctx, s);
+          build_node(sub, 0, tasks[t].begin, tasks[t].end, tasks[t].depth, tasks[t].box, tasks[t].centroids, ctx, s);
         }
       };
       std::vector<std::thread> pool;
@@ -704,6 +740,7 @@ class AdaptiveBinaryTree {
       order_[i] = items[i].index;
       bounds_[i] = items[i].box;
     }
+    leaf_boxes_.assign(bounds_);
     build_area_ = total_area();
     if (params.progress) params.progress(1.0f);
   }
@@ -711,6 +748,7 @@ class AdaptiveBinaryTree {
   std::vector<AbtNode> nodes_;
   std::vector<std::uint32_t> order_;
   std::vector<Aabb> bounds_;
+  detail::AbtLeafBoxes leaf_boxes_;  // bounds_ again, as padded SoA for the leaf tests
   std::size_t input_count_ = 0;
   AbtStats stats_;
   double build_area_ = 0.0;

@@ -55,6 +55,18 @@ class OracleFrustum {
     add(-1, 2, 1);
   }
 
+  /// True if all eight corners are inside (or on) every plane.
+  [[nodiscard]] bool contains(const cullkit::Aabb& b) const {
+    for (const auto& p : planes_) {
+      for (int c = 0; c < 8; ++c) {
+        const double x = (c & 1) ? b.max.x : b.min.x, y = (c & 2) ? b.max.y : b.min.y,
+                     z = (c & 4) ? b.max.z : b.min.z;
+        if (p[0] * x + p[1] * y + p[2] * z + p[3] < 0.0) return false;
+      }
+    }
+    return true;
+  }
+
   /// True unless all eight corners are strictly outside one plane.
   [[nodiscard]] bool meets(const cullkit::Aabb& b) const {
     for (const auto& p : planes_) {

@@ -64,10 +64,17 @@ void check_view(const Tree& tree, const std::vector<Aabb>& boxes, const View& vi
   // The visitor form covers exactly the same positions, as disjoint ranges.
   std::size_t covered = 0;
   bool ranges_ok = true;
+  std::size_t wrong_inside = 0;
   tree.cull(frustum, [&](std::uint32_t b, std::uint32_t e, Containment c) {
     if (!(b < e && e <= tree.size()) || c == Containment::outside) ranges_ok = false;
     covered += e - b;
+    // `inside` is a promise: every object of the range lies wholly inside the frustum.
+    if (c == Containment::inside)
+      for (std::uint32_t i = b; i < e && e <= tree.size(); ++i)
+        if (!oracle.contains(boxes[tree.order()[i]])) ++wrong_inside;
   });
+  CHECK_MSG(wrong_inside == 0, "%s: %zu objects reported inside are not (seed %llu, view %d, %s)", label,
+            wrong_inside, static_cast<unsigned long long>(seed), k, view.kind);
   CHECK_MSG(ranges_ok && covered == out.size(), "%s: visitor ranges cover %zu, out has %zu (seed %llu, view %d)",
             label, covered, out.size(), static_cast<unsigned long long>(seed), k);
   ++totals.views;

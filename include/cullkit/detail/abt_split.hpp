@@ -19,6 +19,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "../config.hpp"
 #include "../geometry/aabb.hpp"
 
 namespace cullkit::detail {
@@ -56,10 +57,11 @@ struct AbtBuildItem {
 }
 
 struct AbtSplitConfig {
-  float weights[4];           // w1..w4
-  std::uint32_t candidates;   // candidate planes per axis
-  bool sampling;              // true: seeded sampling; false: uniform binning
+  float weights[4];            // w1..w4
+  std::uint32_t candidates;    // candidate planes per axis
+  bool sampling;               // true: seeded sampling; false: uniform binning
   std::uint64_t seed;
+  std::uint32_t sample_limit;  // nodes larger than this score on an evenly strided subset
 };
 
 struct AbtSplit {
@@ -70,24 +72,73 @@ struct AbtSplit {
 
 /// Reusable per-thread scratch (sized once per build, no allocation per node).
 struct AbtSplitScratch {
-  std::vector<float> positions;        // candidate positions on one axis, ascending
-  std::vector<std::uint32_t> count;    // objects whose centroid falls in each interval
-  std::vector<Aabb> box;               // merged bounds per interval
-  std::vector<std::int64_t> straddle;  // difference array for straddling counts
-  std::vector<Aabb> right;             // suffix merges
+  std::vector<float> positions[3];     // candidate positions per axis, ascending
+  std::vector<std::uint32_t> count;    // [axis][interval] objects whose centroid falls there
+  std::vector<Aabb> box;               // [axis][interval] merged bounds
+  std::vector<std::int32_t> straddle;  // [axis][interval] difference array of straddling counts
+  std::vector<Aabb> right;             // suffix merges for one axis
+  std::uint32_t k = 0;
 
-  void reserve(std::uint32_t k) {
-    positions.reserve(k);
-    count.resize(k + 1);
-    box.resize(k + 1);
-    straddle.resize(k + 2);
-    right.resize(k + 1);
+  void reserve(std::uint32_t candidates) {
+    k = candidates;
+    for (auto& p : positions) p.reserve(candidates);
+    count.resize(3 * std::size_t{k + 2});
+    box.resize(3 * std::size_t{k + 2});
+    straddle.resize(3 * std::size_t{k + 2});
+    right.resize(k + 2);
   }
 };
+
+namespace abt_split_impl {
+
+struct AxisBinning {
+  float lo = 0.0f;
+  float scale = 0.0f;  // > 0: uniform bins; 0: binary search in `pos`
+  const float* pos = nullptr;
+  std::uint32_t m = 0;  // candidate count on this axis (0: axis unused)
+
+  [[nodiscard]] CULLKIT_FORCEINLINE std::uint32_t bin(float v) const noexcept {
+    if (scale > 0.0f) {
+      float t = (v - lo) * scale;  // never NaN: v, lo finite, scale finite > 0
+      t = t < 0.0f ? 0.0f : t;
+      t = t > float(m) ? float(m) : t;
+      return static_cast<std::uint32_t>(t);
+    }
+    return static_cast<std::uint32_t>(std::upper_bound(pos, pos + m, v) - pos);
+  }
+};
+
+// One pass over the (possibly strided) items fills all three axes' histograms.
+template <bool Straddle>
+inline void fill(const AbtBuildItem* items, std::uint32_t begin, std::uint32_t end, std::uint32_t step,
+                 const AxisBinning* ax, AbtSplitScratch& s) {
+  const std::size_t w = std::size_t{s.k} + 2;
+  for (std::uint32_t i = begin; i < end; i += step) {
+    const AbtBuildItem& it = items[i];
+    for (int a = 0; a < 3; ++a) {
+      if (ax[a].m == 0) continue;
+      const std::size_t base = std::size_t(a) * w;
+      const std::uint32_t b = ax[a].bin(it.centroid[a]);
+      ++s.count[base + b];
+      Aabb& bb = s.box[base + b];
+      bb.min = glm::min(bb.min, it.box.min);
+      bb.max = glm::max(bb.max, it.box.max);
+      if constexpr (Straddle) {
+        // Straddles candidate j (between intervals j and j + 1) when bin(min) <= j < bin(max).
+        ++s.straddle[base + ax[a].bin(it.box.min[a])];
+        --s.straddle[base + ax[a].bin(it.box.max[a])];
+      }
+    }
+  }
+}
+
+}  // namespace abt_split_impl
 
 /// Chooses the split of items [begin, end) whose merged bounds are `node_box` and whose centroids
 /// span `centroid_box`. `found` is false when no candidate puts objects on both sides.
 /// `key` makes the sampling stream depend only on the node (never on threads or visit order).
+/// Nodes with more than `cfg.sample_limit` objects are scored on every (n / limit)-th object: the
+/// scores are estimates there, the partition that follows is always exact.
 [[nodiscard]] inline AbtSplit abt_find_split(const AbtBuildItem* items, std::uint32_t begin, std::uint32_t end,
                                              const Aabb& node_box, const Aabb& centroid_box,
                                              const AbtSplitConfig& cfg, std::uint64_t key,
@@ -95,75 +146,73 @@ struct AbtSplitScratch {
   AbtSplit best;
   const std::uint32_t n = end - begin;
   if (n < 2) return best;
+  if (s.k != cfg.candidates) s.reserve(cfg.candidates);
   double node_ext[3], max_ext = 0.0;
   for (int a = 0; a < 3; ++a) {
     node_ext[a] = double(node_box.max[a]) - double(node_box.min[a]);
     max_ext = std::max(max_ext, node_ext[a]);
   }
-  const double inv_n = 1.0 / double(n);
-  double best_score = 0.0;
   std::uint64_t rng = cfg.seed ^ (key * 0xD1B54A32D192ED03ull);
   const std::uint32_t k_max = std::max<std::uint32_t>(1u, cfg.candidates);
 
+  // Candidate positions per axis; bin(v) approximates #{candidates <= v} (exact for sampling).
+  abt_split_impl::AxisBinning ax[3];
   for (int axis = 0; axis < 3; ++axis) {
+    std::vector<float>& positions = s.positions[axis];
+    positions.clear();
     const float cmin = centroid_box.min[axis], cmax = centroid_box.max[axis];
     const double ext = double(cmax) - double(cmin);
     if (!(ext > 0.0)) continue;  // all centroids on one plane: nothing separates on this axis
-
-    // Candidate positions; bin(v) must approximate #{candidates <= v} (exact for sampling).
-    s.positions.clear();
     float scale = 0.0f;
     if (cfg.sampling) {
       for (std::uint32_t i = 0; i < k_max; ++i) {
         const std::uint32_t pick = begin + static_cast<std::uint32_t>(splitmix64(rng) % n);
         const float p = items[pick].centroid[axis];
-        if (p > cmin) s.positions.push_back(p);  // a plane at cmin would leave the left side empty
+        if (p > cmin) positions.push_back(p);  // a plane at cmin would leave the left side empty
       }
-      std::sort(s.positions.begin(), s.positions.end());
-      s.positions.erase(std::unique(s.positions.begin(), s.positions.end()), s.positions.end());
+      std::sort(positions.begin(), positions.end());
+      positions.erase(std::unique(positions.begin(), positions.end()), positions.end());
     } else {
       const double step = ext / double(k_max + 1);
       scale = static_cast<float>(double(k_max + 1) / ext);
-      if (!(scale > 0.0f) || !std::isfinite(scale)) continue;
       for (std::uint32_t i = 0; i < k_max; ++i) {
         const float p = static_cast<float>(double(cmin) + step * double(i + 1));
-        if (p > cmin && p <= cmax && (s.positions.empty() || p > s.positions.back())) s.positions.push_back(p);
+        if (p > cmin && p <= cmax && (positions.empty() || p > positions.back())) positions.push_back(p);
       }
-      if (s.positions.size() != k_max) {
-        // Rounding merged candidates (a tiny range): fall back to exact counting by search.
-        scale = 0.0f;
-      }
+      // Rounding merged candidates (a tiny range) or an extreme scale: count exactly by search.
+      if (positions.size() != k_max || !(scale > 0.0f) || !std::isfinite(scale)) scale = 0.0f;
     }
-    const auto m = static_cast<std::uint32_t>(s.positions.size());
+    ax[axis].lo = cmin;
+    ax[axis].scale = scale;
+    ax[axis].pos = positions.data();
+    ax[axis].m = static_cast<std::uint32_t>(positions.size());
+  }
+  if (ax[0].m + ax[1].m + ax[2].m == 0) return best;
+
+  const std::size_t w = std::size_t{s.k} + 2;
+  std::fill(s.count.begin(), s.count.end(), 0u);
+  std::fill(s.box.begin(), s.box.end(), Aabb::empty());
+  const bool want_straddle = cfg.weights[3] != 0.0f;
+  if (want_straddle) std::fill(s.straddle.begin(), s.straddle.end(), 0);
+  const std::uint32_t limit = std::max<std::uint32_t>(cfg.sample_limit, 64u);
+  const std::uint32_t step = n > limit ? n / limit : 1u;
+  if (want_straddle) abt_split_impl::fill<true>(items, begin, end, step, ax, s);
+  else abt_split_impl::fill<false>(items, begin, end, step, ax, s);
+
+  double best_score = 0.0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::uint32_t m = ax[axis].m;
     if (m == 0) continue;
-    const float* pos = s.positions.data();
-    auto bin = [&](float v) -> std::uint32_t {
-      if (scale > 0.0f) {
-        float t = (v - cmin) * scale;  // never NaN: v, cmin finite and scale finite > 0
-        t = t < 0.0f ? 0.0f : t;
-        t = t > float(m) ? float(m) : t;
-        return static_cast<std::uint32_t>(t);
-      }
-      return static_cast<std::uint32_t>(std::upper_bound(pos, pos + m, v) - pos);
-    };
-    std::fill(s.count.begin(), s.count.begin() + m + 1, 0u);
-    std::fill(s.box.begin(), s.box.begin() + m + 1, Aabb::empty());
-    const bool want_straddle = cfg.weights[3] != 0.0f;
-    if (want_straddle) std::fill(s.straddle.begin(), s.straddle.begin() + m + 2, std::int64_t{0});
-    for (std::uint32_t i = begin; i < end; ++i) {
-      const AbtBuildItem& it = items[i];
-      const std::uint32_t b = bin(it.centroid[axis]);
-      ++s.count[b];
-      s.box[b] = merge(s.box[b], it.box);
-      if (want_straddle) {
-        // Straddles candidate j (between intervals j and j + 1) when bin(min) <= j < bin(max).
-        ++s.straddle[bin(it.box.min[axis])];
-        --s.straddle[bin(it.box.max[axis])];
-      }
-    }
+    const std::uint32_t* count = s.count.data() + std::size_t(axis) * w;
+    const Aabb* box = s.box.data() + std::size_t(axis) * w;
+    const std::int32_t* straddle = s.straddle.data() + std::size_t(axis) * w;
+    std::uint32_t total = 0;
+    for (std::uint32_t j = 0; j <= m; ++j) total += count[j];
+    if (total < 2) continue;
+    const double inv_total = 1.0 / double(total);
     Aabb acc = Aabb::empty();
     for (std::uint32_t j = m + 1; j-- > 0;) {
-      acc = merge(acc, s.box[j]);
+      acc = merge(acc, box[j]);
       s.right[j] = acc;
     }
     Aabb left = Aabb::empty();
@@ -171,21 +220,21 @@ struct AbtSplitScratch {
     std::int64_t straddling = 0;
     const double f1 = max_ext > 0.0 ? 1.0 - node_ext[axis] / max_ext : 0.0;
     for (std::uint32_t j = 0; j < m; ++j) {
-      left = merge(left, s.box[j]);
-      n_left += s.count[j];
-      if (want_straddle) straddling += s.straddle[j];
-      if (n_left == 0 || n_left == n) continue;
+      left = merge(left, box[j]);
+      n_left += count[j];
+      if (want_straddle) straddling += straddle[j];
+      if (n_left == 0 || n_left == total) continue;
       const double vl = abt_volume(left), vr = abt_volume(s.right[j + 1]);
       const double vsum = vl + vr;
       const double f2 = vsum > 0.0 ? std::fabs(vl - vr) / vsum : 0.0;
-      const double f3 = std::fabs(double(n_left) - double(n - n_left)) * inv_n;
-      const double f4 = want_straddle ? double(std::max<std::int64_t>(straddling, 0)) * inv_n : 0.0;
+      const double f3 = std::fabs(double(n_left) - double(total - n_left)) * inv_total;
+      const double f4 = want_straddle ? double(std::max<std::int64_t>(straddling, 0)) * inv_total : 0.0;
       const double score = double(cfg.weights[0]) * f1 + double(cfg.weights[1]) * f2 +
                            double(cfg.weights[2]) * f3 + double(cfg.weights[3]) * std::min(f4, 1.0);
       if (!best.found || score < best_score) {
         best.found = true;
         best.axis = axis;
-        best.position = pos[j];
+        best.position = ax[axis].pos[j];
         best_score = score;
       }
     }
