@@ -48,7 +48,7 @@ void run(CullScene& cs, const char* name, int cameras) {
       params.azimuth_planes = 4;
       params.elevation_planes = 2;
     }
-    if (variant == 2) cp.skip_clear_subtrees = false;
+    if (variant == 2) cp.skip_clear_subtrees = true;
     if (variant == 3) cp.start_at_parent_node = false;
     std::vector<std::uint32_t> out, frustum_only;
     OcclusionTree tree(glm::vec3(0.0f), params);

@@ -1,0 +1,152 @@
+// bench_occlusion: OcclusionTree speed. (1) per-query ns and per-insertion us against the number of
+// box occluders (10..1000), plain tree vs two-level top planes, insertion near-to-far and far-to-near
+// (adversarial); (2) whole-scene culling of a generated city: frustum only (the ABT) vs frustum +
+// occlusion with each seed refinement on and off. CSV (race.hpp) plus summary lines.
+#include <algorithm>
+#include <cstdio>
+#include <vector>
+
+#include <cullkit/cullkit.hpp>
+#include <cullkit_support/scene.hpp>
+
+#include "race.hpp"
+
+using namespace cullkit;
+using cullkit::support::Rng;
+
+namespace {
+
+std::vector<Aabb> city_boxes(int n, Rng& rng, float radius) {
+  std::vector<Aabb> out;
+  while (static_cast<int>(out.size()) < n) {
+    const glm::vec3 c(rng.uniform(-radius, radius), 0.0f, rng.uniform(-radius, radius));
+    if (std::max(std::fabs(c.x), std::fabs(c.z)) < 6.0f) continue;
+    out.push_back(Aabb{c - glm::vec3(rng.uniform(1, 4), 0, rng.uniform(1, 4)),
+                       c + glm::vec3(rng.uniform(1, 4), rng.uniform(3, 25), rng.uniform(1, 4))});
+  }
+  return out;
+}
+
+void micro() {
+  const bool smoke = cullkit_bench::smoke();
+  const glm::vec3 eye(0.0f, 1.7f, 0.0f);
+  const int counts[] = {10, 100, 1000};
+  for (int n : counts) {
+    if (smoke && n > 100) break;
+    Rng rng(42u + n);
+    std::vector<Aabb> occ = city_boxes(n, rng, 20.0f + 2.0f * std::sqrt(float(n)) * 4.0f);
+    std::vector<Aabb> far_first = occ;
+    std::sort(far_first.begin(), far_first.end(), [&](const Aabb& a, const Aabb& b) {
+      return glm::length(a.center() - eye) > glm::length(b.center() - eye);
+    });
+    std::vector<Aabb> queries;
+    for (int k = 0; k < (smoke ? 50 : 2000); ++k) {
+      const glm::vec3 c(rng.uniform(-80, 80), rng.uniform(0, 4), rng.uniform(-80, 80));
+      queries.push_back(Aabb{c - glm::vec3(0.4f), c + glm::vec3(0.4f)});
+    }
+    OcclusionParams top;
+    top.azimuth_planes = 8;
+    top.elevation_planes = 2;
+    OcclusionTree plain_tree(eye), top_tree(eye, top), adv_plain(eye), adv_top(eye, top);
+    for (auto& b : occ) plain_tree.insert_box_occluder(b), top_tree.insert_box_occluder(b);
+    for (auto& b : far_first) adv_plain.insert_box_occluder(b), adv_top.insert_box_occluder(b);
+    int hidden = 0;
+    for (auto& q : queries) hidden += plain_tree.is_occluded(q);
+    const char* tag = n == 10 ? "10" : n == 100 ? "100" : "1000";
+    std::printf("# %d occluders: nodes plain %u (depth %u), top %u (depth %u); far-to-near plain depth %u, top "
+                "depth %u; %d of %zu queries hidden\n",
+                n, plain_tree.stats().nodes, plain_tree.stats().depth, top_tree.stats().nodes, top_tree.stats().depth,
+                adv_plain.stats().depth, adv_top.stats().depth, hidden, queries.size());
+    auto query_all = [&queries](const OcclusionTree& t) {
+      return [&queries, &t] {
+        int h = 0;
+        for (auto& q : queries) h += t.is_occluded(q);
+        cullkit_bench::keep(h);
+      };
+    };
+    const auto qr = cullkit_bench::race(std::string("query_x") + std::to_string(queries.size()) + "_occ" + tag,
+                                        {{"plain", query_all(plain_tree)},
+                                         {"two_level", query_all(top_tree)},
+                                         {"plain_far_to_near", query_all(adv_plain)},
+                                         {"two_level_far_to_near", query_all(adv_top)}});
+    for (auto& r : qr) std::printf("# query %s: %.1f ns per query\n", r.name.c_str(), r.median_ns / queries.size());
+    OcclusionTree t1(eye), t2(eye, top);
+    auto insert_all = [&eye](OcclusionTree& t, const std::vector<Aabb>& boxes) {
+      return [&eye, &t, &boxes] {
+        t.reset(eye);
+        for (auto& b : boxes) t.insert_box_occluder(b);
+        cullkit_bench::keep(t.stats().nodes);
+      };
+    };
+    const auto ir = cullkit_bench::race(std::string("insert_occ") + tag,
+                                        {{"plain", insert_all(t1, occ)},
+                                         {"two_level", insert_all(t2, occ)},
+                                         {"plain_far_to_near", insert_all(t1, far_first)},
+                                         {"two_level_far_to_near", insert_all(t2, far_first)}});
+    for (auto& r : ir)
+      std::printf("# insert %s: %.2f us for %d boxes (%.3f us each)\n", r.name.c_str(), r.median_ns / 1000.0, n,
+                  r.median_ns / 1000.0 / n);
+  }
+}
+
+void scene_cull() {
+  const bool smoke = cullkit_bench::smoke();
+  for (int blocks : {6, 18}) {
+    if (smoke && blocks > 6) break;
+    const support::Scene scene = support::make_city(3, smoke ? 2 : blocks);
+    const std::vector<Aabb> bounds = scene.object_bounds();
+    std::vector<std::uint8_t> is_box(scene.objects.size());
+    for (std::size_t i = 0; i < scene.objects.size(); ++i)
+      is_box[i] = scene.objects[i].major_occluder && scene.objects[i].is_box;
+    const AdaptiveBinaryTree<Aabb> abt(bounds.data(), bounds.size());
+    const BoxOccluderSource source{bounds.data(), is_box.data()};
+    Rng rng(5);
+    std::vector<Camera> cams;
+    const Aabb sb = scene.bounds;
+    for (int i = 0; i < (smoke ? 2 : 32); ++i) {
+      const glm::vec3 eye(rng.uniform(sb.min.x, sb.max.x), sb.min.y + 1.7f, rng.uniform(sb.min.z, sb.max.z));
+      const glm::vec3 target(rng.uniform(sb.min.x, sb.max.x), sb.min.y + 1.7f, rng.uniform(sb.min.z, sb.max.z));
+      cams.push_back(support::make_camera(eye, target, 60.0f, 1280, 720, 0.1f, 5000.0f));
+    }
+    std::vector<std::uint32_t> out;
+    OcclusionTree tree(glm::vec3(0.0f));
+    std::size_t sums[5] = {};
+    auto run = [&](int mode) {
+      return [&, mode] {
+        for (const Camera& cam : cams) {
+          const Frustum f = Frustum::from_matrix(cam.view_proj, cam.depth);
+          if (mode == 0) {
+            abt.cull(f, out);
+          } else {
+            OcclusionCullParams p;
+            p.skip_clear_subtrees = mode == 1 || mode == 2;
+            p.start_at_parent_node = mode == 1 || mode == 3;
+            tree.reset(cam.eye);
+            cull_with_occlusion(abt, f, tree, source, out, nullptr, p);
+          }
+          sums[mode] += out.size();
+        }
+      };
+    };
+    const auto res = cullkit_bench::race("city" + std::to_string(blocks) + "_cull_x" + std::to_string(cams.size()),
+                                         {{"frustum_only", run(0)},
+                                          {"occlusion_both_refinements", run(1)},
+                                          {"occlusion_clear_skip_only", run(2)},
+                                          {"occlusion_start_at_parent_only", run(3)},
+                                          {"occlusion_no_refinement", run(4)}});
+    const double reps = res.front().reps + 1;
+    std::printf("# city %d blocks, %zu objects: mean objects kept per view: frustum %.1f, occlusion %.1f / %.1f / "
+                "%.1f / %.1f (both / clear-skip / start-at-parent / none)\n",
+                blocks, scene.objects.size(), sums[0] / reps / cams.size(), sums[1] / reps / cams.size(),
+                sums[2] / reps / cams.size(), sums[3] / reps / cams.size(), sums[4] / reps / cams.size());
+    for (auto& r : res) std::printf("# %s: %.1f us per view\n", r.name.c_str(), r.median_ns / 1000.0 / cams.size());
+  }
+}
+
+}  // namespace
+
+int main() {
+  micro();
+  scene_cull();
+  return 0;
+}
