@@ -230,13 +230,15 @@ int main() {
     AbtParams p;
     p.candidates = AbtCandidates::sampling;
     p.max_leaf_size = 1;
+    p.scan_below = 0;  // descend to every leaf
     const Tree tree_s(boxes.data(), boxes.size(), p);
-    run_views(tree_s, boxes, region_of(boxes), "random_boxes_sampling_leaf1", seed + 1, 700);
+    run_views(tree_s, boxes, region_of(boxes), "random_boxes_sampl_leaf1_s0", seed + 1, 700);
     p.max_leaf_size = 32;
     p.candidates = AbtCandidates::binning;
     p.candidate_count = 3;
+    p.scan_below = 8;  // leaves larger than the scan threshold
     const Tree tree_b(boxes.data(), boxes.size(), p);
-    run_views(tree_b, boxes, region_of(boxes), "random_boxes_bin3_leaf32", seed + 2, 700);
+    run_views(tree_b, boxes, region_of(boxes), "random_boxes_bin3_leaf32_s8", seed + 2, 700);
   }
   // A generated city: objects, then triangles.
   {
