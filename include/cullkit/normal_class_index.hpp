@@ -122,9 +122,16 @@ class NciContext {
  private:
   template <class, class, class>
   friend class NormalClassIndex;
+  struct Rect {  // a triangle's pixel rectangle (inclusive); x0 > x1: none; x0 == full: every pixel
+    static constexpr std::int16_t full = -32768;
+    std::int16_t x0, y0, x1, y1;
+  };
   struct Thread {
     std::vector<std::uint32_t> stamp;   // per triangle: last tile that tested it
     std::uint32_t stamp_value = 0;
+    std::vector<std::uint32_t> rect_epoch;  // per triangle: frame of the cached rectangle
+    std::vector<Rect> rect;
+    std::uint32_t frame_epoch = 0;
     std::vector<std::uint32_t> tested;  // triangles tested (unique per tile)
     std::vector<std::uint16_t> active_classes;
     NciSelectStats stats;
@@ -208,6 +215,13 @@ class NormalClassIndex {
         if (th.stamp.size() != triangle_count()) {
           th.stamp.assign(triangle_count(), 0u);
           th.stamp_value = 0;
+          th.rect_epoch.assign(triangle_count(), 0u);
+          th.rect.resize(triangle_count());
+          th.frame_epoch = 0;
+        }
+        if (++th.frame_epoch == 0) {
+          std::fill(th.rect_epoch.begin(), th.rect_epoch.end(), 0u);
+          th.frame_epoch = 1;
         }
         th.tested.clear();
         th.stats = NciSelectStats{};
@@ -264,7 +278,7 @@ class NormalClassIndex {
       for (std::uint32_t tri : context.pixel_tri_) {
         if (tri != none_ && context.shown_[tri] != epoch) {
           context.shown_[tri] = epoch;
-          out.triangles.push_back(tri_original_[tri]);
+          out.triangles.push_back(original(tri));
         }
       }
       std::sort(out.triangles.begin(), out.triangles.end());
@@ -274,7 +288,7 @@ class NormalClassIndex {
       pixels->depth.resize(pixel_count);
       for (std::size_t i = 0; i < pixel_count; ++i) {
         const std::uint32_t tri = context.pixel_tri_[i];
-        pixels->triangle[i] = tri == none_ ? NciPixels::miss : tri_original_[tri];
+        pixels->triangle[i] = tri == none_ ? NciPixels::miss : original(tri);
         pixels->depth[i] = context.pixel_t_[i];
       }
     }
@@ -290,9 +304,12 @@ class NormalClassIndex {
            bytes(class_of_);
   }
   /// Triangles kept by the build.
-  [[nodiscard]] std::size_t triangle_count() const noexcept { return tri_original_.size(); }
+  [[nodiscard]] std::size_t triangle_count() const noexcept { return stats_.triangles_indexed; }
   /// Normal class of a kept triangle, by the mesh's numbering; -1 for a skipped triangle.
   [[nodiscard]] int triangle_class(std::uint32_t mesh_triangle) const noexcept {
+    if (tri_original_.empty()) {  // every triangle kept: the numbering is the identity
+      return mesh_triangle < class_of_.size() ? static_cast<int>(class_of_[mesh_triangle]) : -1;
+    }
     const auto it = std::lower_bound(tri_original_.begin(), tri_original_.end(), mesh_triangle);
     if (it == tri_original_.end() || *it != mesh_triangle) return -1;
     return static_cast<int>(class_of_[static_cast<std::size_t>(it - tri_original_.begin())]);
@@ -306,6 +323,10 @@ class NormalClassIndex {
 
  private:
   static constexpr std::uint32_t none_ = 0xFFFFFFFFu;
+
+  [[nodiscard]] std::uint32_t original(std::uint32_t tri) const noexcept {
+    return tri_original_.empty() ? tri : tri_original_[tri];
+  }
 
   template <class T>
   static std::size_t bytes(const std::vector<T>& v) noexcept {
@@ -399,7 +420,11 @@ class NormalClassIndex {
     delta_ = std::max(1e-3 * h_, 64.0 * double(std::numeric_limits<float>::epsilon()) * max_abs);
 
     // 3. Normal classes.
-    detail::cluster_normals(normals, params_.classes, params_.seed, class_of_, class_axis_);
+    {
+      std::vector<std::uint32_t> cls;
+      detail::cluster_normals(normals, params_.classes, params_.seed, cls, class_axis_);
+      class_of_.assign(cls.begin(), cls.end());  // at most 4096 classes: 16 bits
+    }
     const std::size_t classes = class_axis_.size();
     stats_.classes = classes;
     {
@@ -506,6 +531,11 @@ class NormalClassIndex {
       p = ClassGrids{};
     }
     row_begin_.push_back(static_cast<std::uint32_t>(cell_col_.size()));
+    if (tri_original_.size() == stats_.triangles_input) tri_original_ = {};  // identity numbering
+    vertices_.shrink_to_fit();
+    tri_vertices_.shrink_to_fit();
+    tri_original_.shrink_to_fit();
+    class_of_.shrink_to_fit();
     report(1.0f);
   }
 
@@ -666,7 +696,7 @@ class NormalClassIndex {
       }
       f.target_plane = row2 - z0 * row3;
       const double on_eye = glm::dot(f.target_plane, glm::dvec4(f.eye, 1.0));
-      f.use_rect = std::isfinite(on_eye) && on_eye != 0.0;
+      f.use_rect = std::isfinite(on_eye) && on_eye != 0.0 && camera.width <= 32000 && camera.height <= 32000;
     }
     return f;
   }
@@ -677,8 +707,48 @@ class NormalClassIndex {
     float best_t[256];
     std::uint32_t best[256];
     float slope_b[256], slope_c[256];
+    float t_exit[256];  // where the ray leaves the inflated scene box (rounded up): nothing beyond
     bool flat[256];
   };
+
+  // Which pixels may see the triangle: an empty rectangle for a back face (or one seen exactly
+  // edge-on: the eye in its plane is never a hit), `full` when the projection cannot be trusted.
+  [[nodiscard]] static NciContext::Rect screen_rect(const Frame& f, const glm::vec3& p0, const glm::vec3& p1,
+                                                    const glm::vec3& p2) noexcept {
+    using Rect = NciContext::Rect;
+    if (!detail::faces_eye(p0, p1, p2, f.eye)) return Rect{0, 0, -1, -1};
+    if (!f.use_rect) return Rect{Rect::full, 0, 0, 0};
+    const glm::vec3* p[3] = {&p0, &p1, &p2};
+    double mnx = std::numeric_limits<double>::infinity(), mny = mnx, mxx = -mnx, mxy = -mnx;
+    const double eye_side = -glm::dot(f.target_plane, glm::dvec4(f.eye, 1.0));
+    for (int k = 0; k < 3; ++k) {
+      const glm::dvec3 dx = glm::dvec3(*p[k]) - f.eye;
+      const double s = eye_side / glm::dot(f.target_plane, glm::dvec4(dx, 0.0));
+      // Behind the eye, or beside it (parallel to the plane): no rectangle.
+      if (!(s > 0.0) || !std::isfinite(s)) return Rect{Rect::full, 0, 0, 0};
+      const glm::dvec4 c = f.view_proj * glm::dvec4(f.eye + s * dx, 1.0);
+      if (!(c.w > 0.0)) return Rect{Rect::full, 0, 0, 0};
+      // Pixel-centre coordinates: pixel i has ndc (2i + 1) / width - 1.
+      const double px = ((c.x / c.w + 1.0) * f.width - 1.0) * 0.5;
+      const double py = ((1.0 - c.y / c.w) * f.height - 1.0) * 0.5;
+      mnx = std::min(mnx, px);
+      mxx = std::max(mxx, px);
+      mny = std::min(mny, py);
+      mxy = std::max(mxy, py);
+    }
+    if (!(std::isfinite(mnx) && std::isfinite(mxx) && std::isfinite(mny) && std::isfinite(mxy)))
+      return Rect{Rect::full, 0, 0, 0};
+    // A pixel centre can see the triangle only inside its projection; the margin (a twentieth of
+    // a pixel) covers the float rounding of the ray directions. Clamped to the screen (in double
+    // first: projected corners may be far off screen).
+    const double m = 0.05;
+    const double lx0 = std::ceil(mnx - m), lx1 = std::floor(mxx + m);
+    const double ly0 = std::ceil(mny - m), ly1 = std::floor(mxy + m);
+    if (lx1 < 0.0 || ly1 < 0.0 || lx0 > f.width - 1 || ly0 > f.height - 1) return Rect{0, 0, -1, -1};
+    return Rect{static_cast<std::int16_t>(std::max(0.0, lx0)), static_cast<std::int16_t>(std::max(0.0, ly0)),
+                static_cast<std::int16_t>(std::min(double(f.width - 1), lx1)),
+                static_cast<std::int16_t>(std::min(double(f.height - 1), ly1))};
+  }
 
   // Tests `tri` against the unfinished rays of the tile inside its screen rectangle; false when no
   // ray was tested (a back face seen from the eye, or no live pixel under its rectangle).
@@ -687,47 +757,22 @@ class NormalClassIndex {
     const glm::vec3& p0 = vertices_[tri_vertices_[3 * tri]];
     const glm::vec3& p1 = vertices_[tri_vertices_[3 * tri + 1]];
     const glm::vec3& p2 = vertices_[tri_vertices_[3 * tri + 2]];
-    // A back face (or one seen exactly edge-on) from the eye is one from every ray: never a hit.
-    if (!detail::faces_eye(p0, p1, p2, f.eye)) return false;
+    // The triangle's screen rectangle, computed once per frame and thread (cached: a triangle is
+    // met by many tiles).
+    if (thread.rect_epoch[tri] != thread.frame_epoch) {
+      thread.rect_epoch[tri] = thread.frame_epoch;
+      thread.rect[tri] = screen_rect(f, p0, p1, p2);
+    }
+    const NciContext::Rect rect = thread.rect[tri];
+    if (rect.x0 > rect.x1) return false;  // back face or edge-on from the eye, or off screen
     int rx0 = 0, ry0 = 0, rx1 = tw - 1, ry1 = th - 1;
-    if (f.use_rect) {
-      const glm::vec3* p[3] = {&p0, &p1, &p2};
-      bool ok = true;
-      double mnx = std::numeric_limits<double>::infinity(), mny = mnx, mxx = -mnx, mxy = -mnx;
-      const double eye_side = -glm::dot(f.target_plane, glm::dvec4(f.eye, 1.0));
-      for (int k = 0; k < 3 && ok; ++k) {
-        const glm::dvec3 dx = glm::dvec3(*p[k]) - f.eye;
-        const double s = eye_side / glm::dot(f.target_plane, glm::dvec4(dx, 0.0));
-        if (!(s > 0.0) || !std::isfinite(s)) {  // behind the eye, or beside it (parallel to the plane)
-          ok = false;
-          break;
-        }
-        const glm::dvec4 c = f.view_proj * glm::dvec4(f.eye + s * dx, 1.0);
-        if (!(c.w > 0.0)) {
-          ok = false;
-          break;
-        }
-        // Pixel-centre coordinates: pixel i has ndc (2i + 1) / width - 1.
-        const double px = ((c.x / c.w + 1.0) * f.width - 1.0) * 0.5;
-        const double py = ((1.0 - c.y / c.w) * f.height - 1.0) * 0.5;
-        mnx = std::min(mnx, px);
-        mxx = std::max(mxx, px);
-        mny = std::min(mny, py);
-        mxy = std::max(mxy, py);
-      }
-      if (ok && std::isfinite(mnx) && std::isfinite(mxx) && std::isfinite(mny) && std::isfinite(mxy)) {
-        // A pixel centre can see the triangle only inside its projection; the margin (a twentieth
-        // of a pixel) covers the float rounding of the ray directions.
-        const double m = 0.05;
-        const double lx0 = std::ceil(mnx - m) - x0, lx1 = std::floor(mxx + m) - x0;
-        const double ly0 = std::ceil(mny - m) - y0, ly1 = std::floor(mxy + m) - y0;
-        if (lx1 < 0.0 || ly1 < 0.0 || lx0 > tw - 1 || ly0 > th - 1) return false;
-        // Clamp in double first: the projected corners may be far off screen.
-        rx0 = static_cast<int>(std::max(0.0, lx0));
-        rx1 = static_cast<int>(std::min(double(tw - 1), lx1));
-        ry0 = static_cast<int>(std::max(0.0, ly0));
-        ry1 = static_cast<int>(std::min(double(th - 1), ly1));
-      }
+    if (rect.x0 != NciContext::Rect::full) {
+      const int lx0 = rect.x0 - x0, lx1 = rect.x1 - x0, ly0 = rect.y0 - y0, ly1 = rect.y1 - y0;
+      if (lx1 < 0 || ly1 < 0 || lx0 > tw - 1 || ly0 > th - 1) return false;
+      rx0 = std::max(0, lx0);
+      rx1 = std::min(tw - 1, lx1);
+      ry0 = std::max(0, ly0);
+      ry1 = std::min(th - 1, ly1);
     }
     const float a[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};
     const float b[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
@@ -788,6 +833,7 @@ class NormalClassIndex {
           if (tmin > tmax) hit = false;
         }
         if (!hit) continue;
+        r.t_exit[i] = static_cast<float>(tmax * (1.0 + 1e-6)) * (1.0f + 1e-6f);
         const double da = d[a];
         r.flat[i] = std::fabs(da) < 1e-6;
         r.slope_b[i] = r.flat[i] ? 0.0f : static_cast<float>(d[b] / da);
@@ -941,8 +987,10 @@ class NormalClassIndex {
             bits &= bits - 1;
             const int i = y * 16 + x;
             bool done = last || r.dir[i][a] == 0.0f;
-            if (!done && r.best[i] != none_) {
-              const double reach = double(r.best_t[i]) * (1.0 + 1e-5) * double(r.dir[i][a]);
+            if (!done) {
+              // Nothing lies beyond the nearest hit, nor beyond the box exit.
+              const float t_stop = std::min(r.best_t[i], r.t_exit[i]);
+              const double reach = double(t_stop) * (1.0 + 1e-5) * double(r.dir[i][a]);
               const double margin = 0.25 * delta_ - 1e-6 * std::fabs(reach);
               done = walk == 0 ? ea + reach < next_plane + margin : ea + reach > next_plane - margin;
             }
@@ -981,8 +1029,8 @@ class NormalClassIndex {
   int dims_[3] = {1, 1, 1};
   std::vector<glm::vec3> vertices_;
   std::vector<std::uint32_t> tri_vertices_;   // 3 per kept triangle, into vertices_
-  std::vector<std::uint32_t> tri_original_;   // kept triangle -> mesh triangle (increasing)
-  std::vector<std::uint32_t> class_of_;       // kept triangle -> class
+  std::vector<std::uint32_t> tri_original_;   // kept triangle -> mesh triangle (increasing); empty: identity
+  std::vector<std::uint16_t> class_of_;       // kept triangle -> class
   std::vector<glm::vec3> class_axis_;
   std::vector<float> class_sin_, class_cos_;  // cone half-angle (with margin); sin > 1: never skip
   std::vector<std::uint32_t> cell_tri_begin_; // cells + 1
