@@ -34,8 +34,13 @@ deps() {
 build() {  # build <preset> [targets...]
   local preset=$1; shift
   [ -f "build/$preset/CMakeCache.txt" ] || cmake --preset "$preset" >/dev/null
-  if [ $# -gt 0 ]; then cmake --build --preset "$preset" -j "$JOBS" --target "$@"
-  else cmake --build --preset "$preset" -j "$JOBS"; fi
+  local targets=()
+  [ $# -gt 0 ] && targets=(--target "$@")
+  # clang 14 has been seen to segfault now and then under load (the crash shows as garbage
+  # "not valid UTF-8" errors in system headers); one serial retry tells that from a real error.
+  cmake --build --preset "$preset" -j "$JOBS" "${targets[@]}" && return 0
+  say "build ($preset) failed; retrying once with one job to rule out a compiler crash"
+  cmake --build --preset "$preset" -j 1 "${targets[@]}"
 }
 
 run_tests() {  # run_tests <preset> [ctest args...]
