@@ -6,10 +6,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
-#include <optional>
-#include <string>
 #include <vector>
 
 #include <glm/ext/matrix_clip_space.hpp>
@@ -147,63 +143,6 @@ inline std::vector<cullkit::Aabb> random_boxes(cullkit::support::Rng& rng, std::
     b = cullkit::Aabb{c - h, c + h};
   }
   return boxes;
-}
-
-/// A minimal OBJ reader (v and f lines, fan-triangulated, negative indices allowed) so these tests
-/// do not depend on the optional tinyobjloader path of cullkit_support. Objects are not split:
-/// `object_bounds` come from `o`/`g` groups of faces.
-struct ObjMesh {
-  std::vector<glm::vec3> positions;
-  std::vector<std::uint32_t> indices;
-  std::vector<cullkit::Aabb> object_bounds;
-  cullkit::Aabb bounds = cullkit::Aabb::empty();
-  [[nodiscard]] std::size_t triangle_count() const { return indices.size() / 3; }
-  [[nodiscard]] cullkit::MeshView<glm::vec3> mesh() const {
-    return {positions.data(), positions.size(), indices.data(), indices.size()};
-  }
-};
-
-inline std::optional<ObjMesh> read_obj(const std::string& path) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) return std::nullopt;
-  ObjMesh m;
-  char line[4096];
-  cullkit::Aabb current = cullkit::Aabb::empty();
-  auto close_object = [&] {
-    if (!cullkit::is_empty(current)) m.object_bounds.push_back(current);
-    current = cullkit::Aabb::empty();
-  };
-  while (std::fgets(line, sizeof line, f)) {
-    if (line[0] == 'v' && line[1] == ' ') {
-      float x = 0, y = 0, z = 0;
-      if (std::sscanf(line + 2, "%f %f %f", &x, &y, &z) == 3) m.positions.emplace_back(x, y, z);
-    } else if ((line[0] == 'o' || line[0] == 'g') && line[1] == ' ') {
-      close_object();
-    } else if (line[0] == 'f' && line[1] == ' ') {
-      std::vector<std::uint32_t> face;
-      char* s = line + 2;
-      for (;;) {
-        char* end = nullptr;
-        const long v = std::strtol(s, &end, 10);
-        if (end == s) break;
-        const long idx = v < 0 ? long(m.positions.size()) + v : v - 1;
-        if (idx >= 0 && idx < long(m.positions.size())) face.push_back(std::uint32_t(idx));
-        s = end;
-        while (*s && *s != ' ' && *s != '\t' && *s != '\n' && *s != '\r') ++s;  // skip /vt/vn
-        while (*s == ' ' || *s == '\t') ++s;
-      }
-      for (std::size_t k = 2; k < face.size(); ++k) {
-        for (std::uint32_t i : {face[0], face[k - 1], face[k]}) {
-          m.indices.push_back(i);
-          current = cullkit::merge(current, m.positions[i]);
-          m.bounds = cullkit::merge(m.bounds, m.positions[i]);
-        }
-      }
-    }
-  }
-  close_object();
-  std::fclose(f);
-  return m;
 }
 
 }  // namespace abt_test

@@ -262,12 +262,12 @@ int main() {
     const std::vector<std::string> files = support::real_scene_files();
     if (files.empty()) std::printf("real scenes absent: skipped\n");
     for (std::size_t f = 0; f < files.size() && f < 2; ++f) {
-      const auto scene = abt_test::read_obj(support::scenes_dir() + "/" + files[f]);
+      const auto scene = support::load_obj(support::scenes_dir() + "/" + files[f]);
       if (!scene) {
         std::printf("%s: could not load, skipped\n", files[f].c_str());
         continue;
       }
-      const std::vector<Aabb> boxes = scene->object_bounds;
+      const std::vector<Aabb> boxes = scene->object_bounds();
       const Tree tree(boxes.data(), boxes.size());
       run_views(tree, boxes, scene->bounds, (files[f] + "_objects").c_str(), 3003 + f, 600);
       const Tree tri = make_triangle_tree(scene->mesh());
