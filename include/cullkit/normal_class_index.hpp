@@ -29,6 +29,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <thread>
 #include <type_traits>
 #include <vector>
@@ -109,6 +110,29 @@ struct NciSelectStats {
   int axis = 0;                    ///< grid axis walked
 };
 
+/// A moving object for NormalClassIndex::select_visible: an index of its triangles in its local
+/// frame, a rigid transform (rotation and translation) to the world, and the id it is reported with.
+template <class ObjectIndex>
+struct NciMovingObject {
+  const ObjectIndex* index = nullptr;  ///< not owned; must outlive the call
+  glm::mat4 local_to_world{1.0f};      ///< rigid: rotation and translation only
+  std::uint32_t object_id = 0;         ///< reported in NciObjectTriangle::object
+};
+
+/// A visible triangle of a moving object.
+struct NciObjectTriangle {
+  std::uint32_t object = 0;    ///< NciMovingObject::object_id
+  std::uint32_t triangle = 0;  ///< index in that object's mesh
+  friend bool operator<(const NciObjectTriangle& a, const NciObjectTriangle& b) noexcept {
+    return a.object != b.object ? a.object < b.object : a.triangle < b.triangle;
+  }
+  friend bool operator==(const NciObjectTriangle& a, const NciObjectTriangle& b) noexcept {
+    return a.object == b.object && a.triangle == b.triangle;
+  }
+};
+
+class NciContext;
+
 /// Reusable scratch for select_visible: keeps per-thread buffers between frames so a frame does
 /// not allocate once the buffers have grown. One context per concurrent caller; not thread-safe.
 class NciContext {
@@ -142,6 +166,16 @@ class NciContext {
   std::vector<std::uint32_t> seen_;        // per triangle: epoch of last tested-count
   std::vector<std::uint32_t> shown_;       // per triangle: epoch of last visible mark
   std::uint32_t epoch_ = 0;
+  struct Objects;
+  std::unique_ptr<Objects> objects_;  // moving objects' scratch, made on first use
+};
+
+struct NciContext::Objects {
+  NciContext context;
+  VisibleSet set;
+  NciPixels pixels;
+  std::vector<float> depth;
+  std::vector<std::uint32_t> triangle, object;
 };
 
 /// Index of a static triangle mesh that answers "which triangles does this camera see", with the
@@ -187,6 +221,65 @@ class NormalClassIndex {
   /// depends on NciParams::threads. Cost: proportional to the rays times the triangles met near
   /// the visible surfaces, divided over the threads.
   void select_visible(const Camera& camera, NciContext& context, VisibleSet& out, NciPixels* pixels) const {
+    select_impl(camera, context, out, pixels, nullptr);
+  }
+
+  /// With moving objects (DESIGN.md §8): each object has its own index, built in its local frame,
+  /// and a rigid `local_to_world` transform (rotation and translation only: ray parameters t stay
+  /// the same in both frames). The objects are selected first, each with the camera taken into its
+  /// local frame; then the static scene, whose pixels stay unfinished but start from the objects'
+  /// depths, so only static triangles in front of the objects are searched. `out` holds the static
+  /// triangles; `object_triangles` (cleared first) the objects' visible triangles as sorted unique
+  /// (object id, triangle) pairs. `pixels`, when given, holds static triangle ids, or for a pixel
+  /// won by an object NciPixels::miss with the object's depth (see `object_pixels`).
+  /// pre: every `objects[k].index` is not null. Allocates a second context inside `context`.
+  template <class ObjectIndex>
+  void select_visible(const Camera& camera, const NciMovingObject<ObjectIndex>* objects, std::size_t object_count,
+                      NciContext& context, VisibleSet& out, std::vector<NciObjectTriangle>& object_triangles,
+                      NciPixels* pixels = nullptr) const {
+    object_triangles.clear();
+    const int width = camera.width, height = camera.height;
+    if (width <= 0 || height <= 0 || object_count == 0) {
+      select_impl(camera, context, out, pixels, nullptr);
+      return;
+    }
+    const std::size_t pixel_count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    if (!context.objects_) context.objects_ = std::make_unique<NciContext::Objects>();
+    auto& o = *context.objects_;
+    o.depth.assign(pixel_count, std::numeric_limits<float>::infinity());
+    o.triangle.assign(pixel_count, NciPixels::miss);
+    o.object.assign(pixel_count, NciPixels::miss);
+    for (std::size_t k = 0; k < object_count; ++k) {
+      CULLKIT_ASSERT(objects[k].index != nullptr, "every moving object has an index");
+      if (!objects[k].index) continue;
+      const glm::dmat4 m(objects[k].local_to_world);
+      Camera local = camera;
+      local.eye = glm::vec3(glm::inverse(m) * glm::dvec4(glm::dvec3(camera.eye), 1.0));
+      local.view_proj = glm::mat4(glm::dmat4(camera.view_proj) * m);
+      objects[k].index->select_visible(local, o.context, o.set, &o.pixels);
+      for (std::size_t p = 0; p < pixel_count; ++p) {
+        if (o.pixels.depth[p] < o.depth[p]) {
+          o.depth[p] = o.pixels.depth[p];
+          o.triangle[p] = o.pixels.triangle[p];
+          o.object[p] = objects[k].object_id;
+        }
+      }
+    }
+    select_impl(camera, context, out, pixels, o.depth.data());
+    // Objects keep the pixels where no static triangle came in front.
+    for (std::size_t p = 0; p < pixel_count; ++p) {
+      if (o.object[p] == NciPixels::miss) continue;
+      if (context.pixel_tri_.size() == pixel_count && context.pixel_tri_[p] != none_) continue;
+      object_triangles.push_back(NciObjectTriangle{o.object[p], o.triangle[p]});
+      if (pixels && pixels->depth.size() == pixel_count) pixels->depth[p] = o.depth[p];
+    }
+    std::sort(object_triangles.begin(), object_triangles.end());
+    object_triangles.erase(std::unique(object_triangles.begin(), object_triangles.end()), object_triangles.end());
+  }
+
+ private:
+  void select_impl(const Camera& camera, NciContext& context, VisibleSet& out, NciPixels* pixels,
+                   const float* initial_depth) const {
     out.triangles.clear();
     out.triangles_tested = 0;
     context.stats = NciSelectStats{};
@@ -203,6 +296,7 @@ class NormalClassIndex {
     context.pixel_t_.assign(pixel_count, std::numeric_limits<float>::infinity());
     if (triangle_count() > 0) {
       Frame frame = make_frame(camera);
+      frame.initial_depth = initial_depth;
       context.stats.axis = frame.axis;
       const int tile = params_.tile_size;
       const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
@@ -289,11 +383,13 @@ class NormalClassIndex {
       for (std::size_t i = 0; i < pixel_count; ++i) {
         const std::uint32_t tri = context.pixel_tri_[i];
         pixels->triangle[i] = tri == none_ ? NciPixels::miss : original(tri);
-        pixels->depth[i] = context.pixel_t_[i];
+        pixels->depth[i] = tri == none_ ? std::numeric_limits<float>::infinity() : context.pixel_t_[i];
       }
     }
   }
 
+
+ public:
   /// Build statistics (skipped triangles, classes, cells, build time).
   [[nodiscard]] const NciStats& stats() const noexcept { return stats_; }
   /// Bytes held by the index (capacity of every array).
@@ -660,12 +756,13 @@ class NormalClassIndex {
     glm::dmat4 view_proj;
     bool use_rect = false;   // screen rectangles of triangles may prune rays
     glm::dvec4 target_plane{0.0};  // plane holding the pixel rays' target points (world space)
+    const float* initial_depth = nullptr;  // per pixel: start from this depth (moving objects)
     int width = 0, height = 0;
   };
 
   [[nodiscard]] Frame make_frame(const Camera& camera) const {
     Frame f{PixelRays(camera), glm::dvec3(camera.eye), camera.eye, 2, glm::dmat4(camera.view_proj), false,
-            glm::dvec4(0.0), camera.width, camera.height};
+            glm::dvec4(0.0), nullptr, camera.width, camera.height};
     const Ray center = f.rays.ray_at(0.5 * camera.width, 0.5 * camera.height);
     const glm::vec3 d = center.direction;
     const float ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
@@ -814,7 +911,9 @@ class NormalClassIndex {
         const Ray ray = f.rays.ray(x0 + x, y0 + y);
         r.dir[i] = ray.direction;
         r.wray[i] = detail::WatertightRay<float>::make(ray.direction);
-        r.best_t[i] = std::numeric_limits<float>::infinity();
+        r.best_t[i] = f.initial_depth ? f.initial_depth[static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) +
+                                                        static_cast<std::size_t>(x0 + x)]
+                                      : std::numeric_limits<float>::infinity();
         r.best[i] = none_;
         if (!r.wray[i].valid) continue;
         // Does the ray reach the (inflated) scene box at all?
