@@ -12,8 +12,10 @@
 //
 // Culling walks top-down: the node's bounding sphere first, then its box (the seed's order),
 // carrying a mask of the frustum planes a parent was already fully inside (beyond the seed). A node
-// fully inside is reported as one range without descending. Only leaves that straddle the frustum
-// test their objects one by one.
+// fully inside is reported as one range without descending. Only leaves (or small subtrees) that
+// straddle the frustum test their objects one by one, 16 at a time from a structure-of-arrays copy
+// of the boxes. Beyond the seed too: candidates by binning, normalized criteria, plane masks,
+// the vectorized leaf scan, refit, front-to-back order and the parallel build.
 //
 // Conventions: boxes are closed (touching counts as meeting); all answers are conservative: an
 // object is left out only when its box is certainly outside a frustum plane despite float rounding.
@@ -134,7 +136,9 @@ struct AbtNode {
 ///
 /// `Object` is read through `Traits::bounds(const Object&) -> Aabb` (default `BoundsTraits<Object>`),
 /// or through a getter with `from_getter`. The tree copies the bounds it needs: the objects need not
-/// outlive it. Memory: about 64 bytes per node (2n / max_leaf_size nodes) + 28 bytes per object.
+/// outlive it. Memory: 60 bytes per node (about 2n / max_leaf_size nodes) + 52 bytes per held
+/// object (its index, its box, and the box again as padded SoA for vectorized leaf tests); the
+/// build needs 40 more bytes per object while it runs.
 template <class Object, class Traits = BoundsTraits<Object>>
 class AdaptiveBinaryTree {
  public:
