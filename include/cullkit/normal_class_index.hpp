@@ -805,6 +805,9 @@ class NormalClassIndex {
     std::uint32_t best[256];
     float slope_b[256], slope_c[256];
     float t_exit[256];  // where the ray leaves the inflated scene box (rounded up): nothing beyond
+    int finish[256];    // the walk may stop this ray once it has processed this slice
+    bool dirty[256];    // best_t changed since `finish` was computed
+    int axis = 2;       // the frame's walk axis
     bool flat[256];
   };
 
@@ -887,6 +890,7 @@ class NormalClassIndex {
         float t;
         if (detail::watertight_hit(r.wray[i], a, b, c, t)) {
           if (t < r.best_t[i] || (t == r.best_t[i] && tri < r.best[i])) {
+            r.dirty[i] = r.dirty[i] || t < r.best_t[i];
             r.best_t[i] = t;
             r.best[i] = tri;
           }
@@ -899,6 +903,7 @@ class NormalClassIndex {
   void process_tile(const Frame& f, int x0, int y0, int x1, int y1, NciContext::Thread& thread,
                     NciContext& context) const {
     TileRays r;
+    r.axis = f.axis;
     const int tw = x1 - x0, th = y1 - y0;
     const int a = f.axis, b = (a + 1) % 3, c = (a + 2) % 3;
     std::uint16_t live[16] = {};  // unfinished rays, both walks
@@ -915,6 +920,7 @@ class NormalClassIndex {
                                                         static_cast<std::size_t>(x0 + x)]
                                       : std::numeric_limits<float>::infinity();
         r.best[i] = none_;
+        r.dirty[i] = true;
         if (!r.wray[i].valid) continue;
         // Does the ray reach the (inflated) scene box at all?
         const glm::dvec3 d(ray.direction);
@@ -1077,22 +1083,17 @@ class NormalClassIndex {
         }
         // Finish the rays whose nearest hit lies before the next slice (with margins that only
         // keep rays unfinished longer).
-        const bool last = walk == 0 ? s + 1 >= na : s == 0;
-        const double next_plane = walk == 0 ? lo_[a] + (s + 1) * h_ : lo_[a] + s * h_;
         for (int y = 0; y < th; ++y) {
           std::uint32_t bits = mask[y];
           while (bits) {
             const int x = __builtin_ctz(bits);
             bits &= bits - 1;
             const int i = y * 16 + x;
-            bool done = last || r.dir[i][a] == 0.0f;
-            if (!done) {
-              // Nothing lies beyond the nearest hit, nor beyond the box exit.
-              const float t_stop = std::min(r.best_t[i], r.t_exit[i]);
-              const double reach = double(t_stop) * (1.0 + 1e-5) * double(r.dir[i][a]);
-              const double margin = 0.25 * delta_ - 1e-6 * std::fabs(reach);
-              done = walk == 0 ? ea + reach < next_plane + margin : ea + reach > next_plane - margin;
+            if (r.dirty[i]) {
+              r.finish[i] = finish_slice(r, i, walk, s, ea, na);
+              r.dirty[i] = false;
             }
+            const bool done = walk == 0 ? s >= r.finish[i] : s <= r.finish[i];
             if (done) {
               mask[y] = static_cast<std::uint16_t>(mask[y] & ~(1u << x));
               live[y] = static_cast<std::uint16_t>(live[y] & ~(1u << x));
@@ -1106,6 +1107,46 @@ class NormalClassIndex {
       }
     }
     write_tile(f, r, x0, y0, tw, th, context);
+  }
+
+  // Whether ray i may stop after processing slice s of its walk: its nearest hit (or the box exit:
+  // nothing lies beyond) comes before where it enters the next slice, with margins that only keep
+  // it longer. Rays exactly parallel to the slices never reach another slice.
+  [[nodiscard]] bool done_after(const TileRays& r, int i, int walk, int s, double ea, int na) const noexcept {
+    const int a = axis_of(r);
+    if (walk == 0 ? s + 1 >= na : s <= 0) return true;
+    if (r.dir[i][a] == 0.0f) return true;
+    const float t_stop = std::min(r.best_t[i], r.t_exit[i]);
+    const double reach = double(t_stop) * (1.0 + 1e-5) * double(r.dir[i][a]);
+    const double margin = 0.25 * delta_ - 1e-6 * std::fabs(reach);
+    const double next_plane = walk == 0 ? lo_[a] + (s + 1) * h_ : lo_[a] + s * h_;
+    return walk == 0 ? ea + reach < next_plane + margin : ea + reach > next_plane - margin;
+  }
+  static int axis_of(const TileRays& r) noexcept { return r.axis; }
+
+  // The first slice (in walk order, from `from`) after which `done_after` holds. The predicate is
+  // monotone along the walk; an estimate from the stop coordinate is corrected by the predicate
+  // itself, so the answer is exactly the first slice where it holds.
+  [[nodiscard]] int finish_slice(const TileRays& r, int i, int walk, int from, double ea, int na) const noexcept {
+    const int a = r.axis;
+    const int end = walk == 0 ? na - 1 : 0;
+    int s = from;
+    if (r.dir[i][a] != 0.0f) {
+      const float t_stop = std::min(r.best_t[i], r.t_exit[i]);
+      const double x = ea + double(t_stop) * double(r.dir[i][a]);
+      if (std::isfinite(x)) {
+        const double est = std::floor((x - lo_[a]) / h_) + (walk == 0 ? -1.0 : 1.0);
+        if (walk == 0 && est > from) s = static_cast<int>(std::min(est, double(end)));
+        if (walk == 1 && est < from) s = static_cast<int>(std::max(est, double(end)));
+      } else {
+        s = end;
+      }
+    }
+    const int step = walk == 0 ? 1 : -1;
+    // Back up while the previous slice already qualifies, then move on until this one does.
+    while (s != from && done_after(r, i, walk, s - step, ea, na)) s -= step;
+    while (s != end && !done_after(r, i, walk, s, ea, na)) s += step;
+    return s;
   }
 
   static void write_tile(const Frame& f, const TileRays& r, int x0, int y0, int tw, int th, NciContext& context) {
