@@ -49,8 +49,9 @@ class AbtLeafBoxes {
     const std::size_t s = stride_;
     constexpr float k = 8.0f * std::numeric_limits<float>::epsilon();  // as Frustum::tolerance
     for (std::uint32_t base = begin; base < end; base += lanes) {
-      std::uint8_t out[lanes] = {};
-      std::uint8_t cross[lanes] = {};
+      // 32-bit flags: the same width as the float lanes, so no packing in the vector loop.
+      std::uint32_t out[lanes] = {};
+      std::uint32_t cross[lanes] = {};
       const float* cx = d + base;
       const float* cy = d + s + base;
       const float* cz = d + 2 * s + base;
@@ -67,8 +68,8 @@ class AbtLeafBoxes {
           const float dc = px + py + pz + pd;
           const float r = ax * ex[i] + ay * ey[i] + az * ez[i];
           const float slack = (std::fabs(px) + std::fabs(py) + std::fabs(pz) + ad + r) * k;
-          out[i] |= static_cast<std::uint8_t>(dc + r < -slack);
-          cross[i] |= static_cast<std::uint8_t>(!(dc - r >= slack));
+          out[i] |= static_cast<std::uint32_t>(dc + r < -slack);
+          cross[i] |= static_cast<std::uint32_t>(!(dc - r >= slack));
         }
       }
       const std::uint32_t count = end - base < lanes ? end - base : lanes;
