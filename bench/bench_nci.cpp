@@ -299,7 +299,7 @@ int main(int argc, char** argv) {
   }
   if (big) {
     // >= 10M triangles: a large generated city.
-    Scene s = support::make_city(8, 200);
+    Scene s = support::make_city(8, 284);
     std::printf("# big scene: %zu triangles\n", s.triangle_count());
     precision_table("bigcity", s, threads, smoke);
     speed("bigcity", s, threads, smoke);

@@ -8,3 +8,4 @@
 #include "adaptive_binary_tree.hpp"
 #include "occlusion_tree.hpp"
 #include "occlusion_culling.hpp"
+#include "normal_class_index.hpp"
