@@ -9,6 +9,8 @@
 //
 // Every contestant writes the same output (indices of possibly visible boxes) into a reused vector.
 //   ./build/release/bench/bench_abt            (CULLKIT_BENCH_SMOKE=1: tiny sizes)
+#include <algorithm>
+#include <cstddef>
 #include <cstdio>
 #include <cstdlib>
 #include <optional>
@@ -197,9 +199,22 @@ int main() {
     const std::vector<Aabb> boxes = triangle_boxes(*scene);
     const Aabb b = scene->bounds;
     const glm::vec3 c = b.center();
-    const glm::vec3 eye(c.x, b.min.y + 0.15f * (b.max.y - b.min.y), c.z);
+    // Street level: the scene's bounds hold far-away backdrop geometry, so stand at the median
+    // triangle position, 2 units above the 5th percentile of heights, looking along the ground.
+    std::vector<float> xs, ys, zs;
+    for (const Aabb& t : boxes) {
+      xs.push_back(t.center().x);
+      ys.push_back(t.center().y);
+      zs.push_back(t.center().z);
+    }
+    auto quantile = [](std::vector<float>& v, double q) {
+      const auto k = static_cast<std::ptrdiff_t>(q * double(v.size() - 1));
+      std::nth_element(v.begin(), v.begin() + k, v.end());
+      return v[static_cast<std::size_t>(k)];
+    };
+    const glm::vec3 eye(quantile(xs, 0.5), quantile(ys, 0.05) + 2.0f, quantile(zs, 0.5));
     const Camera street = support::make_camera(eye, eye + glm::vec3(1, -0.05f, 0.3f), 70, 1280, 720, 0.1f,
-                                               glm::length(b.extent()));
+                                               0.15f * glm::length(b.extent()));
     cull_race("cull_triangles_" + scene->name + "_street", boxes, frustum_of(street));
     const Camera over = support::make_camera(c + glm::vec3(0, b.extent().y + 0.3f * glm::length(b.extent()), 0.01f),
                                              c, 60, 1280, 720, 0.5f, 4.0f * glm::length(b.extent()));
