@@ -319,6 +319,13 @@ class AdaptiveBinaryTree {
     }
   }
 
+  /// `refit` through a getter: `get_bounds(i)` for the input indices of the build (same as
+  /// `refit_from_getter`; chosen when the argument is callable with a std::uint32_t).
+  template <class Getter, class = std::enable_if_t<is_bounds_getter_v<std::decay_t<Getter>>>>
+  void refit(Getter&& get_bounds) {
+    refit_from_getter(get_bounds);
+  }
+
   /// `refit` through a getter: `get_bounds(i)` for the input indices of the build.
   template <class Getter>
   void refit_from_getter(Getter&& get_bounds) {

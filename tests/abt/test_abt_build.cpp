@@ -305,6 +305,9 @@ void refit_tests() {
   with_bad[3] = Aabb{glm::vec3(0), glm::vec3(1)};
   tb.refit_from_getter([&](std::uint32_t i) { return with_bad[i]; });
   CHECK(tb.validate() && tb.size() == boxes.size() - 1);
+  // The `refit(getter)` spelling; moving everything far away is seen by the refitted tree.
+  tb.refit([&](std::uint32_t i) { return Aabb{with_bad[i].min + 1000.0f, with_bad[i].max + 1000.0f}; });
+  CHECK(tb.validate() && tb.nodes()[0].bounds.min.x > 800.0f);
   std::vector<std::uint32_t> out;
   tb.cull(Frustum{}, out);
   CHECK(std::find(out.begin(), out.end(), 3u) == out.end());
