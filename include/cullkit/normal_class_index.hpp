@@ -19,6 +19,12 @@
 // Conservative by construction: every pixel's reported triangle is its true first hit under the
 // watertight test (ties broken by the lower triangle index), so the visible set contains the first
 // hit of every pixel centre. Rounding is absorbed by inflating cells and slice bounds.
+//
+// Hit rule (what "first hit" means here): the ray of the pixel centre (PixelRays), the watertight
+// test in float on corners taken relative to the eye, front faces only, and the eye strictly on
+// the front side of the triangle's plane in double (a triangle seen exactly edge-on is never hit).
+// Known limit: a triangle whose plane passes within float rounding of the eye (the eye touching
+// the surface) may be decided differently by the ray test and by the class cones.
 #pragma once
 
 #include <algorithm>
@@ -135,6 +141,8 @@ class NciContext;
 
 /// Reusable scratch for select_visible: keeps per-thread buffers between frames so a frame does
 /// not allocate once the buffers have grown. One context per concurrent caller; not thread-safe.
+/// Size: 16 bytes per indexed triangle per worker thread (test stamps and cached screen
+/// rectangles), 8 bytes per triangle for the merge, and 8 bytes per pixel.
 class NciContext {
  public:
   NciSelectStats stats;  ///< statistics of the last call that used this context
