@@ -1,6 +1,7 @@
 set(_abt ${CMAKE_CURRENT_LIST_DIR})
 cullkit_add_test(test_abt_cull SOURCES ${_abt}/test_abt_cull.cpp LABELS abt)
 cullkit_add_test(test_abt_build SOURCES ${_abt}/test_abt_build.cpp LABELS abt)
+cullkit_add_test(test_abt_occlusion_tree SOURCES ${_abt}/test_abt_occlusion_tree.cpp LABELS abt)
 
 # Compile-fail: the tree over a type without BoundsTraits (the shared source, built with the tree),
 # and from_getter with a getter that returns no Aabb. Each must fail with cullkit's message.
