@@ -51,7 +51,8 @@
 //           infinite far plane.
 //   real, ground  for the two outdoor scenes in metres (fzk_haus, lasdunasarena) an extra row with
 //           eyes 1.7 m above the first up-facing surface under a random point (ground or roof), the
-//           way the scenes' README suggests; random heading, pitched between -10 and +5 degrees.
+//           way the scenes' README suggests; heading toward the scene's centre +- 45 degrees,
+//           pitched between -10 and +5 degrees.
 // Projection: 60 degree vertical field of view, near 0.1, far = the scene box's diagonal for the
 // generated scenes (so the frustum is the view cone over the whole scene), OpenGL depth range.
 //
@@ -140,7 +141,8 @@ std::vector<Camera> office_cameras(const CullScene& cs, std::uint32_t seed, int 
 // Outdoor real scenes in metres (README of the scenes: cast a ray down, put the eye 1.7 m above
 // what it hits): eyes 1.7 m over the first up-facing surface below a random point of the scene box
 // (the ground, or a roof: pixel rays hit front faces only, so a downward ray stops on surfaces that
-// face up), random heading, pitched between -10 and +5 degrees.
+// face up), heading toward the scene's centre turned by up to 45 degrees either way, pitched between
+// -10 and +5 degrees.
 std::vector<Camera> ground_cameras(const CullScene& cs, std::uint32_t seed, int count, int width, int height) {
   support::Rng rng(seed);
   std::vector<Camera> cams;
@@ -152,7 +154,12 @@ std::vector<Camera> ground_cameras(const CullScene& cs, std::uint32_t seed, int 
     float t = 0;
     if (cs.embree.first_hit(down, &t) == oracle::HitBuffer::miss) continue;
     const glm::vec3 eye = down.origin + glm::vec3(0.0f, 1.7f - t, 0.0f);
-    cams.push_back(support::make_camera(eye, eye + heading(rng, -10.0f, 5.0f), 60.0f, width, height, 0.1f, far_plane));
+    // Heading: toward the scene's centre, turned by up to 45 degrees either way.
+    const glm::vec3 to_centre = sb.center() - eye;
+    const float yaw = std::atan2(to_centre.z, to_centre.x) + rng.uniform(-0.785398f, 0.785398f);
+    const float pitch = rng.uniform(-10.0f, 5.0f) * (3.14159265f / 180.0f);
+    const glm::vec3 dir(std::cos(yaw) * std::cos(pitch), std::sin(pitch), std::sin(yaw) * std::cos(pitch));
+    cams.push_back(support::make_camera(eye, eye + dir, 60.0f, width, height, 0.1f, far_plane));
   }
   return cams;
 }
