@@ -63,7 +63,7 @@ cmd_test() {
   cmd_fuzz "${FUZZ_SECONDS:-20}"
   say "strict: clang++, C++20, -fno-exceptions -fno-rtti"
   run_tests strict --no-tests=error
-  run_tests asan -LE bench --no-tests=error
+  run_tests asan --no-tests=error
   run_tests release --no-tests=error
 }
 
