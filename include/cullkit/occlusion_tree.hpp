@@ -35,6 +35,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -44,6 +45,7 @@
 #include "box_proxy.hpp"
 #include "config.hpp"
 #include "detail/occlusion_geometry.hpp"
+#include "detail/occlusion_query.hpp"
 #include "geometry/aabb.hpp"
 #include "geometry/convex_polygon.hpp"
 #include "geometry/plane.hpp"
@@ -284,14 +286,51 @@ class OcclusionTree {
     OcclusionQueryResult result;
     result.together = start;
     if (!eye_ok_ || !is_valid(box) || contains(box, eye_)) return result;
-    ConvexPolygon faces[3];
+    // Eye-relative box; the largest norm1 over the corners separates per axis.
+    const glm::vec3 lo = box.min - eye_, hi = box.max - eye_;
+    const glm::vec3 far = glm::max(glm::abs(lo), glm::abs(hi));
+    const float scale = far.x + far.y + far.z + eye_scale_;
+    const glm::vec3 center = 0.5f * (lo + hi), half = 0.5f * (hi - lo);
     glm::vec3 points[8];
-    int point_count = 0;
-    const int nfaces = detail::box_front_faces(box, eye_, faces, points, point_count);
+    int point_count = 0;  // front corners, computed only if the two-corner rule cannot decide
+    // Phase 1: the whole box goes down while it stays on one side. Each plane is first tested with
+    // the box's nearest and farthest corners (center +- half-extent projected on the normal), which
+    // decides almost every node; "inside" this way needs twice the margin, so the rounding of the
+    // center/extent form can never matter. Undecided nodes fall back to the front corners only
+    // (the faces the query really tests), as a box may straddle a plane its front does not.
+    std::uint32_t ref = start == whole_tree ? root_ : start;
+    while (ref < hidden_leaf) {
+      const OcclusionNode& node = nodes_[ref];
+      const float m = params_.margin * (scale + std::fabs(node.plane.d));
+      const float c = signed_distance(node.plane, center);
+      const float r = glm::dot(glm::abs(node.plane.normal), half);
+      bool inside;
+      if (c - r >= 2.0f * m) {
+        inside = true;
+      } else if (c + r <= m) {
+        inside = false;
+      } else {
+        if (point_count == 0) point_count = detail::box_front_points(box, eye_, points);
+        float dmin = signed_distance(node.plane, points[0]), dmax = dmin;
+        for (int i = 1; i < point_count; ++i) {
+          const float dist = signed_distance(node.plane, points[i]);
+          dmin = std::min(dmin, dist);
+          dmax = std::max(dmax, dist);
+        }
+        if (dmin >= m) inside = true;
+        else if (dmax <= m) inside = false;
+        else break;  // straddles (or NaN): split the faces from here
+      }
+      result.together = ref;
+      ref = inside ? node.inside : node.outside;
+    }
+    if (ref >= hidden_leaf) return leaf_answer(result, ref, want_clear);
+    result.together = ref;
+    Fragment stack[query_stack_size];
+    const int nfaces = detail::box_front_fragments(box, eye_, stack);
     if (nfaces == 0) return result;
-    float scale = 0.0f;
-    for (int c = 0; c < 8; ++c) scale = std::max(scale, detail::norm1(corner(box, c) - eye_));
-    return run_query(faces, nfaces, points, point_count, scale + eye_scale_, start, want_clear);
+    for (int f = 0; f < nfaces; ++f) stack[f].ref = ref;
+    return split_query(result, stack, nfaces, scale, want_clear);
   }
 
   /// The same for a convex planar polygon in world coordinates.
@@ -300,15 +339,35 @@ class OcclusionTree {
     OcclusionQueryResult result;
     result.together = start;
     if (!eye_ok_ || polygon.empty() || polygon.overflow()) return result;
-    ConvexPolygon local;
+    Fragment stack[query_stack_size];
+    Fragment& local = stack[0];
     float scale = 0.0f;
+    local.size = static_cast<std::uint32_t>(polygon.size());
     for (std::size_t i = 0; i < polygon.size(); ++i) {
       if (!detail::finite3(polygon[i])) return result;
-      local.push_back(polygon[i] - eye_);
-      scale = std::max(scale, detail::norm1(local[i]));
+      local.v[i] = polygon[i] - eye_;
+      scale = std::max(scale, detail::norm1(local.v[i]));
     }
-    return run_query(&local, 1, local.data(), static_cast<int>(local.size()), scale + eye_scale_, start,
-                     want_clear);
+    scale += eye_scale_;
+    // Phase 1: the whole polygon goes down while its corners stay on one side.
+    std::uint32_t ref = start == whole_tree ? root_ : start;
+    while (ref < hidden_leaf) {
+      const OcclusionNode& node = nodes_[ref];
+      const float m = params_.margin * (scale + std::fabs(node.plane.d));
+      float dmin = signed_distance(node.plane, local.v[0]), dmax = dmin;
+      for (std::uint32_t i = 1; i < local.size; ++i) {
+        const float dist = signed_distance(node.plane, local.v[i]);
+        dmin = std::min(dmin, dist);
+        dmax = std::max(dmax, dist);
+      }
+      if (!(dmin >= m) && !(dmax <= m)) break;  // straddles (or NaN): split from here
+      result.together = ref;
+      ref = dmin >= m ? node.inside : node.outside;
+    }
+    if (ref >= hidden_leaf) return leaf_answer(result, ref, want_clear);
+    result.together = ref;
+    local.ref = ref;
+    return split_query(result, stack, 1, scale, want_clear);
   }
 
  private:
@@ -323,10 +382,12 @@ class OcclusionTree {
     int box_point_count = 0;
     float split_epsilon = 0.0f;
   };
+  using Fragment = detail::QueryFragment<ConvexPolygon::capacity>;
+  // A pending occluder fragment: `fragment.ref` is the node whose child slot it enters next
+  // (whole_tree: the root slot), `inside` says which child.
   struct InsertItem {
-    std::uint32_t parent;  // node whose child slot this is; whole_tree: the root slot
+    Fragment fragment;
     bool inside;
-    ConvexPolygon polygon;
   };
 
   void skip() { ++stats_.occluders_skipped; }
@@ -351,22 +412,36 @@ class OcclusionTree {
     return index;
   }
 
-  // Pushes one occluder (its first fragment) down the tree.
+  // Pushes one occluder (its first fragment) down the tree. The work stack keeps its size (entries
+  // past `top` are stale, never value-initialized again), and a split writes its inside piece straight
+  // into the next stack entry, so vertices are copied only when an entry is popped.
   void insert_fragment(const ConvexPolygon& first) {
-    work_.clear();
-    work_.push_back(InsertItem{whole_tree, false, first});
-    ConvexPolygon in_piece, out_piece;
-    while (!work_.empty()) {
-      InsertItem item = work_.back();
-      work_.pop_back();
+    std::size_t top = 0;
+    if (work_.empty()) work_.resize(16);
+    {
+      Fragment& f = work_[top].fragment;
+      f.size = static_cast<std::uint32_t>(first.size());
+      for (std::size_t i = 0; i < first.size(); ++i) f.v[i] = first[i];
+      f.ref = whole_tree;
+      work_[top].inside = false;
+      ++top;
+    }
+    Fragment buffers[2];
+    while (top > 0) {
+      --top;
+      Fragment* cur = &buffers[0];
+      Fragment* alt = &buffers[1];
+      detail::copy_fragment(work_[top].fragment, *cur);
+      bool inside = work_[top].inside;
       for (;;) {
-        const std::uint32_t ref = slot_value(item.parent, item.inside);
+        const std::uint32_t parent = cur->ref;
+        const std::uint32_t ref = slot_value(parent, inside);
         if (ref == hidden_leaf) {
           ++stats_.fragments_hidden;
           break;
         }
         if (ref == visible_leaf) {
-          grow_chain(item.parent, item.inside);
+          grow_chain(parent, inside);
           break;
         }
         const OcclusionNode& node = nodes_[ref];
@@ -377,30 +452,35 @@ class OcclusionTree {
           bool behind = true;
           for (int i = 0; i < current_.box_point_count; ++i)
             behind = behind && signed_distance(node.plane, current_.box_points[i]) >= 0.0f;
-          item.parent = ref;
-          item.inside = behind;
+          cur->ref = ref;
+          inside = behind;
           continue;
         }
-        const PolygonSide side = item.polygon.split(node.plane, current_.split_epsilon, in_piece, out_piece);
-        if (side == PolygonSide::front) {
-          item.parent = ref;
-          item.inside = true;
-        } else if (side == PolygonSide::back) {
-          item.parent = ref;
-          item.inside = false;
-        } else if (side == PolygonSide::straddling) {
-          // NaN distances give no pieces: drop (losing occluder area is safe).
-          if (in_piece.size() < 3 || out_piece.size() < 3) {
+        if (top == work_.size()) work_.resize(2 * top);  // `node` stays valid: nodes_ does not move
+        Fragment& in_piece = work_[top].fragment;
+        const detail::FragmentSide side =
+            detail::split_fragment(*cur, node.plane, current_.split_epsilon, in_piece, *alt);
+        if (side == detail::FragmentSide::inside) {
+          cur->ref = ref;
+          inside = true;
+        } else if (side == detail::FragmentSide::outside) {
+          cur->ref = ref;
+          inside = false;
+        } else if (side == detail::FragmentSide::split) {
+          if (in_piece.size < 3 || alt->size < 3) {
             ++stats_.fragments_degenerate;
             break;
           }
-          work_.push_back(InsertItem{ref, true, in_piece});
-          item.parent = ref;
-          item.inside = false;
-          item.polygon = out_piece;
+          in_piece.ref = ref;
+          work_[top].inside = true;
+          ++top;
+          alt->ref = ref;
+          inside = false;
+          std::swap(cur, alt);
         } else {
           // Coplanar with a plane through the eye (no area) or with another occluder's own plane
-          // (it hides nothing more there): drop. Empty: nothing to do.
+          // (it hides nothing more there): drop. NaN or too many corners: drop too (losing occluder
+          // area is safe).
           ++stats_.fragments_degenerate;
           break;
         }
@@ -431,83 +511,56 @@ class OcclusionTree {
     stats_.nodes = static_cast<std::uint32_t>(nodes_.size());
   }
 
-  struct QueryItem {
-    std::uint32_t ref;
-    ConvexPolygon polygon;
-  };
+  [[nodiscard]] static OcclusionQueryResult leaf_answer(OcclusionQueryResult result, std::uint32_t leaf,
+                                                        bool want_clear) {
+    if (leaf == hidden_leaf) result.answer = OcclusionAnswer::hidden;
+    else result.answer = want_clear ? OcclusionAnswer::clear : OcclusionAnswer::visible;
+    return result;
+  }
 
-  [[nodiscard]] OcclusionQueryResult run_query(const ConvexPolygon* faces, int nfaces, const glm::vec3* points,
-                                               int point_count, float scale, std::uint32_t start,
-                                               bool want_clear) const {
-    OcclusionQueryResult result;
+  // Phase 2: the fragments stack[0..count) are pushed down the tree, split where they straddle a
+  // plane shifted inward by the margin. Depth first, outside pieces first, so a query that reaches a
+  // visible leaf stops early (unless `want_clear`). The current fragment lives in one of two local
+  // buffers (a split writes its outside piece into the other one and its inside piece straight onto
+  // the stack), so only pops copy vertices.
+  [[nodiscard]] OcclusionQueryResult split_query(OcclusionQueryResult result, Fragment* stack, int count,
+                                                 float scale, bool want_clear) const {
     const float eps = params_.margin;
-    // Phase 1: the whole shape goes down while its corners stay on one side.
-    std::uint32_t ref = start == whole_tree ? root_ : start;
-    result.together = start;
-    while (ref < hidden_leaf) {
-      const OcclusionNode& node = nodes_[ref];
-      const float m = eps * (scale + std::fabs(node.plane.d));
-      float lo = signed_distance(node.plane, points[0]), hi = lo;
-      for (int i = 1; i < point_count; ++i) {
-        const float dist = signed_distance(node.plane, points[i]);
-        lo = std::min(lo, dist);
-        hi = std::max(hi, dist);
-      }
-      if (lo >= m) {
-        result.together = ref;
-        ref = node.inside;
-      } else if (hi <= m) {
-        result.together = ref;
-        ref = node.outside;
-      } else {
-        break;  // straddles (or NaN): split the faces from here
-      }
-    }
-    if (ref == hidden_leaf) {
-      result.answer = OcclusionAnswer::hidden;
-      return result;
-    }
-    if (ref == visible_leaf) {
-      result.answer = want_clear ? OcclusionAnswer::clear : OcclusionAnswer::visible;
-      return result;
-    }
-    result.together = ref;
-    // Phase 2: split the faces.
-    QueryItem stack[query_stack_size];
-    int top = 0;
-    for (int f = 0; f < nfaces; ++f) stack[top++] = QueryItem{ref, faces[f]};
     bool any_hidden = false, any_visible = false;
-    ConvexPolygon in_piece, out_piece;
+    int top = count;
+    Fragment buffers[2];
     while (top > 0) {
-      QueryItem item = stack[--top];
+      Fragment* cur = &buffers[0];
+      Fragment* alt = &buffers[1];
+      detail::copy_fragment(stack[--top], *cur);
       for (;;) {
-        if (item.ref == hidden_leaf) {
+        const std::uint32_t ref = cur->ref;
+        if (ref == hidden_leaf) {
           any_hidden = true;
           break;
         }
-        if (item.ref == visible_leaf) {
+        if (ref == visible_leaf) {
           any_visible = true;
           break;
         }
-        const OcclusionNode& node = nodes_[item.ref];
+        const OcclusionNode& node = nodes_[ref];
         const float m = eps * (scale + std::fabs(node.plane.d));
         const Plane shifted{node.plane.normal, node.plane.d - m};
-        const PolygonSide side = item.polygon.split(shifted, 0.0f, in_piece, out_piece);
-        if (side == PolygonSide::front) {
-          item.ref = node.inside;
-        } else if (side == PolygonSide::back || side == PolygonSide::coplanar) {
-          item.ref = node.outside;
-        } else if (side == PolygonSide::straddling) {
-          if (in_piece.overflow() || out_piece.overflow() || in_piece.empty() || out_piece.empty() ||
-              top >= query_stack_size) {
-            any_visible = true;  // cannot be decided (or NaN): visible
-            break;
-          }
-          stack[top++] = QueryItem{node.inside, in_piece};
-          item.ref = node.outside;
-          item.polygon = out_piece;
+        // With the stack full, the inside piece has nowhere to go: a split then answers visible.
+        Fragment& in_piece = top < query_stack_size ? stack[top] : *alt;
+        const detail::FragmentSide side = detail::split_fragment(*cur, shifted, 0.0f, in_piece, *alt);
+        if (side == detail::FragmentSide::inside) {
+          cur->ref = node.inside;
+        } else if (side == detail::FragmentSide::outside || side == detail::FragmentSide::on) {
+          cur->ref = node.outside;
+        } else if (side == detail::FragmentSide::split && top < query_stack_size) {
+          in_piece.ref = node.inside;
+          ++top;
+          alt->ref = node.outside;
+          std::swap(cur, alt);
         } else {
-          break;  // empty fragment: nothing to show
+          any_visible = true;  // NaN, too many corners or a full stack: cannot be decided, visible
+          break;
         }
       }
       if (any_visible && !want_clear) break;
@@ -516,7 +569,6 @@ class OcclusionTree {
     else result.answer = any_hidden ? OcclusionAnswer::hidden : OcclusionAnswer::visible;
     return result;
   }
-
   // Top-level planes (seed §3.4.3): azimuth wedges around `up`, then elevation bands in each wedge.
   // Plane k (k = 0..K-1) contains `up` and the horizontal direction at azimuth psi_k = pi k / K; its
   // inside holds the azimuths in (psi_k, psi_k + pi). Plane 0 is the root; in each half the other

@@ -1,0 +1,129 @@
+// cullkit/detail/occlusion_query.hpp: the query side of OcclusionTree (not public API).
+//
+// Query fragments are small polygons pushed down the tree. They live in a fixed local array on the
+// stack of a const query, so they must cost nothing until written: the type has no member
+// initializers (a stack array of 48 of them is not zeroed, unlike ConvexPolygon), and splits copy
+// only the vertices in use.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include <glm/vec3.hpp>
+
+#include "../geometry/aabb.hpp"
+#include "../geometry/plane.hpp"
+
+namespace cullkit::detail {
+
+/// A convex query fragment (eye-relative vertices) and the tree slot it is about to enter.
+/// Deliberately trivial: uninitialized until `size` and the vertices are written.
+template <std::size_t Capacity>
+struct QueryFragment {
+  glm::vec3 v[Capacity];
+  std::uint32_t size;
+  std::uint32_t ref;  ///< node index or leaf code the fragment enters next
+};
+
+/// Where a fragment went at one plane.
+enum class FragmentSide : std::uint8_t {
+  inside,     ///< every vertex at distance >= -epsilon, some > epsilon
+  outside,    ///< every vertex at distance <= epsilon, some < -epsilon
+  on,         ///< every vertex within epsilon of the plane
+  split,      ///< vertices clearly on both sides: `in` and `out` were written
+  undecided,  ///< a NaN distance, or a piece would exceed the capacity (nothing written)
+};
+
+/// Classifies `src` against `plane` and splits it when it straddles, with the same rule as
+/// ConvexPolygon::split (so answers match the polygon-based code this replaced): a vertex within
+/// `epsilon` of the plane is on it and goes to both pieces; `in` gets the part at distance >= 0, `out`
+/// the part at distance <= 0, crossing points placed where a clearly crossing edge meets distance 0.
+/// `in`/`out` may not alias `src`; their `ref` is left alone. Cost: one dot product per vertex, and a
+/// copy of the vertices only when splitting.
+template <std::size_t Capacity>
+[[nodiscard]] inline FragmentSide split_fragment(const QueryFragment<Capacity>& src, const Plane& plane,
+                                                 float epsilon, QueryFragment<Capacity>& in,
+                                                 QueryFragment<Capacity>& out) noexcept {
+  float dist[Capacity];
+  bool f = false, b = false;
+  const std::uint32_t n = src.size;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const float d = signed_distance(plane, src.v[i]);
+    if (!(d == d)) return FragmentSide::undecided;
+    dist[i] = d;
+    f |= d > epsilon;
+    b |= d < -epsilon;
+  }
+  if (!(f && b)) return f ? FragmentSide::inside : (b ? FragmentSide::outside : FragmentSide::on);
+  std::uint32_t ni = 0, no = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t j = (i + 1 == n) ? 0 : i + 1;
+    const float di = dist[i], dj = dist[j];
+    const int si = di > epsilon ? 1 : (di < -epsilon ? -1 : 0);
+    const int sj = dj > epsilon ? 1 : (dj < -epsilon ? -1 : 0);
+    // Room for this vertex and a crossing point in both pieces.
+    if (ni + 2 > Capacity || no + 2 > Capacity) return FragmentSide::undecided;
+    if (si >= 0) in.v[ni++] = src.v[i];
+    if (si <= 0) out.v[no++] = src.v[i];
+    if (si * sj < 0) {
+      const float t = di / (di - dj);
+      const glm::vec3 p = src.v[i] + (src.v[j] - src.v[i]) * t;
+      in.v[ni++] = p;
+      out.v[no++] = p;
+    }
+  }
+  in.size = ni;
+  out.size = no;
+  return FragmentSide::split;
+}
+
+/// Copies the used vertices, the size and the slot of a fragment.
+template <std::size_t Capacity>
+inline void copy_fragment(const QueryFragment<Capacity>& from, QueryFragment<Capacity>& to) noexcept {
+  to.size = from.size;
+  to.ref = from.ref;
+  for (std::uint32_t i = 0; i < from.size; ++i) to.v[i] = from.v[i];
+}
+
+/// Writes the box faces the eye sees (eye-relative quads, at most 3) into `faces` and returns how many
+/// (0 when the eye is inside or on the box). `faces` has room for 3.
+template <std::size_t Capacity>
+[[nodiscard]] inline int box_front_fragments(const Aabb& box, const glm::vec3& eye,
+                                             QueryFragment<Capacity>* faces) noexcept {
+  static_assert(Capacity >= 4, "cullkit: a box face needs 4 vertices");
+  int nfaces = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    int side;  // 0: the min face is seen, 1: the max face
+    if (eye[axis] < box.min[axis]) side = 0;
+    else if (eye[axis] > box.max[axis]) side = 1;
+    else continue;
+    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+    const int base = side << axis;
+    const int cyc[4] = {base, base | (1 << a1), base | (1 << a1) | (1 << a2), base | (1 << a2)};
+    QueryFragment<Capacity>& f = faces[nfaces++];
+    for (int k = 0; k < 4; ++k) f.v[k] = corner(box, cyc[k]) - eye;
+    f.size = 4;
+  }
+  return nfaces;
+}
+
+/// The distinct corners of the box faces the eye sees (eye-relative) into `points` (room for 8);
+/// returns how many (0 when the eye is inside or on the box).
+[[nodiscard]] inline int box_front_points(const Aabb& box, const glm::vec3& eye, glm::vec3* points) noexcept {
+  unsigned mask = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    unsigned face = 0;  // corners of the seen face on this axis
+    if (eye[axis] < box.min[axis]) face = 0;
+    else if (eye[axis] > box.max[axis]) face = 1;
+    else continue;
+    for (int c = 0; c < 8; ++c)
+      if (((static_cast<unsigned>(c) >> axis) & 1u) == face) mask |= 1u << c;
+  }
+  int count = 0;
+  for (int c = 0; c < 8; ++c)
+    if (mask & (1u << c)) points[count++] = corner(box, c) - eye;
+  return count;
+}
+
+}  // namespace cullkit::detail
