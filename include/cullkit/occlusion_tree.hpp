@@ -311,6 +311,7 @@ class OcclusionTree {
         inside = false;
       } else {
         if (point_count == 0) point_count = detail::box_front_points(box, eye_, points);
+        if (point_count == 0) break;  // cannot happen (the eye is outside the box); then visible
         float dmin = signed_distance(node.plane, points[0]), dmax = dmin;
         for (int i = 1; i < point_count; ++i) {
           const float dist = signed_distance(node.plane, points[i]);
@@ -458,8 +459,9 @@ class OcclusionTree {
         }
         if (top == work_.size()) work_.resize(2 * top);  // `node` stays valid: nodes_ does not move
         Fragment& in_piece = work_[top].fragment;
-        const detail::FragmentSide side =
-            detail::split_fragment(*cur, node.plane, current_.split_epsilon, in_piece, *alt);
+        detail::FragmentSide side = detail::classify_fragment(*cur, node.plane, current_.split_epsilon);
+        if (side == detail::FragmentSide::split)
+          side = detail::split_fragment(*cur, node.plane, current_.split_epsilon, in_piece, *alt);
         if (side == detail::FragmentSide::inside) {
           cur->ref = ref;
           inside = true;
@@ -548,7 +550,8 @@ class OcclusionTree {
         const Plane shifted{node.plane.normal, node.plane.d - m};
         // With the stack full, the inside piece has nowhere to go: a split then answers visible.
         Fragment& in_piece = top < query_stack_size ? stack[top] : *alt;
-        const detail::FragmentSide side = detail::split_fragment(*cur, shifted, 0.0f, in_piece, *alt);
+        detail::FragmentSide side = detail::classify_fragment(*cur, shifted, 0.0f);
+        if (side == detail::FragmentSide::split) side = detail::split_fragment(*cur, shifted, 0.0f, in_piece, *alt);
         if (side == detail::FragmentSide::inside) {
           cur->ref = node.inside;
         } else if (side == detail::FragmentSide::outside || side == detail::FragmentSide::on) {

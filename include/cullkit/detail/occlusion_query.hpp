@@ -35,6 +35,25 @@ enum class FragmentSide : std::uint8_t {
   undecided,  ///< a NaN distance, or a piece would exceed the capacity (nothing written)
 };
 
+/// Classifies `src` against `plane` like `split_fragment`, without writing any piece: `split` here
+/// means "straddles; call split_fragment". NaN gives `undecided`. Kept small so it inlines into the
+/// tree walks (most nodes only classify).
+template <std::size_t Capacity>
+[[nodiscard]] inline FragmentSide classify_fragment(const QueryFragment<Capacity>& src, const Plane& plane,
+                                                    float epsilon) noexcept {
+  bool f = false, b = false, nan = false;
+  const std::uint32_t n = src.size;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const float d = signed_distance(plane, src.v[i]);
+    f |= d > epsilon;
+    b |= d < -epsilon;
+    nan |= !(d == d);
+  }
+  if (nan) return FragmentSide::undecided;
+  if (f && b) return FragmentSide::split;
+  return f ? FragmentSide::inside : (b ? FragmentSide::outside : FragmentSide::on);
+}
+
 /// Classifies `src` against `plane` and splits it when it straddles, with the same rule as
 /// ConvexPolygon::split (so answers match the polygon-based code this replaced): a vertex within
 /// `epsilon` of the plane is on it and goes to both pieces; `in` gets the part at distance >= 0, `out`
