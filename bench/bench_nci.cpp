@@ -5,7 +5,8 @@
 //  2. time of select_visible against Embree casting one ray per pixel (rtcIntersect1) and 4x4
 //     packets (rtcIntersect16), at 640x480 and 1024x768, on real scenes and a generated one of
 //     >= 10M triangles (full runs only; `--no-big` skips it).
-// CSV on stdout. CULLKIT_BENCH_SMOKE=1: a tiny city at 64x48, one setting.
+// Flags: --no-big, --only-big, --no-precision, --quick (precision at the default parameters only,
+// timing at 640x480 only). CSV on stdout. CULLKIT_BENCH_SMOKE=1: a tiny city at 64x48, one setting.
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -210,6 +211,8 @@ std::vector<Camera> views(const Scene& s, int w, int h) {
   return cams;
 }
 
+bool g_quick = false;  // --quick: precision at the default parameters only, timing at 640x480 only
+
 void precision_table(const std::string& name, const Scene& s, unsigned threads, bool smoke) {
   const Embree embree(s, threads);
   std::printf("embree_build,%s,%zu,%.3f,%.1f\n", name.c_str(), s.triangle_count(), embree.build_seconds,
@@ -218,8 +221,8 @@ void precision_table(const std::string& name, const Scene& s, unsigned threads, 
   const auto cams = views(s, w, h);
   std::vector<std::vector<std::uint32_t>> truth;
   for (const auto& c : cams) truth.push_back(embree.visible(c, s));
-  const std::vector<int> classes = smoke ? std::vector<int>{32} : std::vector<int>{32, 128, 512};
-  const std::vector<int> grids = smoke ? std::vector<int>{64} : std::vector<int>{32, 64, 128};
+  const std::vector<int> classes = smoke || g_quick ? std::vector<int>{NciParams{}.classes} : std::vector<int>{32, 128, 512};
+  const std::vector<int> grids = smoke || g_quick ? std::vector<int>{NciParams{}.grid} : std::vector<int>{32, 64, 128};
   for (int k : classes) {
     for (int g : grids) {
       NciParams p;
@@ -250,7 +253,9 @@ void speed(const std::string& name, const Scene& s, unsigned threads, bool smoke
   p.build_threads = threads;
   const NormalClassIndex<glm::vec3> index(s.mesh(), p);
   const std::vector<std::pair<int, int>> sizes =
-      smoke ? std::vector<std::pair<int, int>>{{64, 48}} : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}};
+      smoke     ? std::vector<std::pair<int, int>>{{64, 48}}
+      : g_quick ? std::vector<std::pair<int, int>>{{640, 480}}
+                : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}};
   for (auto [w, h] : sizes) {
     const auto cams = views(s, w, h);
     for (std::size_t ci = 0; ci < cams.size(); ++ci) {
@@ -280,6 +285,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--no-big")) big = false;
     if (!std::strcmp(argv[i], "--only-big")) precision = timing = false;
     if (!std::strcmp(argv[i], "--no-precision")) precision = false;
+    if (!std::strcmp(argv[i], "--quick")) g_quick = true;
   }
   const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
   std::printf("# threads=%u\n", threads);

@@ -159,10 +159,15 @@ class NciContext {
     std::int16_t x0, y0, x1, y1;
   };
   struct Thread {
-    std::vector<std::uint32_t> stamp;   // per triangle: last tile that tested it
+    // Per triangle, one 16-byte record (one cache line touch per triangle met by a tile): the
+    // last tile that looked at it, the frame of its cached rectangle, and that rectangle.
+    struct Tri {
+      std::uint32_t stamp;
+      std::uint32_t epoch;
+      Rect rect;
+    };
+    std::vector<Tri> tri;
     std::uint32_t stamp_value = 0;
-    std::vector<std::uint32_t> rect_epoch;  // per triangle: frame of the cached rectangle
-    std::vector<Rect> rect;
     std::uint32_t frame_epoch = 0;
     std::vector<std::uint32_t> tested;  // triangles tested (unique per tile)
     std::vector<std::uint16_t> active_classes;
@@ -314,15 +319,13 @@ class NormalClassIndex {
       if (context.threads_.size() < thread_count) context.threads_.resize(thread_count);
       for (unsigned i = 0; i < thread_count; ++i) {
         auto& th = context.threads_[i];
-        if (th.stamp.size() != triangle_count()) {
-          th.stamp.assign(triangle_count(), 0u);
+        if (th.tri.size() != triangle_count()) {
+          th.tri.assign(triangle_count(), NciContext::Thread::Tri{0u, 0u, NciContext::Rect{0, 0, -1, -1}});
           th.stamp_value = 0;
-          th.rect_epoch.assign(triangle_count(), 0u);
-          th.rect.resize(triangle_count());
           th.frame_epoch = 0;
         }
         if (++th.frame_epoch == 0) {
-          std::fill(th.rect_epoch.begin(), th.rect_epoch.end(), 0u);
+          for (auto& t : th.tri) t.epoch = 0u;
           th.frame_epoch = 1;
         }
         th.tested.clear();
@@ -404,7 +407,7 @@ class NormalClassIndex {
   [[nodiscard]] std::size_t memory_bytes() const noexcept {
     return sizeof(*this) + bytes(vertices_) + bytes(tri_vertices_) + bytes(tri_original_) + bytes(class_axis_) +
            bytes(class_sin_) + bytes(class_cos_) + bytes(cell_tri_begin_) + bytes(cell_tris_) + bytes(grid_base_) +
-           bytes(slice_rows_) + bytes(row_coord_) + bytes(row_begin_) + bytes(cell_col_) + bytes(cell_id_) +
+           bytes(slice_rows_) + bytes(row_coord_) + bytes(row_begin_) + bytes(cell_col_) + bytes(cell_id_) + bytes(grid_shift_) +
            bytes(class_of_);
   }
   /// Triangles kept by the build.
@@ -613,8 +616,9 @@ class NormalClassIndex {
     row_coord_.reserve(total_rows);
     row_begin_.reserve(total_rows + 1);
     cell_col_.reserve(total_grid_cells);
-    cell_id_.reserve(total_grid_cells);
+    cell_id_.reserve(total_grid_cells - total_cells);
     grid_base_.reserve(classes * 3);
+    grid_shift_.reserve(classes * 3);
     cell_tri_begin_.push_back(0);
     for (std::size_t c = 0; c < classes; ++c) {
       auto& p = parts[c];
@@ -630,7 +634,13 @@ class NormalClassIndex {
         row_coord_.insert(row_coord_.end(), p.row_coord[a].begin(), p.row_coord[a].end());
         for (std::uint32_t b : p.row_begin[a]) row_begin_.push_back(col_base + b);
         cell_col_.insert(cell_col_.end(), p.cell_col[a].begin(), p.cell_col[a].end());
-        for (std::uint32_t id : p.cell_id[a]) cell_id_.push_back(cell_base + id);
+        if (a == 0) {
+          // The X grid lists the class's cells in id order: the id is the position, shifted.
+          grid_shift_.push_back(col_base - cell_base);
+        } else {
+          grid_shift_.push_back(col_base - static_cast<std::uint32_t>(cell_id_.size()));
+          for (std::uint32_t id : p.cell_id[a]) cell_id_.push_back(cell_base + id);
+        }
       }
       p = ClassGrids{};
     }
@@ -817,6 +827,11 @@ class NormalClassIndex {
     bool dirty[256];    // best_t changed since `finish` was computed
     int axis = 2;       // the frame's walk axis
     bool flat[256];
+    // The tile's beam: four planes through the eye (unit normals, inside positive) holding every
+    // live ray of the tile up to `beam_eps` (the largest measured violation plus rounding).
+    float beam_n[4][3];
+    float beam_eps = 0.0f;
+    bool beam = false;
   };
 
   // Which pixels may see the triangle: an empty rectangle for a back face (or one seen exactly
@@ -858,20 +873,90 @@ class NormalClassIndex {
                 static_cast<std::int16_t>(std::min(double(f.height - 1), ly1))};
   }
 
+  // The beam of the tile's live rays: planes through the eye and consecutive corner rays, then
+  // measured against every live ray so that the margin covers whatever the projection did.
+  static void make_beam(TileRays& r, int tw, int th, const std::uint16_t* live) noexcept {
+    r.beam = false;
+    if (tw < 2 || th < 2) return;
+    const int corner[4] = {0, tw - 1, (th - 1) * 16 + tw - 1, (th - 1) * 16};
+    glm::dvec3 d[4], centre(0.0);
+    for (int k = 0; k < 4; ++k) {
+      d[k] = glm::dvec3(r.dir[corner[k]]);
+      if (!r.wray[corner[k]].valid) return;
+      centre += d[k];
+    }
+    for (int k = 0; k < 4; ++k) {
+      glm::dvec3 n = glm::cross(d[k], d[(k + 1) % 4]);
+      const double len = glm::length(n);
+      if (!(len > 1e-12) || !std::isfinite(len)) return;
+      n /= len;
+      if (glm::dot(n, centre) < 0.0) n = -n;
+      for (int j = 0; j < 3; ++j) r.beam_n[k][j] = static_cast<float>(n[j]);
+    }
+    double worst = 0.0;
+    for (int y = 0; y < th; ++y) {
+      std::uint32_t bits = live[y];
+      while (bits) {
+        const int x = __builtin_ctz(bits);
+        bits &= bits - 1;
+        const glm::dvec3 dir(r.dir[y * 16 + x]);
+        const double dl = std::fabs(dir.x) + std::fabs(dir.y) + std::fabs(dir.z);
+        for (int k = 0; k < 4; ++k) {
+          const double v = double(r.beam_n[k][0]) * dir.x + double(r.beam_n[k][1]) * dir.y + double(r.beam_n[k][2]) * dir.z;
+          worst = std::max(worst, -v / std::max(dl, 1e-30));
+        }
+      }
+    }
+    // Rounding of the float plane test below (relative to the corner's 1-norm) on top.
+    const double eps = worst * 1.01 + 1e-5;
+    if (!(eps < 0.25)) return;
+    r.beam_eps = static_cast<float>(eps);
+    r.beam = true;
+  }
+
+  // Whether triangle `tri` lies wholly outside one plane of the tile's beam with margin: every
+  // corner x (relative to the eye, in float as the ray test takes it) has n.x + eps |x|_1 < 0.
+  // That set is convex, so it holds the whole triangle; a ray direction d (unit) with
+  // n.d >= -eps |d|_1 meets no point of it.
+  [[nodiscard]] bool outside_beam(const TileRays& r, std::uint32_t tri, const Frame& f) const noexcept {
+    float x[3][3];
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec3& p = vertices_[tri_vertices_[3 * tri + static_cast<std::uint32_t>(k)]];
+      x[k][0] = p.x - f.eye_f.x;
+      x[k][1] = p.y - f.eye_f.y;
+      x[k][2] = p.z - f.eye_f.z;
+    }
+    const float e = r.beam_eps;
+    for (int j = 0; j < 4; ++j) {
+      const float* n = r.beam_n[j];
+      bool out = true;
+      for (int k = 0; k < 3 && out; ++k) {
+        const float l1 = std::fabs(x[k][0]) + std::fabs(x[k][1]) + std::fabs(x[k][2]);
+        out = n[0] * x[k][0] + n[1] * x[k][1] + n[2] * x[k][2] + e * l1 < 0.0f;
+      }
+      if (out) return true;
+    }
+    return false;
+  }
+
   // Tests `tri` against the unfinished rays of the tile inside its screen rectangle; false when no
   // ray was tested (a back face seen from the eye, or no live pixel under its rectangle).
   bool test_triangle(const Frame& f, std::uint32_t tri, int x0, int y0, int tw, int th, const std::uint16_t* live,
                      TileRays& r, NciContext::Thread& thread) const {
-    const glm::vec3& p0 = vertices_[tri_vertices_[3 * tri]];
-    const glm::vec3& p1 = vertices_[tri_vertices_[3 * tri + 1]];
-    const glm::vec3& p2 = vertices_[tri_vertices_[3 * tri + 2]];
     // The triangle's screen rectangle, computed once per frame and thread (cached: a triangle is
     // met by many tiles).
-    if (thread.rect_epoch[tri] != thread.frame_epoch) {
-      thread.rect_epoch[tri] = thread.frame_epoch;
-      thread.rect[tri] = screen_rect(f, p0, p1, p2);
+    auto& slot = thread.tri[tri];
+    bool in_beam = !r.beam;
+    if (slot.epoch != thread.frame_epoch) {
+      // Not yet met this frame: a triangle wholly outside the tile's beam is rejected without
+      // computing its rectangle (most triangles of a big scene met by a tile are).
+      if (r.beam && outside_beam(r, tri, f)) return false;
+      in_beam = true;
+      slot.epoch = thread.frame_epoch;
+      slot.rect = screen_rect(f, vertices_[tri_vertices_[3 * tri]], vertices_[tri_vertices_[3 * tri + 1]],
+                              vertices_[tri_vertices_[3 * tri + 2]]);
     }
-    const NciContext::Rect rect = thread.rect[tri];
+    const NciContext::Rect rect = slot.rect;
     if (rect.x0 > rect.x1) return false;  // back face or edge-on from the eye, or off screen
     int rx0 = 0, ry0 = 0, rx1 = tw - 1, ry1 = th - 1;
     if (rect.x0 != NciContext::Rect::full) {
@@ -882,10 +967,19 @@ class NormalClassIndex {
       ry0 = std::max(0, ly0);
       ry1 = std::min(th - 1, ly1);
     }
+    const std::uint32_t span = ((1u << (rx1 - rx0 + 1)) - 1u) << rx0;
+    std::uint32_t under = 0;  // live pixels under the rectangle
+    for (int y = ry0; y <= ry1; ++y) under |= live[y] & span;
+    if (!under) return false;
+    // The same beam test when the rectangle came from the cache, so what is tested does not depend
+    // on which thread met the triangle first.
+    if (!in_beam && outside_beam(r, tri, f)) return false;
+    const glm::vec3& p0 = vertices_[tri_vertices_[3 * tri]];
+    const glm::vec3& p1 = vertices_[tri_vertices_[3 * tri + 1]];
+    const glm::vec3& p2 = vertices_[tri_vertices_[3 * tri + 2]];
     const float a[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};
     const float b[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
     const float c[3] = {p2.x - f.eye_f.x, p2.y - f.eye_f.y, p2.z - f.eye_f.z};
-    const std::uint32_t span = ((1u << (rx1 - rx0 + 1)) - 1u) << rx0;
     bool any = false;
     for (int y = ry0; y <= ry1; ++y) {
       std::uint32_t bits = live[y] & span;
@@ -963,6 +1057,8 @@ class NormalClassIndex {
       return;
     }
 
+    make_beam(r, tw, th, live);
+
     // Classes that may face some ray of the tile: skip a class only when every normal of its cone
     // and every live ray direction make an angle below 90 degrees (a back face for all of them).
     auto& active = thread.active_classes;
@@ -997,7 +1093,7 @@ class NormalClassIndex {
     }
 
     if (++thread.stamp_value == 0) {
-      std::fill(thread.stamp.begin(), thread.stamp.end(), 0u);
+      for (auto& t : thread.tri) t.stamp = 0u;
       thread.stamp_value = 1;
     }
     const std::uint32_t stamp = thread.stamp_value;
@@ -1065,6 +1161,7 @@ class NormalClassIndex {
           if (rlo <= rhi && clo <= chi) {
             for (std::uint16_t k : active) {
               const std::size_t base = grid_base_[static_cast<std::size_t>(k) * 3 + static_cast<std::size_t>(a)];
+              const std::uint32_t shift = grid_shift_[static_cast<std::size_t>(k) * 3 + static_cast<std::size_t>(a)];
               const std::uint32_t row_first = slice_rows_[base + static_cast<std::size_t>(s)];
               const std::uint32_t row_last = slice_rows_[base + static_cast<std::size_t>(s) + 1];
               if (row_first == row_last) continue;
@@ -1076,12 +1173,16 @@ class NormalClassIndex {
                 auto cell_it = std::lower_bound(cell_col_.begin() + cf, cell_col_.begin() + cl,
                                                 static_cast<std::uint16_t>(clo));
                 for (; cell_it != cell_col_.begin() + cl && *cell_it <= chi; ++cell_it) {
-                  const std::uint32_t cell = cell_id_[static_cast<std::size_t>(cell_it - cell_col_.begin())];
+                  const std::uint32_t pos = static_cast<std::uint32_t>(cell_it - cell_col_.begin());
+                  const std::uint32_t cell = a == 0 ? pos - shift : cell_id_[pos - shift];
                   ++thread.stats.cells_visited;
-                  for (std::uint32_t e = cell_tri_begin_[cell]; e < cell_tri_begin_[cell + 1]; ++e) {
+                  const std::uint32_t e_end = cell_tri_begin_[cell + 1];
+                  for (std::uint32_t e = cell_tri_begin_[cell]; e < e_end; ++e) {
+                    // The per-triangle records are met in random order on big scenes: fetch ahead.
+                    if (e + 8 < e_end) __builtin_prefetch(&thread.tri[cell_tris_[e + 8]]);
                     const std::uint32_t tri = cell_tris_[e];
-                    if (thread.stamp[tri] == stamp) continue;
-                    thread.stamp[tri] = stamp;
+                    if (thread.tri[tri].stamp == stamp) continue;
+                    thread.tri[tri].stamp = stamp;
                     if (test_triangle(f, tri, x0, y0, tw, th, live, r, thread)) thread.tested.push_back(tri);
                   }
                 }
@@ -1188,7 +1289,8 @@ class NormalClassIndex {
   std::vector<std::uint16_t> row_coord_;
   std::vector<std::uint32_t> row_begin_;      // rows + 1 (global sentinel)
   std::vector<std::uint16_t> cell_col_;
-  std::vector<std::uint32_t> cell_id_;
+  std::vector<std::uint32_t> cell_id_;        // Y and Z grids: cell per grid cell (X grids need none)
+  std::vector<std::uint32_t> grid_shift_;     // (class, axis): X: cell = position - shift; else cell_id_[position - shift]
 };
 
 }  // namespace cullkit
