@@ -407,7 +407,8 @@ class NormalClassIndex {
   [[nodiscard]] std::size_t memory_bytes() const noexcept {
     return sizeof(*this) + bytes(vertices_) + bytes(tri_vertices_) + bytes(tri_original_) + bytes(class_axis_) +
            bytes(class_sin_) + bytes(class_cos_) + bytes(cell_tri_begin_) + bytes(cell_tris_) + bytes(grid_base_) +
-           bytes(slice_rows_) + bytes(row_coord_) + bytes(row_begin_) + bytes(cell_col_) + bytes(cell_id_) + bytes(grid_shift_) +
+           bytes(slice_rows_) + bytes(row_coord_) + bytes(row_begin_) + bytes(cell_col_) + bytes(cell_id_) + bytes(cell_id16_) +
+           bytes(grid_shift_) + bytes(class_cell_base_) +
            bytes(class_of_);
   }
   /// Triangles kept by the build.
@@ -599,8 +600,10 @@ class NormalClassIndex {
 
     // 5. Merge into flat arrays.
     std::size_t total_cells = 0, total_entries = 0, total_rows = 0, total_grid_cells = 0, total_slices = 0;
+    wide_ids_ = false;
     for (const auto& p : parts) {
       total_cells += p.cell_tri_begin.size() - 1;
+      wide_ids_ = wide_ids_ || p.cell_tri_begin.size() - 1 > 65536;
       total_entries += p.cell_tris.size();
       for (int a = 0; a < 3; ++a) {
         total_rows += p.row_coord[a].size();
@@ -616,13 +619,16 @@ class NormalClassIndex {
     row_coord_.reserve(total_rows);
     row_begin_.reserve(total_rows + 1);
     cell_col_.reserve(total_grid_cells);
-    cell_id_.reserve(total_grid_cells - total_cells);
+    if (wide_ids_) cell_id_.reserve(total_grid_cells - total_cells);
+    else cell_id16_.reserve(total_grid_cells - total_cells);
+    class_cell_base_.reserve(classes);
     grid_base_.reserve(classes * 3);
     grid_shift_.reserve(classes * 3);
     cell_tri_begin_.push_back(0);
     for (std::size_t c = 0; c < classes; ++c) {
       auto& p = parts[c];
       const std::uint32_t cell_base = static_cast<std::uint32_t>(cell_tri_begin_.size() - 1);
+      class_cell_base_.push_back(wide_ids_ ? 0u : cell_base);
       const std::uint32_t entry_base = static_cast<std::uint32_t>(cell_tris_.size());
       for (std::size_t k = 1; k < p.cell_tri_begin.size(); ++k) cell_tri_begin_.push_back(entry_base + p.cell_tri_begin[k]);
       cell_tris_.insert(cell_tris_.end(), p.cell_tris.begin(), p.cell_tris.end());
@@ -638,8 +644,15 @@ class NormalClassIndex {
           // The X grid lists the class's cells in id order: the id is the position, shifted.
           grid_shift_.push_back(col_base - cell_base);
         } else {
-          grid_shift_.push_back(col_base - static_cast<std::uint32_t>(cell_id_.size()));
-          for (std::uint32_t id : p.cell_id[a]) cell_id_.push_back(cell_base + id);
+          // Y and Z grids: the class's own cell number, in 16 bits when every class has at most
+          // 65536 cells (2 bytes per grid cell saved), else the global cell in 32 bits.
+          if (wide_ids_) {
+            grid_shift_.push_back(col_base - static_cast<std::uint32_t>(cell_id_.size()));
+            for (std::uint32_t id : p.cell_id[a]) cell_id_.push_back(cell_base + id);
+          } else {
+            grid_shift_.push_back(col_base - static_cast<std::uint32_t>(cell_id16_.size()));
+            for (std::uint32_t id : p.cell_id[a]) cell_id16_.push_back(static_cast<std::uint16_t>(id));
+          }
         }
       }
       p = ClassGrids{};
@@ -776,6 +789,9 @@ class NormalClassIndex {
     glm::dvec4 target_plane{0.0};  // plane holding the pixel rays' target points (world space)
     const float* initial_depth = nullptr;  // per pixel: start from this depth (moving objects)
     int width = 0, height = 0;
+    double eye_side = 0.0;          // -target_plane . (eye, 1)
+    glm::dvec4 eye_clip{0.0};       // view_proj * (eye, 1)
+    glm::dvec3 clip_x{0.0}, clip_y{0.0}, clip_w{0.0};  // rows x, y, w of view_proj's 3x3 part
   };
 
   [[nodiscard]] Frame make_frame(const Camera& camera) const {
@@ -812,6 +828,13 @@ class NormalClassIndex {
       f.target_plane = row2 - z0 * row3;
       const double on_eye = glm::dot(f.target_plane, glm::dvec4(f.eye, 1.0));
       f.use_rect = std::isfinite(on_eye) && on_eye != 0.0 && camera.width <= 32000 && camera.height <= 32000;
+      f.eye_side = -on_eye;
+      f.eye_clip = f.view_proj * glm::dvec4(f.eye, 1.0);
+      for (int j = 0; j < 3; ++j) {
+        f.clip_x[j] = f.view_proj[j][0];
+        f.clip_y[j] = f.view_proj[j][1];
+        f.clip_w[j] = f.view_proj[j][3];
+      }
     }
     return f;
   }
@@ -825,6 +848,7 @@ class NormalClassIndex {
     float t_exit[256];  // where the ray leaves the inflated scene box (rounded up): nothing beyond
     int finish[256];    // the walk may stop this ray once it has processed this slice
     bool dirty[256];    // best_t changed since `finish` was computed
+    bool any_dirty = true;  // some ray became dirty since the walk last looked
     int axis = 2;       // the frame's walk axis
     bool flat[256];
     // The tile's beam: four planes through the eye (unit normals, inside positive) holding every
@@ -843,17 +867,20 @@ class NormalClassIndex {
     if (!f.use_rect) return Rect{Rect::full, 0, 0, 0};
     const glm::vec3* p[3] = {&p0, &p1, &p2};
     double mnx = std::numeric_limits<double>::infinity(), mny = mnx, mxx = -mnx, mxy = -mnx;
-    const double eye_side = -glm::dot(f.target_plane, glm::dvec4(f.eye, 1.0));
+    const glm::dvec3 plane(f.target_plane);
     for (int k = 0; k < 3; ++k) {
       const glm::dvec3 dx = glm::dvec3(*p[k]) - f.eye;
-      const double s = eye_side / glm::dot(f.target_plane, glm::dvec4(dx, 0.0));
+      const double s = f.eye_side / glm::dot(plane, dx);
       // Behind the eye, or beside it (parallel to the plane): no rectangle.
       if (!(s > 0.0) || !std::isfinite(s)) return Rect{Rect::full, 0, 0, 0};
-      const glm::dvec4 c = f.view_proj * glm::dvec4(f.eye + s * dx, 1.0);
-      if (!(c.w > 0.0)) return Rect{Rect::full, 0, 0, 0};
+      // Clip coordinates of eye + s dx: view_proj (eye, 1) + s view_proj (dx, 0).
+      const double cw = f.eye_clip.w + s * glm::dot(f.clip_w, dx);
+      if (!(cw > 0.0)) return Rect{Rect::full, 0, 0, 0};
+      const double cx = f.eye_clip.x + s * glm::dot(f.clip_x, dx);
+      const double cy = f.eye_clip.y + s * glm::dot(f.clip_y, dx);
       // Pixel-centre coordinates: pixel i has ndc (2i + 1) / width - 1.
-      const double px = ((c.x / c.w + 1.0) * f.width - 1.0) * 0.5;
-      const double py = ((1.0 - c.y / c.w) * f.height - 1.0) * 0.5;
+      const double px = ((cx / cw + 1.0) * f.width - 1.0) * 0.5;
+      const double py = ((1.0 - cy / cw) * f.height - 1.0) * 0.5;
       mnx = std::min(mnx, px);
       mxx = std::max(mxx, px);
       mny = std::min(mny, py);
@@ -992,7 +1019,10 @@ class NormalClassIndex {
         float t;
         if (detail::watertight_hit(r.wray[i], a, b, c, t)) {
           if (t < r.best_t[i] || (t == r.best_t[i] && tri < r.best[i])) {
-            r.dirty[i] = r.dirty[i] || t < r.best_t[i];
+            if (t < r.best_t[i]) {
+              r.dirty[i] = true;
+              r.any_dirty = true;
+            }
             r.best_t[i] = t;
             r.best[i] = tri;
           }
@@ -1104,6 +1134,12 @@ class NormalClassIndex {
       std::uint16_t* mask = walk_mask[walk];
       const int step = walk == 0 ? 1 : -1;
       const int start = cell_of(ea, a);
+      // The beam's slopes change only when rays finish; the finish test runs only when a ray's
+      // hit improved or the walk reaches the earliest finishing slice (`next_finish`).
+      r.any_dirty = true;
+      int next_finish = start;
+      bool slopes_stale = true, full = false;
+      float smin_b = 0.0f, smax_b = 0.0f, smin_c = 0.0f, smax_c = 0.0f;
       for (int s = start; s >= 0 && s < na; s += step) {
         bool pending = false;
         for (int y = 0; y < th; ++y) pending = pending || mask[y] != 0;
@@ -1116,19 +1152,25 @@ class NormalClassIndex {
         if (s0 <= s1) {
           // Beam of the walk's unfinished rays across [s0, s1].
           double bmin = std::numeric_limits<double>::infinity(), bmax = -bmin, cmin = bmin, cmax = -bmin;
-          bool full = false;
-          float smin_b = std::numeric_limits<float>::infinity(), smax_b = -smin_b, smin_c = smin_b, smax_c = -smin_b;
-          for (int y = 0; y < th; ++y) {
-            std::uint32_t bits = mask[y];
-            while (bits) {
-              const int x = __builtin_ctz(bits);
-              bits &= bits - 1;
-              const int i = y * 16 + x;
-              if (r.flat[i]) full = true;
-              smin_b = std::min(smin_b, r.slope_b[i]);
-              smax_b = std::max(smax_b, r.slope_b[i]);
-              smin_c = std::min(smin_c, r.slope_c[i]);
-              smax_c = std::max(smax_c, r.slope_c[i]);
+          if (slopes_stale) {
+            slopes_stale = false;
+            full = false;
+            smin_b = std::numeric_limits<float>::infinity();
+            smax_b = -smin_b;
+            smin_c = smin_b;
+            smax_c = -smin_b;
+            for (int y = 0; y < th; ++y) {
+              std::uint32_t bits = mask[y];
+              while (bits) {
+                const int x = __builtin_ctz(bits);
+                bits &= bits - 1;
+                const int i = y * 16 + x;
+                if (r.flat[i]) full = true;
+                smin_b = std::min(smin_b, r.slope_b[i]);
+                smax_b = std::max(smax_b, r.slope_b[i]);
+                smin_c = std::min(smin_c, r.slope_c[i]);
+                smax_c = std::max(smax_c, r.slope_c[i]);
+              }
             }
           }
           int rlo = 0, rhi = nb - 1, clo = 0, chi = nc - 1;
@@ -1162,6 +1204,7 @@ class NormalClassIndex {
             for (std::uint16_t k : active) {
               const std::size_t base = grid_base_[static_cast<std::size_t>(k) * 3 + static_cast<std::size_t>(a)];
               const std::uint32_t shift = grid_shift_[static_cast<std::size_t>(k) * 3 + static_cast<std::size_t>(a)];
+              const std::uint32_t class_base = class_cell_base_[k];
               const std::uint32_t row_first = slice_rows_[base + static_cast<std::size_t>(s)];
               const std::uint32_t row_last = slice_rows_[base + static_cast<std::size_t>(s) + 1];
               if (row_first == row_last) continue;
@@ -1174,7 +1217,9 @@ class NormalClassIndex {
                                                 static_cast<std::uint16_t>(clo));
                 for (; cell_it != cell_col_.begin() + cl && *cell_it <= chi; ++cell_it) {
                   const std::uint32_t pos = static_cast<std::uint32_t>(cell_it - cell_col_.begin());
-                  const std::uint32_t cell = a == 0 ? pos - shift : cell_id_[pos - shift];
+                  const std::uint32_t cell = a == 0     ? pos - shift
+                                             : wide_ids_ ? cell_id_[pos - shift]
+                                                         : class_base + cell_id16_[pos - shift];
                   ++thread.stats.cells_visited;
                   const std::uint32_t e_end = cell_tri_begin_[cell + 1];
                   for (std::uint32_t e = cell_tri_begin_[cell]; e < e_end; ++e) {
@@ -1191,7 +1236,11 @@ class NormalClassIndex {
           }
         }
         // Finish the rays whose nearest hit lies before the next slice (with margins that only
-        // keep rays unfinished longer).
+        // keep rays unfinished longer). Nothing to do while no hit improved and no ray's finishing
+        // slice is reached.
+        if (!r.any_dirty && (walk == 0 ? s < next_finish : s > next_finish)) continue;
+        r.any_dirty = false;
+        next_finish = walk == 0 ? na : -1;
         for (int y = 0; y < th; ++y) {
           std::uint32_t bits = mask[y];
           while (bits) {
@@ -1206,6 +1255,9 @@ class NormalClassIndex {
             if (done) {
               mask[y] = static_cast<std::uint16_t>(mask[y] & ~(1u << x));
               live[y] = static_cast<std::uint16_t>(live[y] & ~(1u << x));
+              slopes_stale = true;
+            } else {
+              next_finish = walk == 0 ? std::min(next_finish, r.finish[i]) : std::max(next_finish, r.finish[i]);
             }
           }
         }
@@ -1289,8 +1341,14 @@ class NormalClassIndex {
   std::vector<std::uint16_t> row_coord_;
   std::vector<std::uint32_t> row_begin_;      // rows + 1 (global sentinel)
   std::vector<std::uint16_t> cell_col_;
-  std::vector<std::uint32_t> cell_id_;        // Y and Z grids: cell per grid cell (X grids need none)
-  std::vector<std::uint32_t> grid_shift_;     // (class, axis): X: cell = position - shift; else cell_id_[position - shift]
+  // Cells of the Y and Z grids' entries (X grids list cells in id order and need none): the
+  // class's own cell number in 16 bits, added to class_cell_base_, unless some class has more
+  // than 65536 cells (wide_ids_): then the global cell in 32 bits.
+  std::vector<std::uint32_t> cell_id_;
+  std::vector<std::uint16_t> cell_id16_;
+  std::vector<std::uint32_t> class_cell_base_;  // per class: its first cell (0 when wide_ids_)
+  std::vector<std::uint32_t> grid_shift_;  // (class, axis): X: cell = position - shift; else id at position - shift
+  bool wide_ids_ = false;
 };
 
 }  // namespace cullkit
