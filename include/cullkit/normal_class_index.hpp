@@ -15,6 +15,18 @@
 // and tests the cells' triangles against the rays with a watertight front-face test at pixel
 // centres (each triangle once per tile). A pixel is finished once its nearest hit lies before the
 // point where its ray enters the next slice; a tile is finished when all its pixels are.
+// Per-triangle work in a tile is kept small: a triangle wholly outside one of the four planes of
+// the tile's beam (its margin measured against the tile's own rays) is dropped with a few float
+// products; the others are checked against their screen rectangle (computed once per frame) and
+// then ray-tested. The beam's extent and each ray's finishing slice are recomputed only when a
+// ray finishes or improves its hit.
+//
+// Memory (memory_bytes()): vertices, 3 vertex ids and a 16-bit class per triangle, 4 bytes per
+// cell entry, and per cell 4 bytes (entry range) + 6 bytes (column in each axis grid) + 4 bytes
+// (its ids in the Y and Z grids, 16-bit each while every class has at most 65536 cells, else 8
+// bytes; the X grids list cells in id order and need none), plus 6 bytes
+// per grid row. Skipped triangles cost 4 bytes each (the renumbering), never more than 4 bytes
+// per kept triangle.
 //
 // Conservative by construction: every pixel's reported triangle is its true first hit under the
 // watertight test (ties broken by the lower triangle index), so the visible set contains the first
@@ -405,7 +417,7 @@ class NormalClassIndex {
   [[nodiscard]] const NciStats& stats() const noexcept { return stats_; }
   /// Bytes held by the index (capacity of every array).
   [[nodiscard]] std::size_t memory_bytes() const noexcept {
-    return sizeof(*this) + bytes(vertices_) + bytes(tri_vertices_) + bytes(tri_original_) + bytes(class_axis_) +
+    return sizeof(*this) + bytes(vertices_) + bytes(tri_vertices_) + bytes(tri_original_) + bytes(tri_skipped_) + bytes(class_axis_) +
            bytes(class_sin_) + bytes(class_cos_) + bytes(cell_tri_begin_) + bytes(cell_tris_) + bytes(grid_base_) +
            bytes(slice_rows_) + bytes(row_coord_) + bytes(row_begin_) + bytes(cell_col_) + bytes(cell_id_) + bytes(cell_id16_) +
            bytes(grid_shift_) + bytes(class_cell_base_) +
@@ -415,8 +427,14 @@ class NormalClassIndex {
   [[nodiscard]] std::size_t triangle_count() const noexcept { return stats_.triangles_indexed; }
   /// Normal class of a kept triangle, by the mesh's numbering; -1 for a skipped triangle.
   [[nodiscard]] int triangle_class(std::uint32_t mesh_triangle) const noexcept {
-    if (tri_original_.empty()) {  // every triangle kept: the numbering is the identity
-      return mesh_triangle < class_of_.size() ? static_cast<int>(class_of_[mesh_triangle]) : -1;
+    if (tri_original_.empty()) {
+      if (tri_skipped_.empty()) {  // every triangle kept: the numbering is the identity
+        return mesh_triangle < class_of_.size() ? static_cast<int>(class_of_[mesh_triangle]) : -1;
+      }
+      if (mesh_triangle >= stats_.triangles_input) return -1;
+      const auto at = std::lower_bound(tri_skipped_.begin(), tri_skipped_.end(), mesh_triangle);
+      if (at != tri_skipped_.end() && *at == mesh_triangle) return -1;
+      return static_cast<int>(class_of_[mesh_triangle - static_cast<std::size_t>(at - tri_skipped_.begin())]);
     }
     const auto it = std::lower_bound(tri_original_.begin(), tri_original_.end(), mesh_triangle);
     if (it == tri_original_.end() || *it != mesh_triangle) return -1;
@@ -433,7 +451,16 @@ class NormalClassIndex {
   static constexpr std::uint32_t none_ = 0xFFFFFFFFu;
 
   [[nodiscard]] std::uint32_t original(std::uint32_t tri) const noexcept {
-    return tri_original_.empty() ? tri : tri_original_[tri];
+    if (!tri_original_.empty()) return tri_original_[tri];
+    // Skip list: the answer is tri plus the number of skipped triangles j with
+    // tri_skipped_[j] - j <= tri (that difference counts the kept triangles before it).
+    std::size_t lo = 0, hi = tri_skipped_.size();
+    while (lo < hi) {
+      const std::size_t mid = (lo + hi) / 2;
+      if (tri_skipped_[mid] - mid <= tri) lo = mid + 1;
+      else hi = mid;
+    }
+    return tri + static_cast<std::uint32_t>(lo);
   }
 
   template <class T>
@@ -658,7 +685,20 @@ class NormalClassIndex {
       p = ClassGrids{};
     }
     row_begin_.push_back(static_cast<std::uint32_t>(cell_col_.size()));
-    if (tri_original_.size() == stats_.triangles_input) tri_original_ = {};  // identity numbering
+    // The numbering: identity when nothing was skipped; else the shorter of the skipped list and
+    // the kept list.
+    if (tri_original_.size() == stats_.triangles_input) {
+      tri_original_ = {};
+    } else if (stats_.triangles_input - tri_original_.size() <= tri_original_.size()) {
+      tri_skipped_.reserve(stats_.triangles_input - tri_original_.size());
+      std::size_t next = 0;
+      for (std::uint32_t kept : tri_original_) {
+        for (; next < kept; ++next) tri_skipped_.push_back(static_cast<std::uint32_t>(next));
+        next = std::size_t{kept} + 1;
+      }
+      for (; next < stats_.triangles_input; ++next) tri_skipped_.push_back(static_cast<std::uint32_t>(next));
+      tri_original_ = {};
+    }
     vertices_.shrink_to_fit();
     tri_vertices_.shrink_to_fit();
     tri_original_.shrink_to_fit();
@@ -1330,7 +1370,8 @@ class NormalClassIndex {
   int dims_[3] = {1, 1, 1};
   std::vector<glm::vec3> vertices_;
   std::vector<std::uint32_t> tri_vertices_;   // 3 per kept triangle, into vertices_
-  std::vector<std::uint32_t> tri_original_;   // kept triangle -> mesh triangle (increasing); empty: identity
+  std::vector<std::uint32_t> tri_original_;   // kept triangle -> mesh triangle (increasing), or empty:
+  std::vector<std::uint32_t> tri_skipped_;    // mesh triangles skipped (increasing); both empty: identity
   std::vector<std::uint16_t> class_of_;       // kept triangle -> class
   std::vector<glm::vec3> class_axis_;
   std::vector<float> class_sin_, class_cos_;  // cone half-angle (with margin); sin > 1: never skip
