@@ -210,15 +210,7 @@ class AdaptiveBinaryTree {
       const Entry entry = stack[--top];
       const AbtNode& node = nodes[entry.node];
       PlaneMask mask = entry.mask;
-      if (mask != 0) {
-        // The seed's order: the sphere first (cheap; it may settle the whole subtree), then the box.
-        Containment c = frustum.classify(node.sphere, mask);
-        if (c == Containment::outside) continue;
-        if (c != Containment::inside) {
-          c = frustum.classify(node.bounds, mask);
-          if (c == Containment::outside) continue;
-        }
-      }
+      if (node_outside(frustum, node, mask)) continue;
       if (mask == 0) {
         if (!call(visitor, node.begin, node.end, Containment::inside)) return;
         continue;
@@ -262,11 +254,7 @@ class AdaptiveBinaryTree {
       const Entry entry = stack[--top];
       const AbtNode& node = nodes_[entry.node];
       PlaneMask mask = entry.mask;
-      if (mask != 0) {
-        Containment c = frustum.classify(node.sphere, mask);
-        if (c == Containment::outside) continue;
-        if (c != Containment::inside && frustum.classify(node.bounds, mask) == Containment::outside) continue;
-      }
+      if (node_outside(frustum, node, mask)) continue;
       if (occlusion.is_occluded(node.bounds)) continue;
       if (node.is_leaf()) {
         for (std::uint32_t i = node.begin; i < node.end; ++i) {
@@ -461,6 +449,15 @@ class AdaptiveBinaryTree {
     } else {
       return static_cast<bool>(visitor(args...));
     }
+  }
+
+  // The node test of every top-down walk, in the seed's order: the sphere first (cheap; it may
+  // settle the whole subtree), then the box. Clears from `mask` the planes the node is inside of.
+  static bool node_outside(const Frustum& frustum, const AbtNode& node, PlaneMask& mask) noexcept {
+    if (mask == 0) return false;
+    const Containment c = frustum.classify(node.sphere, mask);
+    if (c == Containment::outside) return true;
+    return c != Containment::inside && frustum.classify(node.bounds, mask) == Containment::outside;
   }
 
   static bool near_is_left(const AbtNode& node, const glm::vec3& eye) noexcept {
