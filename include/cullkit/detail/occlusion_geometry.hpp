@@ -16,6 +16,7 @@
 #include "../geometry/aabb.hpp"
 #include "../geometry/convex_polygon.hpp"
 #include "../geometry/plane.hpp"
+#include "occlusion_query.hpp"
 
 namespace cullkit::detail {
 
@@ -95,22 +96,15 @@ template <std::size_t Capacity>
 [[nodiscard]] inline int box_front_faces(const Aabb& box, const glm::vec3& eye,
                                          BasicConvexPolygon<Capacity>* faces, glm::vec3* points,
                                          int& point_count) noexcept {
-  int nfaces = 0;
+  int cycles[3][4];
+  const int nfaces = box_front_face_cycles(box, eye, cycles);
   unsigned corner_mask = 0;
-  for (int axis = 0; axis < 3; ++axis) {
-    int side;  // 0: the min face is seen, 1: the max face
-    if (eye[axis] < box.min[axis]) side = 0;
-    else if (eye[axis] > box.max[axis]) side = 1;
-    else continue;
-    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-    // Corners of that face in a cycle (winding does not matter to the tree).
-    const int base = side << axis;
-    const int cyc[4] = {base, base | (1 << a1), base | (1 << a1) | (1 << a2), base | (1 << a2)};
-    BasicConvexPolygon<Capacity>& f = faces[nfaces++];
+  for (int i = 0; i < nfaces; ++i) {
+    BasicConvexPolygon<Capacity>& f = faces[i];
     f.clear();
     for (int k = 0; k < 4; ++k) {
-      f.push_back(corner(box, cyc[k]) - eye);
-      corner_mask |= 1u << cyc[k];
+      f.push_back(corner(box, cycles[i][k]) - eye);
+      corner_mask |= 1u << cycles[i][k];
     }
   }
   point_count = 0;

@@ -105,12 +105,10 @@ inline void copy_fragment(const QueryFragment<Capacity>& from, QueryFragment<Cap
   for (std::uint32_t i = 0; i < from.size; ++i) to.v[i] = from.v[i];
 }
 
-/// Writes the box faces the eye sees (eye-relative quads, at most 3) into `faces` and returns how many
-/// (0 when the eye is inside or on the box). `faces` has room for 3.
-template <std::size_t Capacity>
-[[nodiscard]] inline int box_front_fragments(const Aabb& box, const glm::vec3& eye,
-                                             QueryFragment<Capacity>* faces) noexcept {
-  static_assert(Capacity >= 4, "cullkit: a box face needs 4 vertices");
+/// The box faces the eye sees (at most 3; 0 when the eye is inside or on the box), each as its four
+/// corner ids (`cullkit::corner` numbering) in a cycle; winding does not matter to the tree. Shared
+/// by occluder insertion and queries, so both see the same faces.
+[[nodiscard]] inline int box_front_face_cycles(const Aabb& box, const glm::vec3& eye, int cycles[3][4]) noexcept {
   int nfaces = 0;
   for (int axis = 0; axis < 3; ++axis) {
     int side;  // 0: the min face is seen, 1: the max face
@@ -119,9 +117,26 @@ template <std::size_t Capacity>
     else continue;
     const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
     const int base = side << axis;
-    const int cyc[4] = {base, base | (1 << a1), base | (1 << a1) | (1 << a2), base | (1 << a2)};
-    QueryFragment<Capacity>& f = faces[nfaces++];
-    for (int k = 0; k < 4; ++k) f.v[k] = corner(box, cyc[k]) - eye;
+    int* c = cycles[nfaces++];
+    c[0] = base;
+    c[1] = base | (1 << a1);
+    c[2] = base | (1 << a1) | (1 << a2);
+    c[3] = base | (1 << a2);
+  }
+  return nfaces;
+}
+
+/// Writes the box faces the eye sees (eye-relative quads, at most 3) into `faces` and returns how many
+/// (0 when the eye is inside or on the box). `faces` has room for 3.
+template <std::size_t Capacity>
+[[nodiscard]] inline int box_front_fragments(const Aabb& box, const glm::vec3& eye,
+                                             QueryFragment<Capacity>* faces) noexcept {
+  static_assert(Capacity >= 4, "cullkit: a box face needs 4 vertices");
+  int cycles[3][4];
+  const int nfaces = box_front_face_cycles(box, eye, cycles);
+  for (int i = 0; i < nfaces; ++i) {
+    QueryFragment<Capacity>& f = faces[i];
+    for (int k = 0; k < 4; ++k) f.v[k] = corner(box, cycles[i][k]) - eye;
     f.size = 4;
   }
   return nfaces;
