@@ -328,6 +328,25 @@ class OcclusionTree {
     if (ref >= hidden_leaf) return leaf_answer(result, ref, want_clear);
     result.together = ref;
     Fragment stack[query_stack_size];
+    // Phase 2: one fragment, the box's outline (the cone of every ray into the box), split at planes
+    // through the eye; at an occluder's own plane the whole front of the box decides. Only when the
+    // front straddles such a plane does the query fall back to the faces themselves (phase 3).
+    {
+      glm::vec3 outline[6];
+      const auto corners = static_cast<std::uint32_t>(box_silhouette(box, eye_, outline));
+      if (corners >= 3) {
+        if (point_count == 0) point_count = detail::box_front_points(box, eye_, points);
+        for (std::uint32_t i = 0; i < corners; ++i) stack[0].v[i] = outline[i] - eye_;
+        stack[0].size = corners;
+        stack[0].ref = ref;
+        const BoxFront front{center, half, points, point_count};
+        const OcclusionAnswer cone = cone_query(stack, front, scale, want_clear);
+        if (cone != undecided_answer) {
+          result.answer = cone;
+          return result;
+        }
+      }
+    }
     const int nfaces = detail::box_front_fragments(box, eye_, stack);
     if (nfaces == 0) return result;
     for (int f = 0; f < nfaces; ++f) stack[f].ref = ref;
@@ -511,6 +530,85 @@ class OcclusionTree {
     nodes_[previous].inside = hidden_leaf;
     set_slot(parent, inside, first);
     stats_.nodes = static_cast<std::uint32_t>(nodes_.size());
+  }
+
+  // The front of a query box: its center and half extent (eye-relative) and its front corners.
+  struct BoxFront {
+    glm::vec3 center, half;
+    const glm::vec3* points;
+    int point_count;
+  };
+  static constexpr auto undecided_answer = static_cast<OcclusionAnswer>(0xFF);
+
+  // Phase 2 of a box query: the box's outline cone stack[0] is pushed down from stack[0].ref. At a
+  // plane through the eye the cone is split like a face (the side of a point there depends only on
+  // its direction). At any other plane the whole front of the box must lie on one side (with the
+  // margins of phase 1); if it straddles, returns `undecided_answer` and the caller splits the faces
+  // themselves. Otherwise the answer: hidden only if every piece of the cone reached a hidden leaf.
+  [[nodiscard]] OcclusionAnswer cone_query(Fragment* stack, const BoxFront& front, float scale,
+                                           bool want_clear) const {
+    const float eps = params_.margin;
+    bool any_hidden = false, any_visible = false;
+    int top = 1;
+    Fragment buffers[2];
+    while (top > 0) {
+      Fragment* cur = &buffers[0];
+      Fragment* alt = &buffers[1];
+      detail::copy_fragment(stack[--top], *cur);
+      for (;;) {
+        const std::uint32_t ref = cur->ref;
+        if (ref == hidden_leaf) {
+          any_hidden = true;
+          break;
+        }
+        if (ref == visible_leaf) {
+          any_visible = true;
+          break;
+        }
+        const OcclusionNode& node = nodes_[ref];
+        const float m = eps * (scale + std::fabs(node.plane.d));
+        if (node.kind != OcclusionNodeKind::top && node.kind != OcclusionNodeKind::edge) {
+          const float c = signed_distance(node.plane, front.center);
+          const float r = glm::dot(glm::abs(node.plane.normal), front.half);
+          if (c - r >= 2.0f * m) {
+            cur->ref = node.inside;
+          } else if (c + r <= m) {
+            cur->ref = node.outside;
+          } else {
+            float dmin = signed_distance(node.plane, front.points[0]), dmax = dmin;
+            for (int i = 1; i < front.point_count; ++i) {
+              const float dist = signed_distance(node.plane, front.points[i]);
+              dmin = std::min(dmin, dist);
+              dmax = std::max(dmax, dist);
+            }
+            if (dmin >= m) cur->ref = node.inside;
+            else if (dmax <= m) cur->ref = node.outside;
+            else return undecided_answer;  // the front straddles (or NaN): split the faces instead
+          }
+          continue;
+        }
+        const Plane shifted{node.plane.normal, node.plane.d - m};
+        Fragment& in_piece = top < query_stack_size ? stack[top] : *alt;
+        detail::FragmentSide side = detail::classify_fragment(*cur, shifted, 0.0f);
+        if (side == detail::FragmentSide::split) side = detail::split_fragment(*cur, shifted, 0.0f, in_piece, *alt);
+        if (side == detail::FragmentSide::inside) {
+          cur->ref = node.inside;
+        } else if (side == detail::FragmentSide::outside || side == detail::FragmentSide::on) {
+          cur->ref = node.outside;
+        } else if (side == detail::FragmentSide::split && top < query_stack_size) {
+          in_piece.ref = node.inside;
+          ++top;
+          alt->ref = node.outside;
+          std::swap(cur, alt);
+        } else {
+          any_visible = true;  // NaN, too many corners or a full stack: cannot be decided, visible
+          break;
+        }
+      }
+      if (any_visible && !want_clear) return OcclusionAnswer::visible;
+    }
+    if (any_visible) return (want_clear && !any_hidden) ? OcclusionAnswer::clear : OcclusionAnswer::visible;
+    return any_hidden ? OcclusionAnswer::hidden : OcclusionAnswer::visible;
   }
 
   [[nodiscard]] static OcclusionQueryResult leaf_answer(OcclusionQueryResult result, std::uint32_t leaf,

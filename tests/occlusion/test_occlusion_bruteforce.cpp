@@ -42,14 +42,40 @@ Aabb make_box(glm::vec3 c, glm::vec3 half) { return Aabb{c - half, c + half}; }
 
 struct Tally {
   long queries = 0, hidden = 0, false_culls = 0;
+  long faces_hidden = 0;  // queries whose every front face, asked as a polygon, is hidden
+  long faces_hidden_box_visible = 0;  // ... while the box query says visible (precision lost)
 };
+
+// The box's front faces (world coordinates) as polygons, asked one by one: the exact face-splitting
+// walk, which the box query's outline cone must match in precision.
+bool front_faces_hidden(const OcclusionTree& tree, const Aabb& box) {
+  const glm::vec3 e = tree.eye();
+  int faces = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    int side;
+    if (e[axis] < box.min[axis]) side = 0;
+    else if (e[axis] > box.max[axis]) side = 1;
+    else continue;
+    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3, base = side << axis;
+    ConvexPolygon face;
+    for (int c : {base, base | (1 << a1), base | (1 << a1) | (1 << a2), base | (1 << a2)}) face.push_back(corner(box, c));
+    if (!tree.is_occluded(face)) return false;
+    ++faces;
+  }
+  return faces > 0;
+}
 
 // Checks every hidden answer of `tree` for `queries` against the brute force.
 void check_queries(const OcclusionTree& tree, const Occluders& occ, const std::vector<Aabb>& queries, Rng& rng,
                    Tally& tally, unsigned seed, const char* scenario) {
   for (std::size_t i = 0; i < queries.size(); ++i) {
     ++tally.queries;
-    if (!tree.is_occluded(queries[i])) continue;
+    const bool hidden = tree.is_occluded(queries[i]);
+    if (front_faces_hidden(tree, queries[i])) {
+      ++tally.faces_hidden;
+      tally.faces_hidden_box_visible += hidden ? 0 : 1;
+    }
+    if (!hidden) continue;
     ++tally.hidden;
     glm::dvec3 w;
     const bool visible = occlusion_test::find_visible_sample(occ, tree.eye(), queries[i], rng, 5, 24, &w);
@@ -211,6 +237,12 @@ int main() {
   std::printf("random:     %ld queries, %ld hidden, %ld false culls\n", plain.queries, plain.hidden, plain.false_culls);
   std::printf("random+top: %ld queries, %ld hidden, %ld false culls\n", top.queries, top.hidden, top.false_culls);
   std::printf("walls:      %ld queries, %ld hidden, %ld false culls\n", wall.queries, wall.hidden, wall.false_culls);
+  for (const Tally* t : {&plain, &top, &wall})
+    std::printf("precision:  %ld boxes with every front face hidden, %ld of them called visible\n", t->faces_hidden,
+                t->faces_hidden_box_visible);
+  // The box query (outline cone, faces only where the front straddles an occluder's plane) may differ
+  // from the face-by-face walk only by margin effects: a handful, never a trend.
+  for (const Tally* t : {&plain, &top, &wall}) CHECK(t->faces_hidden_box_visible * 200 <= t->faces_hidden);
   CHECK(plain.hidden > plain.queries / 20);  // the test must exercise hidden answers
   CHECK(top.hidden > top.queries / 20);
   return cullkit_test::report("test_occlusion_bruteforce");
