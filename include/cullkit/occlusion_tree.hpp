@@ -222,7 +222,7 @@ class OcclusionTree {
       scale = std::max(scale, detail::norm1(frag[i]));
     }
     current_ = Current{};
-    current_.edge_count = detail::beam_planes(frag, params_.min_angle, current_.edges);
+    current_.edge_count = beam_edges(frag);
     if (current_.edge_count == 0) return skip();
     current_.is_box = false;
     current_.closing[0] = own;
@@ -246,7 +246,7 @@ class OcclusionTree {
       scale = std::max(scale, detail::norm1(frag[static_cast<std::size_t>(i)]));
     }
     current_ = Current{};
-    current_.edge_count = detail::beam_planes(frag, params_.min_angle, current_.edges);
+    current_.edge_count = beam_edges(frag);
     if (current_.edge_count == 0) return skip();
     current_.is_box = true;
     for (int f = 0; f < proxy.face_count; ++f) {
@@ -411,6 +411,26 @@ class OcclusionTree {
   };
 
   void skip() { ++stats_.occluders_skipped; }
+
+  // The occluder's beam planes into current_.edges, longest edge (in angle) first: a query passing
+  // beside the occluder is most likely outside a long edge, so it leaves the chain after fewer steps.
+  // (The chain's region does not depend on the order.)
+  std::size_t beam_edges(const ConvexPolygon& outline) {
+    float angles[ConvexPolygon::capacity];  // 1 - cos of each edge's angle: same order as the angle
+    const std::size_t n = detail::beam_planes(outline, params_.min_angle, current_.edges, angles);
+    for (std::size_t i = 1; i < n; ++i) {
+      const Plane plane = current_.edges[i];
+      const float angle = angles[i];
+      std::size_t j = i;
+      for (; j > 0 && angles[j - 1] < angle; --j) {
+        current_.edges[j] = current_.edges[j - 1];
+        angles[j] = angles[j - 1];
+      }
+      current_.edges[j] = plane;
+      angles[j] = angle;
+    }
+    return n;
+  }
 
   [[nodiscard]] std::uint32_t slot_value(std::uint32_t parent, bool inside) const {
     if (parent == whole_tree) return root_;

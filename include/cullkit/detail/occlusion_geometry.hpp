@@ -44,10 +44,12 @@ namespace cullkit::detail {
 /// only ever shrinks an occluder. Writes one plane per kept corner into `out` (inside: toward the
 /// polygon) and returns how many, or 0 when fewer than 3 corners survive or the polygon has no area
 /// as seen from the eye (then the fragment must be dropped, which is also safe).
-/// pre: `out` has room for `poly.size()` planes.
+/// With `angles`, also writes for each edge 1 - cos of the angle it subtends at the eye (which grows
+/// with the angle, so it orders edges by angular length without an atan2).
+/// pre: `out` (and `angles`, if given) has room for `poly.size()` entries.
 template <std::size_t Capacity>
 [[nodiscard]] inline std::size_t beam_planes(const BasicConvexPolygon<Capacity>& poly, float min_angle,
-                                             Plane* out) noexcept {
+                                             Plane* out, float* angles = nullptr) noexcept {
   glm::dvec3 kept[Capacity];
   std::size_t n = 0;
   const double min_sin = static_cast<double>(min_angle);
@@ -83,8 +85,14 @@ template <std::size_t Capacity>
   if (!(std::fabs(facing) > min_sin * scale)) return 0;  // seen edge-on: no area from the eye
   const double sign = facing < 0.0 ? -1.0 : 1.0;
   for (std::size_t i = 0; i < n; ++i) {
-    out[i] = eye_plane_from_normal(sign * glm::cross(kept[i], kept[(i + 1) % n]));
+    const glm::dvec3 cross = glm::cross(kept[i], kept[(i + 1) % n]);
+    out[i] = eye_plane_from_normal(sign * cross);
     if (!is_valid(out[i])) return 0;
+    if (angles) {
+      const glm::dvec3& a = kept[i];
+      const glm::dvec3& b = kept[(i + 1) % n];
+      angles[i] = static_cast<float>(1.0 - glm::dot(a, b) / (glm::length(a) * glm::length(b)));
+    }
   }
   return n;
 }
