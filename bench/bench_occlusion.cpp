@@ -3,6 +3,7 @@
 // (adversarial); (2) whole-scene culling of a generated city: frustum only (the ABT) vs frustum +
 // occlusion with each seed refinement on and off. CSV (race.hpp) plus summary lines.
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <vector>
 
@@ -25,6 +26,37 @@ std::vector<Aabb> city_boxes(int n, Rng& rng, float radius) {
                        c + glm::vec3(rng.uniform(1, 4), rng.uniform(3, 25), rng.uniform(1, 4))});
   }
   return out;
+}
+
+// Per-query latency: every query timed on its own (clock overhead, the fastest empty timing,
+// subtracted), `passes` times over the whole set in order, so caches and branch predictors see the
+// same mixed stream as in the race. Prints percentiles: the mean above hides a long tail (queries
+// whose box straddles occluder boundaries split into pieces).
+void query_latency(const OcclusionTree& tree, const std::vector<Aabb>& queries, int passes, const char* tag) {
+  using clock = std::chrono::steady_clock;
+  double overhead = 1e30;
+  for (int i = 0; i < 2000; ++i) {
+    const auto a = clock::now();
+    const auto b = clock::now();
+    overhead = std::min(overhead, std::chrono::duration<double, std::nano>(b - a).count());
+  }
+  std::vector<double> ns;
+  ns.reserve(queries.size() * static_cast<std::size_t>(passes));
+  int hidden = 0;
+  for (int p = 0; p < passes; ++p) {
+    for (const Aabb& q : queries) {
+      const auto a = clock::now();
+      hidden += tree.is_occluded(q) ? 1 : 0;
+      const auto b = clock::now();
+      ns.push_back(std::max(0.0, std::chrono::duration<double, std::nano>(b - a).count() - overhead));
+    }
+  }
+  cullkit_bench::keep(hidden);
+  std::sort(ns.begin(), ns.end());
+  const auto at = [&ns](double f) { return ns[std::min(ns.size() - 1, static_cast<std::size_t>(f * ns.size()))]; };
+  std::printf("# query latency plain, %s occluders: p10 %.0f ns, median %.0f ns, p90 %.0f ns, p99 %.0f ns "
+              "(%zu timings, clock overhead %.0f ns subtracted)\n",
+              tag, at(0.1), at(0.5), at(0.9), at(0.99), ns.size(), overhead);
 }
 
 void micro() {
@@ -70,6 +102,7 @@ void micro() {
                                          {"plain_far_to_near", query_all(adv_plain)},
                                          {"two_level_far_to_near", query_all(adv_top)}});
     for (auto& r : qr) std::printf("# query %s: %.1f ns per query\n", r.name.c_str(), r.median_ns / queries.size());
+    query_latency(plain_tree, queries, smoke ? 1 : 20, tag);
     OcclusionTree t1(eye), t2(eye, top);
     auto insert_all = [&eye](OcclusionTree& t, const std::vector<Aabb>& boxes) {
       return [&eye, &t, &boxes] {

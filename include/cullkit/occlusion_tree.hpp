@@ -293,12 +293,21 @@ class OcclusionTree {
     const glm::vec3 center = 0.5f * (lo + hi), half = 0.5f * (hi - lo);
     glm::vec3 points[8];
     int point_count = 0;  // front corners, computed only if the two-corner rule cannot decide
-    // Phase 1: the whole box goes down while it stays on one side. Each plane is first tested with
-    // the box's nearest and farthest corners (center +- half-extent projected on the normal), which
-    // decides almost every node; "inside" this way needs twice the margin, so the rounding of the
-    // center/extent form can never matter. Undecided nodes fall back to the front corners only
-    // (the faces the query really tests), as a box may straddle a plane its front does not.
+    // Phase 1: the whole box goes down one path. Each plane is first tested with the box's nearest
+    // and farthest corners (center +- half-extent projected on the normal), which decides almost
+    // every node; "inside" this way needs twice the margin, so the rounding of the center/extent form
+    // can never matter. Undecided nodes fall back to the front corners only (the faces the query
+    // really tests), as a box may straddle a plane its front does not.
+    // Where the front still straddles a plane, the whole box goes on to the OUTSIDE. That needs no
+    // proof: a hidden leaf is only reached through a complete occluder chain, every step of which was
+    // an inside decision proven for the whole box, so reaching one means one occluder hides all of
+    // the box. Reaching a visible leaf after such a step proves nothing, except in one case: a path
+    // with a single straddle whose outside part clearly exists takes exactly that part to the visible
+    // leaf. Otherwise the exact walk (phase 2) starts at the first straddled node.
     std::uint32_t ref = start == whole_tree ? root_ : start;
+    std::uint32_t first_split = visible_leaf;
+    int splits = 0;
+    bool clear_split = false;  // the first straddle had front corners clearly outside
     while (ref < hidden_leaf) {
       const OcclusionNode& node = nodes_[ref];
       const float m = params_.margin * (scale + std::fabs(node.plane.d));
@@ -311,22 +320,34 @@ class OcclusionTree {
         inside = false;
       } else {
         if (point_count == 0) point_count = detail::box_front_points(box, eye_, points);
-        if (point_count == 0) break;  // cannot happen (the eye is outside the box); then visible
+        if (point_count == 0) return result;  // cannot happen (the eye is outside the box); then visible
         float dmin = signed_distance(node.plane, points[0]), dmax = dmin;
         for (int i = 1; i < point_count; ++i) {
           const float dist = signed_distance(node.plane, points[i]);
           dmin = std::min(dmin, dist);
           dmax = std::max(dmax, dist);
         }
-        if (dmin >= m) inside = true;
-        else if (dmax <= m) inside = false;
-        else break;  // straddles (or NaN): split the faces from here
+        if (!(dmin == dmin) || !(dmax == dmax)) return result;  // NaN: visible
+        if (dmin >= m) {
+          inside = true;
+        } else if (dmax <= m) {
+          inside = false;
+        } else {  // straddles: on to the outside, unproven
+          if (splits++ == 0) {
+            first_split = ref;
+            clear_split = dmin <= -m;
+          }
+          inside = false;
+        }
       }
-      result.together = ref;
+      if (splits == 0) result.together = ref;
       ref = inside ? node.inside : node.outside;
     }
-    if (ref >= hidden_leaf) return leaf_answer(result, ref, want_clear);
-    result.together = ref;
+    if (ref == hidden_leaf) return leaf_answer(result, ref, want_clear);
+    if (splits == 0) return leaf_answer(result, ref, want_clear);
+    result.together = first_split;
+    if (splits == 1 && clear_split && !want_clear) return result;  // really visible
+    ref = first_split;
     Fragment stack[query_stack_size];
     // Phase 2: one fragment, the box's outline (the cone of every ray into the box), split at planes
     // through the eye; at an occluder's own plane the whole front of the box decides. Only when the
@@ -335,7 +356,6 @@ class OcclusionTree {
       glm::vec3 outline[6];
       const auto corners = static_cast<std::uint32_t>(box_silhouette(box, eye_, outline));
       if (corners >= 3) {
-        if (point_count == 0) point_count = detail::box_front_points(box, eye_, points);
         for (std::uint32_t i = 0; i < corners; ++i) stack[0].v[i] = outline[i] - eye_;
         stack[0].size = corners;
         stack[0].ref = ref;
@@ -347,6 +367,7 @@ class OcclusionTree {
         }
       }
     }
+    // Phase 3: the front faces, split at every plane they straddle.
     const int nfaces = detail::box_front_fragments(box, eye_, stack);
     if (nfaces == 0) return result;
     for (int f = 0; f < nfaces; ++f) stack[f].ref = ref;
