@@ -4,6 +4,8 @@
 // occlusion with each seed refinement on and off. CSV (race.hpp) plus summary lines.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <string>
 #include <cstdio>
 #include <vector>
 
@@ -54,7 +56,7 @@ void query_latency(const OcclusionTree& tree, const std::vector<Aabb>& queries, 
   cullkit_bench::keep(hidden);
   std::sort(ns.begin(), ns.end());
   const auto at = [&ns](double f) { return ns[std::min(ns.size() - 1, static_cast<std::size_t>(f * ns.size()))]; };
-  std::printf("# query latency plain, %s occluders: p10 %.0f ns, median %.0f ns, p90 %.0f ns, p99 %.0f ns "
+  std::printf("# query latency, %s occluders: p10 %.0f ns, median %.0f ns, p90 %.0f ns, p99 %.0f ns "
               "(%zu timings, clock overhead %.0f ns subtracted)\n",
               tag, at(0.1), at(0.5), at(0.9), at(0.99), ns.size(), overhead);
 }
@@ -122,6 +124,84 @@ void micro() {
   }
 }
 
+// The setting: N box occluders all in view (a 90-degree wedge in front of the eye, 8-120 m
+// away, random order) and query boxes in the same wedge, so most occluders overlap others on screen.
+void in_view() {
+  const bool smoke = cullkit_bench::smoke();
+  const glm::vec3 eye(0.0f, 1.7f, 0.0f);
+  for (int n : {10, 100, 1000}) {
+    if (smoke && n > 100) break;
+    Rng rng(7u + n);
+    const auto in_wedge = [&rng](float r0, float r1) {
+      const float a = rng.uniform(-0.785f, 0.785f), d = rng.uniform(r0, r1);
+      return glm::vec3(d * std::sin(a), 0.0f, -d * std::cos(a));
+    };
+    std::vector<Aabb> occ;
+    while (static_cast<int>(occ.size()) < n) {
+      const glm::vec3 c = in_wedge(8.0f, 120.0f);
+      occ.push_back(Aabb{c - glm::vec3(rng.uniform(1, 4), 0, rng.uniform(1, 4)),
+                         c + glm::vec3(rng.uniform(1, 4), rng.uniform(3, 25), rng.uniform(1, 4))});
+    }
+    std::vector<Aabb> queries;
+    for (int k = 0; k < (smoke ? 50 : 2000); ++k) {
+      const glm::vec3 c = in_wedge(5.0f, 140.0f) + glm::vec3(0.0f, rng.uniform(0, 4), 0.0f);
+      queries.push_back(Aabb{c - glm::vec3(0.4f), c + glm::vec3(0.4f)});
+    }
+    OcclusionParams top;
+    top.azimuth_planes = 8;
+    top.elevation_planes = 2;
+    OcclusionTree plain_tree(eye), top_tree(eye, top);
+    for (auto& b : occ) plain_tree.insert_box_occluder(b), top_tree.insert_box_occluder(b);
+    int hidden = 0;
+    for (auto& q : queries) hidden += plain_tree.is_occluded(q);
+    const std::string tag = std::to_string(n);
+    std::printf("# in view, %d occluders: nodes %u (depth %u); %d of %zu queries hidden\n", n, plain_tree.stats().nodes,
+                plain_tree.stats().depth, hidden, queries.size());
+    const auto query_all = [&queries](const OcclusionTree& t) {
+      return [&queries, &t] {
+        int h = 0;
+        for (auto& q : queries) h += t.is_occluded(q);
+        cullkit_bench::keep(h);
+      };
+    };
+    const auto qr = cullkit_bench::race("in_view_query_occ" + tag,
+                                        {{"plain", query_all(plain_tree)}, {"two_level", query_all(top_tree)}});
+    for (auto& r : qr)
+      std::printf("# in view query %s: %.1f ns per query\n", r.name.c_str(), r.median_ns / queries.size());
+    query_latency(plain_tree, queries, smoke ? 1 : 20, ("in view, " + tag).c_str());
+    // Near to far is the order cull_with_occlusion inserts in (front-to-back walk).
+    std::vector<Aabb> near_first = occ;
+    std::sort(near_first.begin(), near_first.end(), [&](const Aabb& a, const Aabb& b) {
+      return glm::length(a.center() - eye) < glm::length(b.center() - eye);
+    });
+    OcclusionTree t1(eye), t2(eye, top), sorted_tree(eye);
+    for (auto& b : near_first) sorted_tree.insert_box_occluder(b);
+    std::printf("# in view, %d occluders inserted near to far: nodes %u (depth %u)\n", n, sorted_tree.stats().nodes,
+                sorted_tree.stats().depth);
+    const auto insert_all = [&eye](OcclusionTree& t, const std::vector<Aabb>& boxes) {
+      return [&eye, &boxes, &t] {
+        t.reset(eye);
+        for (auto& b : boxes) t.insert_box_occluder(b);
+        cullkit_bench::keep(t.stats().nodes);
+      };
+    };
+    const auto sq = cullkit_bench::race("in_view_query_near_to_far_occ" + tag, {{"plain", query_all(sorted_tree)}});
+    std::printf("# in view query near-to-far tree: %.1f ns per query\n", sq.front().median_ns / queries.size());
+    query_latency(sorted_tree, queries, smoke ? 1 : 20, ("in view near-to-far, " + tag).c_str());
+    const auto ir = cullkit_bench::race("in_view_insert_occ" + tag,
+                                        {{"plain", insert_all(t1, occ)},
+                                         {"two_level", insert_all(t2, occ)},
+                                         {"plain_near_to_far", insert_all(t1, near_first)},
+                                         {"batch_insert_box_occluders", [&eye, &occ, &t1] {
+                                            t1.reset(eye);
+                                            t1.insert_box_occluders(occ.data(), occ.size());
+                                            cullkit_bench::keep(t1.stats().nodes);
+                                          }}});
+    for (auto& r : ir)
+      std::printf("# in view insert %s: %.2f us for %d boxes\n", r.name.c_str(), r.median_ns / 1000.0, n);
+  }
+}
+
 void scene_cull() {
   const bool smoke = cullkit_bench::smoke();
   for (int blocks : {6, 18}) {
@@ -180,6 +260,7 @@ void scene_cull() {
 
 int main() {
   micro();
+  in_view();
   scene_cull();
   return 0;
 }

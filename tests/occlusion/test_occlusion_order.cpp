@@ -38,8 +38,9 @@ void order_invariance() {
       queries_v.push_back(Aabb{c - glm::vec3(0.5f), c + glm::vec3(0.5f)});
     }
     std::vector<std::vector<std::uint8_t>> answers;
-    for (int order = 0; order < 6; ++order) {
-      // Orders: as generated, near to far, far to near (adversarial: deep trees), random.
+    for (int order = 0; order < 7; ++order) {
+      // Orders: as generated, near to far, far to near (adversarial: deep trees), random (3, 4; 5
+      // with top planes), and 6: shuffled, then the batch insert_box_occluders (which sorts).
       std::vector<Aabb> b = boxes;
       const auto dist = [&](const Aabb& x) { return glm::length(x.center() - eye); };
       if (order == 1) std::sort(b.begin(), b.end(), [&](auto& p, auto& q) { return dist(p) < dist(q); });
@@ -52,7 +53,12 @@ void order_invariance() {
         params.elevation_planes = 2;
       }
       OcclusionTree tree(eye, params);
-      for (const auto& x : b) tree.insert_box_occluder(x);
+      if (order == 6) {
+        tree.insert_box_occluders(b.data(), b.size());
+        CHECK(tree.stats().occluders_inserted + tree.stats().occluders_skipped == b.size());
+      } else {
+        for (const auto& x : b) tree.insert_box_occluder(x);
+      }
       (order == 5 ? depth_top_max : depth_plain_max) =
           std::max(order == 5 ? depth_top_max : depth_plain_max, tree.stats().depth);
       std::vector<std::uint8_t> a;
@@ -80,8 +86,9 @@ void order_invariance() {
               queries, hidden_any, disagreements, 100.0 * disagreements / std::max(1L, hidden_any), depth_plain_max,
               depth_top_max);
   CHECK(hidden_any > queries / 10);
-  // Measured 6.4% (sound either way; see the report). Bound it so a regression shows.
-  CHECK(disagreements * 10 <= hidden_any);
+  // Measured 6.4% before box queries went on whole at straddles, 2.6% after (sound either way).
+  // Bound it so a regression shows.
+  CHECK(disagreements * 20 <= hidden_any);
 }
 
 void api_and_bad_input() {
@@ -116,6 +123,10 @@ void api_and_bad_input() {
   tree.insert_box_occluder(Aabb{{0, -1, -3}, {1, 1, -2}});     // eye on its face plane: still valid (outside)
   tree.insert_box_occluder(Aabb{{nan, 0, 0}, {1, 1, 1}});
   CHECK(tree.stats().occluders_skipped == 8);
+  const Aabb batch[2] = {Aabb{{nan, 0, 0}, {1, 1, 1}}, Aabb{{-1, -1, -1}, {1, 1, 1}}};  // NaN, eye inside
+  tree.insert_box_occluders(batch, 2);
+  tree.insert_box_occluders(nullptr, 0);
+  CHECK(tree.stats().occluders_skipped == 10);
   CHECK(!tree.is_occluded(Aabb{{-3, -3, -4.5f}, {-2, -2, -3}}));  // only the skipped ones could hide it
   // The query can start where a containing box stayed whole, and gives the same answer.
   const Aabb parent{{-2, -2, -12}, {2, 2, -8}};
