@@ -49,10 +49,19 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       tree.insert_occluder(poly, got);
       for (std::size_t i = 0; i < got; ++i) all_occluders = cullkit::merge(all_occluders, poly[i]);
     } else if (op % 3 == 1) {
-      cullkit::Aabb b;
-      if (!r.vec(b.min) || !r.vec(b.max)) break;
-      tree.insert_box_occluder(b);
-      all_occluders = cullkit::merge(cullkit::merge(all_occluders, b.min), b.max);
+      // One box, or (bit 4) a batch of 1-4 through insert_box_occluders.
+      cullkit::Aabb b[4];
+      const std::size_t want = (op & 16) ? 1 + (op >> 5) % 4 : 1;
+      std::size_t got = 0;
+      while (got < want && r.vec(b[got].min) && r.vec(b[got].max)) ++got;
+      if (got == 0) break;
+      if (op & 16) {
+        tree.insert_box_occluders(b, got);
+      } else {
+        tree.insert_box_occluder(b[0]);
+      }
+      for (std::size_t i = 0; i < got; ++i)
+        all_occluders = cullkit::merge(cullkit::merge(all_occluders, b[i].min), b[i].max);
     } else {
       cullkit::Aabb q;
       if (!r.vec(q.min) || !r.vec(q.max)) break;
