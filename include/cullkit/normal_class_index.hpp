@@ -18,15 +18,20 @@
 // Per-triangle work in a tile is kept small: a triangle wholly outside one of the four planes of
 // the tile's beam (its margin measured against the tile's own rays) is dropped with a few float
 // products; the others are checked against their screen rectangle (computed once per frame) and
-// then ray-tested. The beam's extent and each ray's finishing slice are recomputed only when a
-// ray finishes or improves its hit.
+// then ray-tested, unless every live ray under that rectangle already holds a hit strictly
+// nearer than any t the ray test could return for the triangle (a bound from the corners' depths
+// along each ray's dominant axis): such a triangle is not tested. The beam's extent and each
+// ray's finishing slice are recomputed only when a ray finishes or improves its hit.
 //
-// Memory (memory_bytes()): vertices, 3 vertex ids and a 16-bit class per triangle, 4 bytes per
-// cell entry, and per cell 4 bytes (entry range) + 6 bytes (column in each axis grid) + 4 bytes
-// (its ids in the Y and Z grids, 16-bit each while every class has at most 65536 cells, else 8
-// bytes; the X grids list cells in id order and need none), plus 6 bytes
-// per grid row. Skipped triangles cost 4 bytes each (the renumbering), never more than 4 bytes
-// per kept triangle.
+// Memory (memory_bytes()): vertices (12 bytes each, bitwise-equal positions merged), 3 vertex
+// ids and the mesh number per kept triangle (16 bytes), a 16-bit class per mesh triangle, 2 bytes
+// per cell entry (4 when some class has more than 65536 triangles), and per cell 4 bytes (entry
+// range) + 6 bytes (column in each axis grid) + 4 bytes (its ids in the Y and Z grids, 16-bit
+// each while every class has at most 65536 cells, else 8 bytes; the X grids list cells in id
+// order and need none), plus 6 bytes per grid row.
+// Internally triangles are renumbered class by class in the order of their first cell in the X
+// grid, so the triangles of a cell (and their vertices and per-thread records) are mostly one run
+// of consecutive memory; answers are always given in the mesh's numbering.
 //
 // Conservative by construction: every pixel's reported triangle is its true first hit under the
 // watertight test (ties broken by the lower triangle index), so the visible set contains the first
@@ -46,6 +51,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <thread>
@@ -417,8 +423,9 @@ class NormalClassIndex {
   [[nodiscard]] const NciStats& stats() const noexcept { return stats_; }
   /// Bytes held by the index (capacity of every array).
   [[nodiscard]] std::size_t memory_bytes() const noexcept {
-    return sizeof(*this) + bytes(vertices_) + bytes(tri_vertices_) + bytes(tri_original_) + bytes(tri_skipped_) + bytes(class_axis_) +
-           bytes(class_sin_) + bytes(class_cos_) + bytes(cell_tri_begin_) + bytes(cell_tris_) + bytes(grid_base_) +
+    return sizeof(*this) + bytes(vertices_) + bytes(tri_vertices_) + bytes(tri_original_) + bytes(class_axis_) +
+           bytes(class_sin_) + bytes(class_cos_) + bytes(cell_tri_begin_) + bytes(cell_tris_) + bytes(cell_tris16_) +
+           bytes(class_tri_begin_) + bytes(grid_base_) +
            bytes(slice_rows_) + bytes(row_coord_) + bytes(row_begin_) + bytes(cell_col_) + bytes(cell_id_) + bytes(cell_id16_) +
            bytes(grid_shift_) + bytes(class_cell_base_) +
            bytes(class_of_);
@@ -427,18 +434,8 @@ class NormalClassIndex {
   [[nodiscard]] std::size_t triangle_count() const noexcept { return stats_.triangles_indexed; }
   /// Normal class of a kept triangle, by the mesh's numbering; -1 for a skipped triangle.
   [[nodiscard]] int triangle_class(std::uint32_t mesh_triangle) const noexcept {
-    if (tri_original_.empty()) {
-      if (tri_skipped_.empty()) {  // every triangle kept: the numbering is the identity
-        return mesh_triangle < class_of_.size() ? static_cast<int>(class_of_[mesh_triangle]) : -1;
-      }
-      if (mesh_triangle >= stats_.triangles_input) return -1;
-      const auto at = std::lower_bound(tri_skipped_.begin(), tri_skipped_.end(), mesh_triangle);
-      if (at != tri_skipped_.end() && *at == mesh_triangle) return -1;
-      return static_cast<int>(class_of_[mesh_triangle - static_cast<std::size_t>(at - tri_skipped_.begin())]);
-    }
-    const auto it = std::lower_bound(tri_original_.begin(), tri_original_.end(), mesh_triangle);
-    if (it == tri_original_.end() || *it != mesh_triangle) return -1;
-    return static_cast<int>(class_of_[static_cast<std::size_t>(it - tri_original_.begin())]);
+    if (mesh_triangle >= class_of_.size() || class_of_[mesh_triangle] == skipped_class_) return -1;
+    return static_cast<int>(class_of_[mesh_triangle]);
   }
   /// Number of (non-empty) normal classes.
   [[nodiscard]] std::size_t class_count() const noexcept { return class_axis_.size(); }
@@ -450,18 +447,9 @@ class NormalClassIndex {
  private:
   static constexpr std::uint32_t none_ = 0xFFFFFFFFu;
 
-  [[nodiscard]] std::uint32_t original(std::uint32_t tri) const noexcept {
-    if (!tri_original_.empty()) return tri_original_[tri];
-    // Skip list: the answer is tri plus the number of skipped triangles j with
-    // tri_skipped_[j] - j <= tri (that difference counts the kept triangles before it).
-    std::size_t lo = 0, hi = tri_skipped_.size();
-    while (lo < hi) {
-      const std::size_t mid = (lo + hi) / 2;
-      if (tri_skipped_[mid] - mid <= tri) lo = mid + 1;
-      else hi = mid;
-    }
-    return tri + static_cast<std::uint32_t>(lo);
-  }
+  static constexpr std::uint16_t skipped_class_ = 0xFFFFu;
+
+  [[nodiscard]] std::uint32_t original(std::uint32_t tri) const noexcept { return tri_original_[tri]; }
 
   template <class T>
   static std::size_t bytes(const std::vector<T>& v) noexcept {
@@ -533,6 +521,7 @@ class NormalClassIndex {
     const std::size_t n = tri_original_.size();
     report(0.1f);
     if (n == 0) {
+      class_of_.assign(stats_.triangles_input, skipped_class_);
       report(1.0f);
       return;
     }
@@ -555,25 +544,26 @@ class NormalClassIndex {
     delta_ = std::max(1e-3 * h_, 64.0 * double(std::numeric_limits<float>::epsilon()) * max_abs);
 
     // 3. Normal classes.
+    std::vector<std::uint16_t> class_of;  // kept triangle (input order) -> class
     {
       std::vector<std::uint32_t> cls;
       detail::cluster_normals(normals, params_.classes, params_.seed, cls, class_axis_);
-      class_of_.assign(cls.begin(), cls.end());  // at most 4096 classes: 16 bits
+      class_of.assign(cls.begin(), cls.end());  // at most 4096 classes: 16 bits
     }
     const std::size_t classes = class_axis_.size();
     stats_.classes = classes;
     {
       // Recompute each axis as the mean of its members and measure the cone around it.
       std::vector<glm::dvec3> sum(classes, glm::dvec3(0.0));
-      for (std::size_t i = 0; i < n; ++i) sum[class_of_[i]] += glm::dvec3(normals[i]);
+      for (std::size_t i = 0; i < n; ++i) sum[class_of[i]] += glm::dvec3(normals[i]);
       for (std::size_t c = 0; c < classes; ++c) {
         const double len = glm::length(sum[c]);
         if (len > 1e-9) class_axis_[c] = glm::vec3(sum[c] / len);
       }
       std::vector<double> min_dot(classes, 1.0);
       for (std::size_t i = 0; i < n; ++i) {
-        const double d = glm::dot(glm::dvec3(normals[i]), glm::dvec3(class_axis_[class_of_[i]]));
-        min_dot[class_of_[i]] = std::min(min_dot[class_of_[i]], d);
+        const double d = glm::dot(glm::dvec3(normals[i]), glm::dvec3(class_axis_[class_of[i]]));
+        min_dot[class_of[i]] = std::min(min_dot[class_of[i]], d);
       }
       class_sin_.resize(classes);
       class_cos_.resize(classes);
@@ -596,12 +586,12 @@ class NormalClassIndex {
     // 4. Per class: cells by separating axes, then the three grids. Classes in parallel, merged in
     // class order so the index does not depend on the thread count.
     std::vector<std::uint32_t> class_begin(classes + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) ++class_begin[class_of_[i] + 1];
+    for (std::size_t i = 0; i < n; ++i) ++class_begin[class_of[i] + 1];
     for (std::size_t c = 0; c < classes; ++c) class_begin[c + 1] += class_begin[c];
     std::vector<std::uint32_t> by_class(n);
     {
       std::vector<std::uint32_t> fill(class_begin.begin(), class_begin.end() - 1);
-      for (std::size_t i = 0; i < n; ++i) by_class[fill[class_of_[i]]++] = static_cast<std::uint32_t>(i);
+      for (std::size_t i = 0; i < n; ++i) by_class[fill[class_of[i]]++] = static_cast<std::uint32_t>(i);
     }
     std::vector<ClassGrids> parts(classes);
     std::atomic<std::size_t> next{0}, done{0};
@@ -625,6 +615,83 @@ class NormalClassIndex {
       for (auto& w : workers) w.join();
     }
 
+    // 4b. Internal numbering (memory locality of the select walk): class by class, each class's
+    // triangles in the order their first cell comes in its X grid, so a cell's triangles are
+    // mostly one run of consecutive ids (and so are their vertices and per-thread records).
+    // tri_original_ maps back to the mesh; cell lists are rewritten and sorted in the new ids.
+    {
+      std::vector<std::uint32_t> new_id(n, none_), order;
+      order.reserve(n);
+      class_tri_begin_.assign(classes + 1, 0u);
+      for (std::size_t c = 0; c < classes; ++c) {
+        class_tri_begin_[c] = static_cast<std::uint32_t>(order.size());
+        for (std::uint32_t old : parts[c].cell_tris) {
+          if (new_id[old] == none_) {
+            new_id[old] = static_cast<std::uint32_t>(order.size());
+            order.push_back(old);
+          }
+        }
+        for (std::uint32_t k = class_begin[c]; k < class_begin[c + 1]; ++k) {  // in no cell (never met)
+          if (new_id[by_class[k]] == none_) {
+            new_id[by_class[k]] = static_cast<std::uint32_t>(order.size());
+            order.push_back(by_class[k]);
+          }
+        }
+        auto& p = parts[c];
+        for (auto& e : p.cell_tris) e = new_id[e];
+        for (std::size_t k = 0; k + 1 < p.cell_tri_begin.size(); ++k)
+          std::sort(p.cell_tris.begin() + p.cell_tri_begin[k], p.cell_tris.begin() + p.cell_tri_begin[k + 1]);
+      }
+      class_tri_begin_[classes] = static_cast<std::uint32_t>(n);
+      // Triangles, their mesh numbers and vertices in the new order; vertices renumbered by first
+      // use and merged when their positions are bitwise equal (OBJ files often repeat a position
+      // per normal or texture coordinate).
+      std::vector<std::uint32_t> canon(vertices_.size());
+      {
+        struct Key {
+          std::uint32_t bits[3];
+          std::uint32_t id;
+        };
+        std::vector<Key> keys(vertices_.size());
+        for (std::size_t v = 0; v < vertices_.size(); ++v) {
+          std::memcpy(keys[v].bits, &vertices_[v], sizeof keys[v].bits);
+          keys[v].id = static_cast<std::uint32_t>(v);
+        }
+        std::sort(keys.begin(), keys.end(), [](const Key& x, const Key& y) {
+          if (x.bits[0] != y.bits[0]) return x.bits[0] < y.bits[0];
+          if (x.bits[1] != y.bits[1]) return x.bits[1] < y.bits[1];
+          if (x.bits[2] != y.bits[2]) return x.bits[2] < y.bits[2];
+          return x.id < y.id;
+        });
+        for (std::size_t v = 0; v < keys.size(); ++v) {
+          const bool same = v > 0 && std::memcmp(keys[v].bits, keys[v - 1].bits, sizeof keys[v].bits) == 0;
+          canon[keys[v].id] = same ? canon[keys[v - 1].id] : keys[v].id;
+        }
+      }
+      std::vector<std::uint32_t> vmap(vertices_.size(), none_);
+      std::vector<glm::vec3> vertices;
+      std::vector<std::uint32_t> tri_vertices(3 * n), tri_original(n);
+      for (std::size_t k = 0; k < n; ++k) {
+        const std::uint32_t old = order[k];
+        tri_original[k] = tri_original_[old];
+        for (std::size_t j = 0; j < 3; ++j) {
+          const std::uint32_t v = canon[tri_vertices_[3 * old + j]];
+          if (vmap[v] == none_) {
+            vmap[v] = static_cast<std::uint32_t>(vertices.size());
+            vertices.push_back(vertices_[v]);
+          }
+          tri_vertices[3 * k + j] = vmap[v];
+        }
+      }
+      class_of_.assign(stats_.triangles_input, skipped_class_);
+      for (std::size_t i = 0; i < n; ++i) class_of_[tri_original_[i]] = class_of[i];
+      vertices_ = std::move(vertices);
+      tri_vertices_ = std::move(tri_vertices);
+      tri_original_ = std::move(tri_original);
+      wide_tris_ = false;
+      for (std::size_t c = 0; c < classes; ++c) wide_tris_ = wide_tris_ || class_tri_begin_[c + 1] - class_tri_begin_[c] > 65536;
+    }
+
     // 5. Merge into flat arrays.
     std::size_t total_cells = 0, total_entries = 0, total_rows = 0, total_grid_cells = 0, total_slices = 0;
     wide_ids_ = false;
@@ -641,7 +708,8 @@ class NormalClassIndex {
     stats_.cells = total_cells;
     stats_.cell_entries = total_entries;
     cell_tri_begin_.reserve(total_cells + 1);
-    cell_tris_.reserve(total_entries);
+    if (wide_tris_) cell_tris_.reserve(total_entries);
+    else cell_tris16_.reserve(total_entries);
     slice_rows_.reserve(total_slices);
     row_coord_.reserve(total_rows);
     row_begin_.reserve(total_rows + 1);
@@ -656,9 +724,13 @@ class NormalClassIndex {
       auto& p = parts[c];
       const std::uint32_t cell_base = static_cast<std::uint32_t>(cell_tri_begin_.size() - 1);
       class_cell_base_.push_back(wide_ids_ ? 0u : cell_base);
-      const std::uint32_t entry_base = static_cast<std::uint32_t>(cell_tris_.size());
+      const std::uint32_t entry_base = static_cast<std::uint32_t>(wide_tris_ ? cell_tris_.size() : cell_tris16_.size());
       for (std::size_t k = 1; k < p.cell_tri_begin.size(); ++k) cell_tri_begin_.push_back(entry_base + p.cell_tri_begin[k]);
-      cell_tris_.insert(cell_tris_.end(), p.cell_tris.begin(), p.cell_tris.end());
+      if (wide_tris_) {
+        cell_tris_.insert(cell_tris_.end(), p.cell_tris.begin(), p.cell_tris.end());
+      } else {
+        for (std::uint32_t t : p.cell_tris) cell_tris16_.push_back(static_cast<std::uint16_t>(t - class_tri_begin_[c]));
+      }
       for (int a = 0; a < 3; ++a) {
         grid_base_.push_back(static_cast<std::uint32_t>(slice_rows_.size()));
         const std::uint32_t row_base = static_cast<std::uint32_t>(row_coord_.size());
@@ -685,20 +757,6 @@ class NormalClassIndex {
       p = ClassGrids{};
     }
     row_begin_.push_back(static_cast<std::uint32_t>(cell_col_.size()));
-    // The numbering: identity when nothing was skipped; else the shorter of the skipped list and
-    // the kept list.
-    if (tri_original_.size() == stats_.triangles_input) {
-      tri_original_ = {};
-    } else if (stats_.triangles_input - tri_original_.size() <= tri_original_.size()) {
-      tri_skipped_.reserve(stats_.triangles_input - tri_original_.size());
-      std::size_t next = 0;
-      for (std::uint32_t kept : tri_original_) {
-        for (; next < kept; ++next) tri_skipped_.push_back(static_cast<std::uint32_t>(next));
-        next = std::size_t{kept} + 1;
-      }
-      for (; next < stats_.triangles_input; ++next) tri_skipped_.push_back(static_cast<std::uint32_t>(next));
-      tri_original_ = {};
-    }
     vertices_.shrink_to_fit();
     tri_vertices_.shrink_to_fit();
     tri_original_.shrink_to_fit();
@@ -896,6 +954,11 @@ class NormalClassIndex {
     float beam_n[4][3];
     float beam_eps = 0.0f;
     bool beam = false;
+    // Depth bound: per dominant axis k of the watertight test, the range of its scale sz = 1 / d[k]
+    // over the tile's live rays (sz_lo > sz_hi: no ray has that axis). A ray's computed t is a
+    // convex combination of sz times the corners' k coordinates, so it is at least the smallest
+    // such product over the range's ends.
+    float sz_lo[3], sz_hi[3];
   };
 
   // Which pixels may see the triangle: an empty rectangle for a back face (or one seen exactly
@@ -1006,6 +1069,33 @@ class NormalClassIndex {
     return false;
   }
 
+  // Whether every ray that would test the triangle (live, under its rectangle) already holds a
+  // hit strictly nearer than any t the watertight test can compute for it: a lower bound on that
+  // t (see TileRays::sz_lo) times (1 - 1e-6), against the farthest of those rays' hits. The
+  // computed t is tt / det with tt and det sums of non-negative products, so it is at least the
+  // bound times (1 - 8 2^-24); the margin covers that, and strictness keeps ties (lower index
+  // wins) with the ray test. Such a triangle is not tested at all.
+  [[nodiscard]] static bool behind_hits(const TileRays& r, const float a[3], const float b[3], const float c[3],
+                                        int ry0, int ry1, std::uint32_t span, const std::uint16_t* live) noexcept {
+    double bound = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+      if (r.sz_lo[k] > r.sz_hi[k]) continue;
+      const double lo = r.sz_lo[k], hi = r.sz_hi[k];
+      for (const float q : {a[k], b[k], c[k]}) bound = std::min({bound, lo * double(q), hi * double(q)});
+    }
+    bound *= 1.0 - 1e-6;
+    if (!(bound > 1e-30) || !std::isfinite(bound)) return false;
+    for (int y = ry0; y <= ry1; ++y) {
+      std::uint32_t bits = live[y] & span;
+      while (bits) {
+        const int x = __builtin_ctz(bits);
+        bits &= bits - 1;
+        if (!(double(r.best_t[y * 16 + x]) < bound)) return false;
+      }
+    }
+    return true;
+  }
+
   // Tests `tri` against the unfinished rays of the tile inside its screen rectangle; false when no
   // ray was tested (a back face seen from the eye, or no live pixel under its rectangle).
   bool test_triangle(const Frame& f, std::uint32_t tri, int x0, int y0, int tw, int th, const std::uint16_t* live,
@@ -1047,6 +1137,7 @@ class NormalClassIndex {
     const float a[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};
     const float b[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
     const float c[3] = {p2.x - f.eye_f.x, p2.y - f.eye_f.y, p2.z - f.eye_f.z};
+    if (behind_hits(r, a, b, c, ry0, ry1, span, live)) return false;
     bool any = false;
     for (int y = ry0; y <= ry1; ++y) {
       std::uint32_t bits = live[y] & span;
@@ -1058,7 +1149,9 @@ class NormalClassIndex {
         any = true;
         float t;
         if (detail::watertight_hit(r.wray[i], a, b, c, t)) {
-          if (t < r.best_t[i] || (t == r.best_t[i] && tri < r.best[i])) {
+          // Ties go to the lower mesh index (the internal numbering is not the mesh's).
+          if (t < r.best_t[i] ||
+              (t == r.best_t[i] && (r.best[i] == none_ || tri_original_[tri] < tri_original_[r.best[i]]))) {
             if (t < r.best_t[i]) {
               r.dirty[i] = true;
               r.any_dirty = true;
@@ -1082,6 +1175,10 @@ class NormalClassIndex {
     std::uint16_t walk_mask[2][16] = {};  // [0]: toward +axis (and flat), [1]: toward -axis
     const glm::dvec3 blo = glm::dvec3(box_.min) - delta_, bhi = glm::dvec3(box_.max) + delta_;
     glm::dvec3 cone_sum(0.0);
+    for (int k = 0; k < 3; ++k) {
+      r.sz_lo[k] = std::numeric_limits<float>::infinity();
+      r.sz_hi[k] = -std::numeric_limits<float>::infinity();
+    }
     for (int y = 0; y < th; ++y) {
       for (int x = 0; x < tw; ++x) {
         const int i = y * 16 + x;
@@ -1116,6 +1213,9 @@ class NormalClassIndex {
         r.slope_b[i] = r.flat[i] ? 0.0f : static_cast<float>(d[b] / da);
         r.slope_c[i] = r.flat[i] ? 0.0f : static_cast<float>(d[c] / da);
         live[y] = static_cast<std::uint16_t>(live[y] | (1u << x));
+        const detail::WatertightRay<float>& w = r.wray[i];
+        r.sz_lo[w.kz] = std::min(r.sz_lo[w.kz], w.sz);
+        r.sz_hi[w.kz] = std::max(r.sz_hi[w.kz], w.sz);
         walk_mask[da >= 0.0 ? 0 : 1][y] = static_cast<std::uint16_t>(walk_mask[da >= 0.0 ? 0 : 1][y] | (1u << x));
         cone_sum += d;
       }
@@ -1262,13 +1362,16 @@ class NormalClassIndex {
                                                          : class_base + cell_id16_[pos - shift];
                   ++thread.stats.cells_visited;
                   const std::uint32_t e_end = cell_tri_begin_[cell + 1];
-                  for (std::uint32_t e = cell_tri_begin_[cell]; e < e_end; ++e) {
-                    // The per-triangle records are met in random order on big scenes: fetch ahead.
-                    if (e + 8 < e_end) __builtin_prefetch(&thread.tri[cell_tris_[e + 8]]);
-                    const std::uint32_t tri = cell_tris_[e];
-                    if (thread.tri[tri].stamp == stamp) continue;
+                  auto visit = [&](std::uint32_t tri) {
+                    if (thread.tri[tri].stamp == stamp) return;
                     thread.tri[tri].stamp = stamp;
                     if (test_triangle(f, tri, x0, y0, tw, th, live, r, thread)) thread.tested.push_back(tri);
+                  };
+                  if (wide_tris_) {
+                    for (std::uint32_t e = cell_tri_begin_[cell]; e < e_end; ++e) visit(cell_tris_[e]);
+                  } else {
+                    const std::uint32_t tri_base = class_tri_begin_[k];
+                    for (std::uint32_t e = cell_tri_begin_[cell]; e < e_end; ++e) visit(tri_base + cell_tris16_[e]);
                   }
                 }
               }
@@ -1370,13 +1473,18 @@ class NormalClassIndex {
   int dims_[3] = {1, 1, 1};
   std::vector<glm::vec3> vertices_;
   std::vector<std::uint32_t> tri_vertices_;   // 3 per kept triangle, into vertices_
-  std::vector<std::uint32_t> tri_original_;   // kept triangle -> mesh triangle (increasing), or empty:
-  std::vector<std::uint32_t> tri_skipped_;    // mesh triangles skipped (increasing); both empty: identity
-  std::vector<std::uint16_t> class_of_;       // kept triangle -> class
+  std::vector<std::uint32_t> tri_original_;   // internal triangle -> mesh triangle
+  std::vector<std::uint16_t> class_of_;       // mesh triangle -> class, skipped_class_ when skipped
+  std::vector<std::uint32_t> class_tri_begin_;  // classes + 1: each class's run of internal ids
   std::vector<glm::vec3> class_axis_;
   std::vector<float> class_sin_, class_cos_;  // cone half-angle (with margin); sin > 1: never skip
   std::vector<std::uint32_t> cell_tri_begin_; // cells + 1
-  std::vector<std::uint32_t> cell_tris_;      // kept triangle ids per cell
+  // Internal triangle ids per cell (ascending within a cell): class-local in 16 bits (plus
+  // class_tri_begin_) unless some class has more than 65536 triangles (wide_tris_): then global in
+  // 32 bits.
+  std::vector<std::uint32_t> cell_tris_;
+  std::vector<std::uint16_t> cell_tris16_;
+  bool wide_tris_ = false;
   std::vector<std::uint32_t> grid_base_;      // (class, axis) -> first entry in slice_rows_
   std::vector<std::uint32_t> slice_rows_;     // per grid dims[axis] + 1 row offsets
   std::vector<std::uint16_t> row_coord_;
