@@ -315,20 +315,14 @@ class OcclusionTree {
     const glm::vec3 lo = box.min - eye_, hi = box.max - eye_;
     const glm::vec3 far = glm::max(glm::abs(lo), glm::abs(hi));
     const float scale = far.x + far.y + far.z + eye_scale_;
-    const glm::vec3 center = 0.5f * (lo + hi), half = 0.5f * (hi - lo);
-    glm::vec3 points[8];
-    int point_count = 0;  // front corners, computed only if the two-corner rule cannot decide
-    // Phase 1: the whole box goes down one path. Each plane is first tested with the box's nearest
-    // and farthest corners (center +- half-extent projected on the normal), which decides almost
-    // every node; "inside" this way needs twice the margin, so the rounding of the center/extent form
-    // can never matter. Undecided nodes fall back to the front corners only (the faces the query
-    // really tests), as a box may straddle a plane its front does not.
-    // Where the front still straddles a plane, the whole box goes on to the OUTSIDE. That needs no
-    // proof: a hidden leaf is only reached through a complete occluder chain, every step of which was
-    // an inside decision proven for the whole box, so reaching one means one occluder hides all of
-    // the box. Reaching a visible leaf after such a step proves nothing, except in one case: a path
-    // with a single straddle whose outside part clearly exists takes exactly that part to the visible
-    // leaf. Otherwise the exact walk (phase 2) starts at the first straddled node.
+    BoxFront front(box, 0.5f * (lo + hi), 0.5f * (hi - lo));
+    // Phase 1: the whole box goes down one path, each plane decided by `front_side`.
+    // Where the front straddles a plane, the whole box goes on to the OUTSIDE. That needs no proof:
+    // a hidden leaf is only reached through a complete occluder chain, every step of which was an
+    // inside decision proven for the whole box, so reaching one means one occluder hides all of the
+    // box. Reaching a visible leaf after such a step proves nothing, except in one case: a path with a
+    // single straddle whose outside part clearly exists takes exactly that part to the visible leaf.
+    // Otherwise the exact walk (phase 2) starts at the first straddled node.
     std::uint32_t ref = start == whole_tree ? root_ : start;
     std::uint32_t first_split = visible_leaf;
     int splits = 0;
@@ -336,67 +330,39 @@ class OcclusionTree {
     while (ref < hidden_leaf) {
       const OcclusionNode& node = nodes_[ref];
       const float m = params_.margin * (scale + std::fabs(node.plane.d));
-      const float c = signed_distance(node.plane, center);
-      const float r = glm::dot(glm::abs(node.plane.normal), half);
-      bool inside;
-      if (c - r >= 2.0f * m) {
-        inside = true;
-      } else if (c + r <= m) {
-        inside = false;
-      } else {
-        if (point_count == 0) point_count = detail::box_front_points(box, eye_, points);
-        if (point_count == 0) return result;  // cannot happen (the eye is outside the box); then visible
-        float dmin = signed_distance(node.plane, points[0]), dmax = dmin;
-        for (int i = 1; i < point_count; ++i) {
-          const float dist = signed_distance(node.plane, points[i]);
-          dmin = std::min(dmin, dist);
-          dmax = std::max(dmax, dist);
-        }
-        if (!(dmin == dmin) || !(dmax == dmax)) return result;  // NaN: visible
-        if (dmin >= m) {
-          inside = true;
-        } else if (dmax <= m) {
-          inside = false;
-        } else {  // straddles: on to the outside, unproven
-          if (splits++ == 0) {
-            first_split = ref;
-            clear_split = dmin <= -m;
-          }
-          inside = false;
-        }
+      float dmin = 0.0f;
+      const FrontSide side = front_side(node.plane, m, front, dmin);
+      if (side == FrontSide::unknown) return result;  // NaN: visible
+      if (side == FrontSide::straddles && splits++ == 0) {
+        first_split = ref;
+        clear_split = dmin <= -m;
       }
       if (splits == 0) result.together = ref;
-      ref = inside ? node.inside : node.outside;
+      ref = side == FrontSide::inside ? node.inside : node.outside;
     }
-    if (ref == hidden_leaf) return leaf_answer(result, ref, want_clear);
-    if (splits == 0) return leaf_answer(result, ref, want_clear);
+    if (ref == hidden_leaf || splits == 0) return leaf_answer(result, ref, want_clear);
     result.together = first_split;
     if (splits == 1 && clear_split && !want_clear) return result;  // really visible
-    ref = first_split;
-    Fragment stack[query_stack_size];
     // Phase 2: one fragment, the box's outline (the cone of every ray into the box), split at planes
     // through the eye; at an occluder's own plane the whole front of the box decides. Only when the
     // front straddles such a plane does the query fall back to the faces themselves (phase 3).
-    {
-      glm::vec3 outline[6];
-      const auto corners = static_cast<std::uint32_t>(box_silhouette(box, eye_, outline));
-      if (corners >= 3) {
-        for (std::uint32_t i = 0; i < corners; ++i) stack[0].v[i] = outline[i] - eye_;
-        stack[0].size = corners;
-        stack[0].ref = ref;
-        const BoxFront front{center, half, points, point_count};
-        const OcclusionAnswer cone = cone_query(stack, front, scale, want_clear);
-        if (cone != undecided_answer) {
-          result.answer = cone;
-          return result;
-        }
-      }
+    Fragment stack[query_stack_size];
+    glm::vec3 outline[6];
+    const auto corners = static_cast<std::uint32_t>(box_silhouette(box, eye_, outline));
+    if (corners >= 3) {
+      for (std::uint32_t i = 0; i < corners; ++i) stack[0].v[i] = outline[i] - eye_;
+      stack[0].size = corners;
+      stack[0].ref = first_split;
+      result.answer = walk_fragments(stack, 1, scale, want_clear, &front);
+      if (result.answer != undecided_answer) return result;
     }
     // Phase 3: the front faces, split at every plane they straddle.
+    result.answer = OcclusionAnswer::visible;
     const int nfaces = detail::box_front_fragments(box, eye_, stack);
     if (nfaces == 0) return result;
-    for (int f = 0; f < nfaces; ++f) stack[f].ref = ref;
-    return split_query(result, stack, nfaces, scale, want_clear);
+    for (int f = 0; f < nfaces; ++f) stack[f].ref = first_split;
+    result.answer = walk_fragments(stack, nfaces, scale, want_clear, nullptr);
+    return result;
   }
 
   /// The same for a convex planar polygon in world coordinates.
@@ -433,7 +399,8 @@ class OcclusionTree {
     if (ref >= hidden_leaf) return leaf_answer(result, ref, want_clear);
     result.together = ref;
     local.ref = ref;
-    return split_query(result, stack, 1, scale, want_clear);
+    result.answer = walk_fragments(stack, 1, scale, want_clear, nullptr);
+    return result;
   }
 
  private:
@@ -598,24 +565,67 @@ class OcclusionTree {
     stats_.nodes = static_cast<std::uint32_t>(nodes_.size());
   }
 
-  // The front of a query box: its center and half extent (eye-relative) and its front corners.
+  // The front of a query box: the box, its center and half extent (eye-relative) and its front
+  // corners (eye-relative, computed on first need).
   struct BoxFront {
+    BoxFront(const Aabb& b, const glm::vec3& c, const glm::vec3& h) : box(&b), center(c), half(h) {}
+    const Aabb* box;
     glm::vec3 center, half;
-    const glm::vec3* points;
-    int point_count;
+    glm::vec3 points[8];  // not initialized: written on first need
+    int point_count = 0;
   };
+  enum class FrontSide : std::uint8_t { inside, outside, straddles, unknown };
   static constexpr auto undecided_answer = static_cast<OcclusionAnswer>(0xFF);
 
-  // Phase 2 of a box query: the box's outline cone stack[0] is pushed down from stack[0].ref. At a
-  // plane through the eye the cone is split like a face (the side of a point there depends only on
-  // its direction). At any other plane the whole front of the box must lie on one side (with the
-  // margins of phase 1); if it straddles, returns `undecided_answer` and the caller splits the faces
-  // themselves. Otherwise the answer: hidden only if every piece of the cone reached a hidden leaf.
-  [[nodiscard]] OcclusionAnswer cone_query(Fragment* stack, const BoxFront& front, float scale,
-                                           bool want_clear) const {
+  // Which side of `plane` the whole front of the box lies on, `m` being the margin. Tested first
+  // with the box's nearest and farthest corners (center +- half-extent projected on the normal),
+  // which decides almost every node ("inside" this way needs twice the margin, so the rounding of
+  // the center/extent form can never matter), then with the front corners only (the faces the query
+  // really tests), as a box may straddle a plane its front does not. `dmin` gets the front's least
+  // distance when the corners were needed. `unknown`: NaN.
+  [[nodiscard]] CULLKIT_FORCEINLINE FrontSide front_side(const Plane& plane, float m, BoxFront& front,
+                                                         float& dmin) const {
+    const float c = signed_distance(plane, front.center);
+    const float r = glm::dot(glm::abs(plane.normal), front.half);
+    if (c - r >= 2.0f * m) return FrontSide::inside;
+    if (c + r <= m) return FrontSide::outside;
+    if (front.point_count == 0) front.point_count = detail::box_front_points(*front.box, eye_, front.points);
+    if (front.point_count == 0) return FrontSide::unknown;  // cannot happen: the eye is outside the box
+    dmin = signed_distance(plane, front.points[0]);
+    float dmax = dmin;
+    for (int i = 1; i < front.point_count; ++i) {
+      const float dist = signed_distance(plane, front.points[i]);
+      dmin = std::min(dmin, dist);
+      dmax = std::max(dmax, dist);
+    }
+    if (!(dmin == dmin) || !(dmax == dmax)) return FrontSide::unknown;
+    if (dmin >= m) return FrontSide::inside;
+    if (dmax <= m) return FrontSide::outside;
+    return FrontSide::straddles;
+  }
+
+  [[nodiscard]] static OcclusionQueryResult leaf_answer(OcclusionQueryResult result, std::uint32_t leaf,
+                                                        bool want_clear) {
+    if (leaf == hidden_leaf) result.answer = OcclusionAnswer::hidden;
+    else result.answer = want_clear ? OcclusionAnswer::clear : OcclusionAnswer::visible;
+    return result;
+  }
+
+  // The exact walk: the fragments stack[0..count) are pushed down the tree from their `ref`, split
+  // where they straddle a plane shifted inward by the margin. Depth first, outside pieces first, so
+  // a query that reaches a visible leaf stops early (unless `want_clear`); hidden only if every
+  // piece reached a hidden leaf. The current fragment lives in one of two local buffers (a split
+  // writes its outside piece into the other one and its inside piece straight onto the stack), so
+  // only pops copy vertices.
+  // With `front`, the fragments are the box's outline cone, which stands for its surface only at
+  // planes through the eye (there the side of a point depends only on its direction); at any other
+  // plane the whole front of the box decides, and if it straddles the walk returns
+  // `undecided_answer` so the caller can walk the faces themselves.
+  [[nodiscard]] OcclusionAnswer walk_fragments(Fragment* stack, int count, float scale, bool want_clear,
+                                               BoxFront* front) const {
     const float eps = params_.margin;
     bool any_hidden = false, any_visible = false;
-    int top = 1;
+    int top = count;
     Fragment buffers[2];
     while (top > 0) {
       Fragment* cur = &buffers[0];
@@ -633,27 +643,16 @@ class OcclusionTree {
         }
         const OcclusionNode& node = nodes_[ref];
         const float m = eps * (scale + std::fabs(node.plane.d));
-        if (node.kind != OcclusionNodeKind::top && node.kind != OcclusionNodeKind::edge) {
-          const float c = signed_distance(node.plane, front.center);
-          const float r = glm::dot(glm::abs(node.plane.normal), front.half);
-          if (c - r >= 2.0f * m) {
-            cur->ref = node.inside;
-          } else if (c + r <= m) {
-            cur->ref = node.outside;
-          } else {
-            float dmin = signed_distance(node.plane, front.points[0]), dmax = dmin;
-            for (int i = 1; i < front.point_count; ++i) {
-              const float dist = signed_distance(node.plane, front.points[i]);
-              dmin = std::min(dmin, dist);
-              dmax = std::max(dmax, dist);
-            }
-            if (dmin >= m) cur->ref = node.inside;
-            else if (dmax <= m) cur->ref = node.outside;
-            else return undecided_answer;  // the front straddles (or NaN): split the faces instead
-          }
+        if (front != nullptr && node.kind != OcclusionNodeKind::top && node.kind != OcclusionNodeKind::edge) {
+          float dmin = 0.0f;
+          const FrontSide side = front_side(node.plane, m, *front, dmin);
+          if (side == FrontSide::inside) cur->ref = node.inside;
+          else if (side == FrontSide::outside) cur->ref = node.outside;
+          else return undecided_answer;  // the front straddles (or NaN): walk the faces instead
           continue;
         }
         const Plane shifted{node.plane.normal, node.plane.d - m};
+        // With the stack full, the inside piece has nowhere to go: a split then answers visible.
         Fragment& in_piece = top < query_stack_size ? stack[top] : *alt;
         detail::FragmentSide side = detail::classify_fragment(*cur, shifted, 0.0f);
         if (side == detail::FragmentSide::split) side = detail::split_fragment(*cur, shifted, 0.0f, in_piece, *alt);
@@ -677,65 +676,6 @@ class OcclusionTree {
     return any_hidden ? OcclusionAnswer::hidden : OcclusionAnswer::visible;
   }
 
-  [[nodiscard]] static OcclusionQueryResult leaf_answer(OcclusionQueryResult result, std::uint32_t leaf,
-                                                        bool want_clear) {
-    if (leaf == hidden_leaf) result.answer = OcclusionAnswer::hidden;
-    else result.answer = want_clear ? OcclusionAnswer::clear : OcclusionAnswer::visible;
-    return result;
-  }
-
-  // Phase 2: the fragments stack[0..count) are pushed down the tree, split where they straddle a
-  // plane shifted inward by the margin. Depth first, outside pieces first, so a query that reaches a
-  // visible leaf stops early (unless `want_clear`). The current fragment lives in one of two local
-  // buffers (a split writes its outside piece into the other one and its inside piece straight onto
-  // the stack), so only pops copy vertices.
-  [[nodiscard]] OcclusionQueryResult split_query(OcclusionQueryResult result, Fragment* stack, int count,
-                                                 float scale, bool want_clear) const {
-    const float eps = params_.margin;
-    bool any_hidden = false, any_visible = false;
-    int top = count;
-    Fragment buffers[2];
-    while (top > 0) {
-      Fragment* cur = &buffers[0];
-      Fragment* alt = &buffers[1];
-      detail::copy_fragment(stack[--top], *cur);
-      for (;;) {
-        const std::uint32_t ref = cur->ref;
-        if (ref == hidden_leaf) {
-          any_hidden = true;
-          break;
-        }
-        if (ref == visible_leaf) {
-          any_visible = true;
-          break;
-        }
-        const OcclusionNode& node = nodes_[ref];
-        const float m = eps * (scale + std::fabs(node.plane.d));
-        const Plane shifted{node.plane.normal, node.plane.d - m};
-        // With the stack full, the inside piece has nowhere to go: a split then answers visible.
-        Fragment& in_piece = top < query_stack_size ? stack[top] : *alt;
-        detail::FragmentSide side = detail::classify_fragment(*cur, shifted, 0.0f);
-        if (side == detail::FragmentSide::split) side = detail::split_fragment(*cur, shifted, 0.0f, in_piece, *alt);
-        if (side == detail::FragmentSide::inside) {
-          cur->ref = node.inside;
-        } else if (side == detail::FragmentSide::outside || side == detail::FragmentSide::on) {
-          cur->ref = node.outside;
-        } else if (side == detail::FragmentSide::split && top < query_stack_size) {
-          in_piece.ref = node.inside;
-          ++top;
-          alt->ref = node.outside;
-          std::swap(cur, alt);
-        } else {
-          any_visible = true;  // NaN, too many corners or a full stack: cannot be decided, visible
-          break;
-        }
-      }
-      if (any_visible && !want_clear) break;
-    }
-    if (any_visible) result.answer = (want_clear && !any_hidden) ? OcclusionAnswer::clear : OcclusionAnswer::visible;
-    else result.answer = any_hidden ? OcclusionAnswer::hidden : OcclusionAnswer::visible;
-    return result;
-  }
   // Top-level planes (seed §3.4.3): azimuth wedges around `up`, then elevation bands in each wedge.
   // Plane k (k = 0..K-1) contains `up` and the horizontal direction at azimuth psi_k = pi k / K; its
   // inside holds the azimuths in (psi_k, psi_k + pi). Plane 0 is the root; in each half the other
