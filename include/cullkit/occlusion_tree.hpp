@@ -11,6 +11,14 @@
 // is hidden only if every fragment ends in a hidden leaf. Unlike the seed, a query fragment that
 // straddles an occluder's own plane is split rather than declared visible.
 //
+// Box queries in three phases, cheapest first, each exact where it answers: (1) the whole box goes
+// down one path, to the outside of any plane its front straddles; a hidden leaf reached that way is
+// proof (it is only reachable through one complete occluder chain, whose every inside step held for
+// the whole box). (2) Otherwise the box's outline cone is split from the first straddled plane: at
+// planes through the eye a cone piece stands for the surface behind it; at an occluder's own plane
+// the whole front decides. (3) Only if the front straddles such a plane are the faces split. Chains
+// list an occluder's longest edges (seen from the eye) first, so walks passing beside it leave sooner.
+//
 // Coordinates. The tree stores its planes relative to the eye, so planes through the eye have d = 0
 // exactly; plane normals are computed in double precision and rounded once.
 //
