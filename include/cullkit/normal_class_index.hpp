@@ -424,7 +424,7 @@ class NormalClassIndex {
   /// Bytes held by the index (capacity of every array).
   [[nodiscard]] std::size_t memory_bytes() const noexcept {
     return sizeof(*this) + bytes(vertices_) + bytes(tri_vertices_) + bytes(tri_original_) + bytes(class_axis_) +
-           bytes(class_sin_) + bytes(class_cos_) + bytes(cell_tri_begin_) + bytes(cell_tris_) + bytes(cell_tris16_) +
+           bytes(class_sin_) + bytes(class_cos_) + bytes(cell_tri_begin_) + bytes(cell_tris_) + bytes(cell_tris16_) + bytes(chunk_box_) +
            bytes(class_tri_begin_) + bytes(grid_base_) +
            bytes(slice_rows_) + bytes(row_coord_) + bytes(row_begin_) + bytes(cell_col_) + bytes(cell_id_) + bytes(cell_id16_) +
            bytes(grid_shift_) + bytes(class_cell_base_) +
@@ -720,6 +720,8 @@ class NormalClassIndex {
     grid_base_.reserve(classes * 3);
     grid_shift_.reserve(classes * 3);
     cell_tri_begin_.push_back(0);
+    std::vector<std::uint32_t> class_entry_end;  // per class: one past its last cell entry
+    class_entry_end.reserve(classes);
     for (std::size_t c = 0; c < classes; ++c) {
       auto& p = parts[c];
       const std::uint32_t cell_base = static_cast<std::uint32_t>(cell_tri_begin_.size() - 1);
@@ -731,6 +733,7 @@ class NormalClassIndex {
       } else {
         for (std::uint32_t t : p.cell_tris) cell_tris16_.push_back(static_cast<std::uint16_t>(t - class_tri_begin_[c]));
       }
+      class_entry_end.push_back(static_cast<std::uint32_t>(wide_tris_ ? cell_tris_.size() : cell_tris16_.size()));
       for (int a = 0; a < 3; ++a) {
         grid_base_.push_back(static_cast<std::uint32_t>(slice_rows_.size()));
         const std::uint32_t row_base = static_cast<std::uint32_t>(row_coord_.size());
@@ -757,11 +760,43 @@ class NormalClassIndex {
       p = ClassGrids{};
     }
     row_begin_.push_back(static_cast<std::uint32_t>(cell_col_.size()));
+    // 6. Chunk boxes when cells are crowded (mean entries per cell >= chunk_min_mean_): one box
+    // per chunk_ consecutive entries (chunks cut the entry array at fixed positions, so a chunk
+    // may span two cells: its box bounds both parts). A tile skips a chunk lying wholly outside
+    // its beam instead of meeting its triangles one by one.
+    if (total_cells > 0 && total_entries >= chunk_min_mean_ * total_cells) {
+      const std::size_t chunks = (total_entries + chunk_ - 1) / chunk_;
+      chunk_box_.assign(6 * chunks, 0.0f);
+      std::size_t e = 0;
+      for (std::size_t c = 0; c < classes; ++c) {
+        const std::size_t e_end = class_entry_end[c];
+        for (; e < e_end; ++e) {
+          const std::uint32_t tri = entry_triangle(static_cast<std::uint32_t>(e), static_cast<std::uint32_t>(c));
+          float* box = &chunk_box_[6 * (e / chunk_)];
+          for (int k = 0; k < 3; ++k) {
+            const glm::vec3& q = vertices_[tri_vertices_[3 * tri + static_cast<std::uint32_t>(k)]];
+            for (int a = 0; a < 3; ++a) {
+              if (e % chunk_ == 0 && k == 0) {
+                box[a] = q[a];
+                box[3 + a] = q[a];
+              }
+              box[a] = std::min(box[a], q[a]);
+              box[3 + a] = std::max(box[3 + a], q[a]);
+            }
+          }
+        }
+      }
+    }
     vertices_.shrink_to_fit();
     tri_vertices_.shrink_to_fit();
     tri_original_.shrink_to_fit();
     class_of_.shrink_to_fit();
     report(1.0f);
+  }
+
+  // The internal triangle of entry e, which belongs to a cell of class c.
+  [[nodiscard]] std::uint32_t entry_triangle(std::uint32_t e, std::uint32_t c) const noexcept {
+    return wide_tris_ ? cell_tris_[e] : class_tri_begin_[c] + cell_tris16_[e];
   }
 
   // One class's cells and grids, with offsets local to the class.
@@ -785,6 +820,7 @@ class NormalClassIndex {
   void build_class(const std::uint32_t* tris, std::size_t count, ClassGrids& out) const {
     struct Pair {
       std::uint64_t key;
+      std::uint32_t place;  // Morton code of the centroid (clamped into the cell) within the cell
       std::uint32_t tri;
     };
     std::vector<Pair> pairs;
@@ -816,13 +852,22 @@ class NormalClassIndex {
             }
             const std::uint64_t key = (static_cast<std::uint64_t>(x) * ny + static_cast<std::uint64_t>(y)) * nz +
                                       static_cast<std::uint64_t>(z);
-            pairs.push_back(Pair{key, tri});
+            double u[3];
+            const int cell[3] = {x, y, z};
+            for (int a = 0; a < 3; ++a) {
+              const double cen = (v[0][a] + v[1][a] + v[2][a]) / 3.0;
+              u[a] = std::clamp((cen - (lo_[a] + cell[a] * h_)) / h_, 0.0, 1.0);
+            }
+            pairs.push_back(Pair{key, detail::nci_morton(u), tri});
           }
         }
       }
     }
     std::sort(pairs.begin(), pairs.end(),
-              [](const Pair& a, const Pair& b) { return a.key != b.key ? a.key < b.key : a.tri < b.tri; });
+              [](const Pair& a, const Pair& b) {
+                if (a.key != b.key) return a.key < b.key;
+                return a.place != b.place ? a.place < b.place : a.tri < b.tri;
+              });
     // Cells in (x, y, z) order.
     std::vector<std::uint64_t> cell_key;
     for (std::size_t i = 0; i < pairs.size(); ++i) {
@@ -954,6 +999,7 @@ class NormalClassIndex {
     float beam_n[4][3];
     float beam_eps = 0.0f;
     bool beam = false;
+    int beam_box[4] = {-1, -1, -1, -1};  // live pixels' rectangle the beam was made for
     // Depth bound: per dominant axis k of the watertight test, the range of its scale sz = 1 / d[k]
     // over the tile's live rays (sz_lo > sz_hi: no ray has that axis). A ray's computed t is a
     // convex combination of sz times the corners' k coordinates, so it is at least the smallest
@@ -1005,10 +1051,37 @@ class NormalClassIndex {
 
   // The beam of the tile's live rays: planes through the eye and consecutive corner rays, then
   // measured against every live ray so that the margin covers whatever the projection did.
+  // The corners are those of the live pixels' bounding rectangle (widened to two pixels where it
+  // is one wide), so the beam narrows as rays finish; `box` records that rectangle.
+  // The live pixels' bounding rectangle (x0, y0, x1, y1), widened to two pixels where it is one
+  // wide; false when no pixel is live or the tile is narrower than two pixels.
+  static bool live_box(int tw, int th, const std::uint16_t* live, int box[4]) noexcept {
+    if (tw < 2 || th < 2) return false;
+    int y0 = -1, y1 = -1;
+    std::uint32_t cols = 0;
+    for (int y = 0; y < th; ++y) {
+      if (!live[y]) continue;
+      if (y0 < 0) y0 = y;
+      y1 = y;
+      cols |= live[y];
+    }
+    if (y0 < 0) return false;
+    int x0 = __builtin_ctz(cols), x1 = 31 - __builtin_clz(cols);
+    if (x0 == x1) x1 < tw - 1 ? ++x1 : --x0;
+    if (y0 == y1) y1 < th - 1 ? ++y1 : --y0;
+    box[0] = x0;
+    box[1] = y0;
+    box[2] = x1;
+    box[3] = y1;
+    return true;
+  }
+
   static void make_beam(TileRays& r, int tw, int th, const std::uint16_t* live) noexcept {
     r.beam = false;
-    if (tw < 2 || th < 2) return;
-    const int corner[4] = {0, tw - 1, (th - 1) * 16 + tw - 1, (th - 1) * 16};
+    int box[4];
+    if (!live_box(tw, th, live, box)) return;
+    for (int k = 0; k < 4; ++k) r.beam_box[k] = box[k];
+    const int corner[4] = {box[1] * 16 + box[0], box[1] * 16 + box[2], box[3] * 16 + box[2], box[3] * 16 + box[0]};
     glm::dvec3 d[4], centre(0.0);
     for (int k = 0; k < 4; ++k) {
       d[k] = glm::dvec3(r.dir[corner[k]]);
@@ -1042,6 +1115,47 @@ class NormalClassIndex {
     if (!(eps < 0.25)) return;
     r.beam_eps = static_cast<float>(eps);
     r.beam = true;
+  }
+
+  // Re-makes the beam when the live pixels' rectangle has shrunk since it was made (a beam that
+  // cannot be made for the smaller rectangle leaves the old one, which still holds every live ray).
+  static void narrow_beam(TileRays& r, int tw, int th, const std::uint16_t* live) noexcept {
+    int box[4];
+    if (!r.beam || !live_box(tw, th, live, box)) return;
+    if (box[0] == r.beam_box[0] && box[1] == r.beam_box[1] && box[2] == r.beam_box[2] && box[3] == r.beam_box[3]) return;
+    float n[4][3];
+    std::memcpy(n, r.beam_n, sizeof n);
+    const float eps = r.beam_eps;
+    int old_box[4];
+    std::memcpy(old_box, r.beam_box, sizeof old_box);
+    make_beam(r, tw, th, live);
+    if (!r.beam) {
+      std::memcpy(r.beam_n, n, sizeof n);
+      r.beam_eps = eps;
+      std::memcpy(r.beam_box, old_box, sizeof old_box);
+      r.beam = true;
+    }
+  }
+
+  // Whether the box (min xyz, max xyz) lies wholly outside one plane of the tile's beam with the
+  // margin of outside_beam (then so does every triangle inside it): the largest n.x + eps |x|_1
+  // over the box, x relative to the eye, is below zero. In double with a 1e-12 relative slack, so
+  // the sign is exact for the float data.
+  [[nodiscard]] static bool chunk_outside_beam(const TileRays& r, const float* box, const Frame& f) noexcept {
+    double lo[3], hi[3], l1 = 0.0;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = double(box[a]) - f.eye[a];
+      hi[a] = double(box[3 + a]) - f.eye[a];
+      l1 += std::max(std::fabs(lo[a]), std::fabs(hi[a]));
+    }
+    const double e = double(r.beam_eps) + 1e-12;
+    for (int j = 0; j < 4; ++j) {
+      const float* n = r.beam_n[j];
+      double top = 0.0;
+      for (int a = 0; a < 3; ++a) top += std::max(double(n[a]) * lo[a], double(n[a]) * hi[a]);
+      if (top + e * l1 < 0.0) return true;
+    }
+    return false;
   }
 
   // Whether triangle `tri` lies wholly outside one plane of the tile's beam with margin: every
@@ -1367,11 +1481,23 @@ class NormalClassIndex {
                     thread.tri[tri].stamp = stamp;
                     if (test_triangle(f, tri, x0, y0, tw, th, live, r, thread)) thread.tested.push_back(tri);
                   };
-                  if (wide_tris_) {
-                    for (std::uint32_t e = cell_tri_begin_[cell]; e < e_end; ++e) visit(cell_tris_[e]);
-                  } else {
-                    const std::uint32_t tri_base = class_tri_begin_[k];
-                    for (std::uint32_t e = cell_tri_begin_[cell]; e < e_end; ++e) visit(tri_base + cell_tris16_[e]);
+                  const std::uint32_t tri_base = class_tri_begin_[k];
+                  std::uint32_t e = cell_tri_begin_[cell];
+                  while (e < e_end) {
+                    std::uint32_t part_end = e_end;
+                    if (!chunk_box_.empty() && r.beam) {
+                      const std::uint32_t j = e / static_cast<std::uint32_t>(chunk_);
+                      part_end = std::min(e_end, (j + 1) * static_cast<std::uint32_t>(chunk_));
+                      if (chunk_outside_beam(r, &chunk_box_[6 * std::size_t{j}], f)) {
+                        e = part_end;
+                        continue;
+                      }
+                    }
+                    if (wide_tris_) {
+                      for (; e < part_end; ++e) visit(cell_tris_[e]);
+                    } else {
+                      for (; e < part_end; ++e) visit(tri_base + cell_tris16_[e]);
+                    }
                   }
                 }
               }
@@ -1404,6 +1530,7 @@ class NormalClassIndex {
             }
           }
         }
+        if (slopes_stale) narrow_beam(r, tw, th, live);
       }
       for (int y = 0; y < th; ++y) {  // a walk that ran out of slices finishes its rays
         live[y] = static_cast<std::uint16_t>(live[y] & ~mask[y]);
@@ -1485,6 +1612,11 @@ class NormalClassIndex {
   std::vector<std::uint32_t> cell_tris_;
   std::vector<std::uint16_t> cell_tris16_;
   bool wide_tris_ = false;
+  // Chunk boxes (min xyz, max xyz) of every chunk_ consecutive cell entries, or empty when the
+  // cells hold fewer than chunk_min_mean_ entries on average (a box would not pay for itself).
+  static constexpr std::size_t chunk_ = 16;
+  static constexpr std::size_t chunk_min_mean_ = 8;
+  std::vector<float> chunk_box_;
   std::vector<std::uint32_t> grid_base_;      // (class, axis) -> first entry in slice_rows_
   std::vector<std::uint32_t> slice_rows_;     // per grid dims[axis] + 1 row offsets
   std::vector<std::uint16_t> row_coord_;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace cullkit::detail {
 
@@ -54,6 +55,18 @@ namespace cullkit::detail {
   const double r = half[0] * std::fabs(n[0]) + half[1] * std::fabs(n[1]) + half[2] * std::fabs(n[2]);
   if (d > r || d < -r) return false;
   return true;
+}
+
+/// Morton code (10 bits per axis, x lowest) of a point given in [0, 1]^3: orders a cell's
+/// triangles so that consecutive ones lie close together.
+[[nodiscard]] inline std::uint32_t nci_morton(const double u[3]) noexcept {
+  std::uint32_t code = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double q = std::clamp(u[a], 0.0, 1.0) * 1024.0;
+    const std::uint32_t v = std::min<std::uint32_t>(1023u, static_cast<std::uint32_t>(q));
+    for (int b = 0; b < 10; ++b) code |= ((v >> b) & 1u) << (3 * b + a);
+  }
+  return code;
 }
 
 }  // namespace cullkit::detail
