@@ -116,6 +116,8 @@ struct OcclusionStats {
   std::uint32_t occluders_inserted = 0; ///< occluders accepted (polygons and boxes)
   std::uint32_t occluders_skipped = 0;  ///< rejected: non-finite, < 3 corners, non-planar, no area
                                         ///< from the eye, eye inside or on a box
+  std::uint32_t occluders_hidden = 0;   ///< boxes `insert_box_occluders` found already hidden
+                                        ///< (nothing to add: not inserted)
   std::uint32_t fragments = 0;          ///< occluder fragments that grew a chain
   std::uint32_t fragments_hidden = 0;   ///< fragments dropped because already hidden
   std::uint32_t fragments_degenerate = 0;  ///< fragments dropped as too thin seen from the eye
@@ -271,11 +273,13 @@ class OcclusionTree {
     insert_fragment(frag);
   }
 
-  /// Inserts many solid box occluders, nearest to the eye first (each as `insert_box_occluder`).
-  /// The hidden region does not depend on the order, but the tree does: near occluders inserted
-  /// first hide most of the far ones, whose fragments are then dropped at once. In bench_occlusion
-  /// (100 boxes in view) that gives a tree 35x smaller, 6x faster insertion and 3.5x faster queries
-  /// than a random order. Invalid boxes are skipped and counted as in `insert_box_occluder`.
+  /// Inserts many solid box occluders, nearest to the eye first (each as `insert_box_occluder`),
+  /// leaving out those already hidden by the nearer ones (counted in `stats().occluders_hidden`:
+  /// everything behind a hidden box is hidden too, so they would add nothing). The hidden region does
+  /// not depend on the order, but the tree does: near occluders inserted first hide most of the far
+  /// ones. In bench_occlusion (100 boxes in view) that gives a tree 35x smaller, 25x faster insertion
+  /// and 3.5x faster queries than inserting in a random order. Invalid boxes are skipped and counted
+  /// as in `insert_box_occluder`.
   /// pre: `boxes` points to `count` boxes (may be null when count is 0). Allocation: a scratch array
   /// kept by the tree (none once warm). Cost: a sort of `count` keys, then the insertions.
   void insert_box_occluders(const Aabb* boxes, std::size_t count) {
@@ -292,7 +296,15 @@ class OcclusionTree {
     std::sort(order_.begin(), order_.end(), [](const SortKey& a, const SortKey& b) {
       return a.key < b.key || (a.key == b.key && a.index < b.index);
     });
-    for (const SortKey& k : order_) insert_box_occluder(boxes[k.index]);
+    for (const SortKey& k : order_) {
+      // Far boxes behind near ones are often hidden whole by now: then so is everything behind
+      // them (past a hidden point along each ray), and all their fragments would be dropped.
+      if (stats_.fragments > 0 && is_occluded(boxes[k.index])) {
+        ++stats_.occluders_hidden;
+        continue;
+      }
+      insert_box_occluder(boxes[k.index]);
+    }
   }
 
   /// True only if every point of `box` is hidden from the eye by the occluders inserted so far.
