@@ -16,19 +16,25 @@
 // centres (each triangle once per tile). A pixel is finished once its nearest hit lies before the
 // point where its ray enters the next slice; a tile is finished when all its pixels are.
 // Per-triangle work in a tile is kept small: a triangle wholly outside one of the four planes of
-// the tile's beam (its margin measured against the tile's own rays) is dropped with a few float
-// products; the others are checked against their screen rectangle (computed once per frame) and
-// then ray-tested, unless every live ray under that rectangle already holds a hit strictly
-// nearer than any t the ray test could return for the triangle (a bound from the corners' depths
-// along each ray's dominant axis): such a triangle is not tested. The beam's extent and each
-// ray's finishing slice are recomputed only when a ray finishes or improves its hit.
+// the tile's beam (made around the live pixels, its margin measured against their rays) is dropped
+// with a few float products; the others are checked against their screen rectangle (computed once
+// per frame). Those with live pixels under it are sorted nearest first (smallest corner depth
+// along the tile's mean ray) and then ray-tested, unless every live ray under the rectangle
+// already holds a hit strictly nearer than any t the ray test could return for the triangle (a
+// bound from the corners along each ray's dominant axis), or the triangle lies beside the
+// rectangle's four corner rays (outside the plane through the eye and one of its edges): such a
+// triangle is not tested. On crowded indexes (8 or more entries per cell on average) every 16
+// consecutive cell entries have a box, and a tile skips a box outside its beam, off its live
+// pixels, or behind their hits. The beam's extent and each ray's finishing slice are recomputed
+// only when a ray finishes or improves its hit.
 //
 // Memory (memory_bytes()): vertices (12 bytes each, bitwise-equal positions merged), 3 vertex
 // ids and the mesh number per kept triangle (16 bytes), a 16-bit class per mesh triangle, 2 bytes
 // per cell entry (4 when some class has more than 65536 triangles), and per cell 4 bytes (entry
 // range) + 6 bytes (column in each axis grid) + 4 bytes (its ids in the Y and Z grids, 16-bit
 // each while every class has at most 65536 cells, else 8 bytes; the X grids list cells in id
-// order and need none), plus 6 bytes per grid row.
+// order and need none), plus 6 bytes per grid row, plus 24 bytes per 16 cell entries on crowded
+// indexes (chunk boxes).
 // Internally triangles are renumbered class by class in the order of their first cell in the X
 // grid, so the triangles of a cell (and their vertices and per-thread records) are mostly one run
 // of consecutive memory; answers are always given in the mesh's numbering.
@@ -160,6 +166,7 @@ class NciContext;
 /// Reusable scratch for select_visible: keeps per-thread buffers between frames so a frame does
 /// not allocate once the buffers have grown. One context per concurrent caller; not thread-safe.
 /// Size: 16 bytes per indexed triangle per worker thread (test stamps and cached screen
+/// rectangles), on crowded indexes 12 bytes per 16 cell entries per worker thread (chunk
 /// rectangles), 8 bytes per triangle for the merge, and 8 bytes per pixel.
 class NciContext {
  public:
@@ -185,9 +192,22 @@ class NciContext {
       Rect rect;
     };
     std::vector<Tri> tri;
+    // Per chunk of cell entries (crowded indexes only): the frame of its cached rectangle and it.
+    struct Chunk {
+      std::uint32_t epoch;
+      Rect rect;
+    };
+    std::vector<Chunk> chunk;
     std::uint32_t stamp_value = 0;
     std::uint32_t frame_epoch = 0;
     std::vector<std::uint32_t> tested;  // triangles tested (unique per tile)
+    // Triangles of the current slice that passed the tile's cheap rejects, tested nearest first.
+    struct Cand {
+      float key;  // smallest depth of a corner along the tile's mean ray
+      std::uint32_t tri;
+      std::int8_t rx0, ry0, rx1, ry1;  // the tile pixels under its rectangle
+    };
+    std::vector<Cand> cand;
     std::vector<std::uint16_t> active_classes;
     NciSelectStats stats;
   };
@@ -342,8 +362,14 @@ class NormalClassIndex {
           th.stamp_value = 0;
           th.frame_epoch = 0;
         }
+        if (th.chunk.size() != chunk_box_.size() / 6) {
+          th.chunk.assign(chunk_box_.size() / 6, NciContext::Thread::Chunk{0u, NciContext::Rect{0, 0, -1, -1}});
+          th.frame_epoch = 0;
+          for (auto& t : th.tri) t.epoch = 0u;
+        }
         if (++th.frame_epoch == 0) {
           for (auto& t : th.tri) t.epoch = 0u;
+          for (auto& c : th.chunk) c.epoch = 0u;
           th.frame_epoch = 1;
         }
         th.tested.clear();
@@ -1000,6 +1026,7 @@ class NormalClassIndex {
     float beam_eps = 0.0f;
     bool beam = false;
     int beam_box[4] = {-1, -1, -1, -1};  // live pixels' rectangle the beam was made for
+    float mean_dir[3] = {0.0f, 0.0f, 0.0f};  // the live rays' mean direction (sort key of candidates)
     // Depth bound: per dominant axis k of the watertight test, the range of its scale sz = 1 / d[k]
     // over the tile's live rays (sz_lo > sz_hi: no ray has that axis). A ray's computed t is a
     // convex combination of sz times the corners' k coordinates, so it is at least the smallest
@@ -1011,14 +1038,22 @@ class NormalClassIndex {
   // edge-on: the eye in its plane is never a hit), `full` when the projection cannot be trusted.
   [[nodiscard]] static NciContext::Rect screen_rect(const Frame& f, const glm::vec3& p0, const glm::vec3& p1,
                                                     const glm::vec3& p2) noexcept {
+    if (!detail::faces_eye(p0, p1, p2, f.eye)) return NciContext::Rect{0, 0, -1, -1};
+    const glm::vec3 p[3] = {p0, p1, p2};
+    return project_rect(f, p, 3);
+  }
+
+  // The pixels whose centres may see a point of the convex hull of `p` (count points): the
+  // bounding rectangle of their projections (the hull projects into the hull of the projected
+  // points when every point is in front of the eye: the conditions checked are linear in the
+  // point, so they hold on the whole hull), `full` when the projection cannot be trusted.
+  [[nodiscard]] static NciContext::Rect project_rect(const Frame& f, const glm::vec3* p, int count) noexcept {
     using Rect = NciContext::Rect;
-    if (!detail::faces_eye(p0, p1, p2, f.eye)) return Rect{0, 0, -1, -1};
     if (!f.use_rect) return Rect{Rect::full, 0, 0, 0};
-    const glm::vec3* p[3] = {&p0, &p1, &p2};
     double mnx = std::numeric_limits<double>::infinity(), mny = mnx, mxx = -mnx, mxy = -mnx;
     const glm::dvec3 plane(f.target_plane);
-    for (int k = 0; k < 3; ++k) {
-      const glm::dvec3 dx = glm::dvec3(*p[k]) - f.eye;
+    for (int k = 0; k < count; ++k) {
+      const glm::dvec3 dx = glm::dvec3(p[k]) - f.eye;
       const double s = f.eye_side / glm::dot(plane, dx);
       // Behind the eye, or beside it (parallel to the plane): no rectangle.
       if (!(s > 0.0) || !std::isfinite(s)) return Rect{Rect::full, 0, 0, 0};
@@ -1137,6 +1172,40 @@ class NormalClassIndex {
     }
   }
 
+  // Whether no live ray of the tile can take a hit from chunk j: its box's screen rectangle
+  // (cached per frame and thread) covers no live pixel of the tile, or every live ray under it
+  // already holds a hit strictly nearer than any t the ray test could give a point of the box.
+  [[nodiscard]] bool chunk_hidden(const Frame& f, std::uint32_t j, int x0, int y0, int tw, int th,
+                                  const std::uint16_t* live, const TileRays& r, NciContext::Thread& thread) const noexcept {
+    const float* box = &chunk_box_[6 * std::size_t{j}];
+    auto& slot = thread.chunk[j];
+    if (slot.epoch != thread.frame_epoch) {
+      slot.epoch = thread.frame_epoch;
+      glm::vec3 corner[8];
+      for (int k = 0; k < 8; ++k)
+        corner[k] = glm::vec3(box[(k & 1) ? 3 : 0], box[(k & 2) ? 4 : 1], box[(k & 4) ? 5 : 2]);
+      slot.rect = project_rect(f, corner, 8);
+    }
+    const NciContext::Rect rect = slot.rect;
+    if (rect.x0 > rect.x1) return true;  // off screen
+    int rx0 = 0, ry0 = 0, rx1 = tw - 1, ry1 = th - 1;
+    if (rect.x0 != NciContext::Rect::full) {
+      const int lx0 = rect.x0 - x0, lx1 = rect.x1 - x0, ly0 = rect.y0 - y0, ly1 = rect.y1 - y0;
+      if (lx1 < 0 || ly1 < 0 || lx0 > tw - 1 || ly0 > th - 1) return true;
+      rx0 = std::max(0, lx0);
+      rx1 = std::min(tw - 1, lx1);
+      ry0 = std::max(0, ly0);
+      ry1 = std::min(th - 1, ly1);
+    }
+    const std::uint32_t span = ((1u << (rx1 - rx0 + 1)) - 1u) << rx0;
+    std::uint32_t under = 0;
+    for (int y = ry0; y <= ry1; ++y) under |= live[y] & span;
+    if (!under) return true;
+    const float qlo[3] = {box[0] - f.eye_f.x, box[1] - f.eye_f.y, box[2] - f.eye_f.z};
+    const float qhi[3] = {box[3] - f.eye_f.x, box[4] - f.eye_f.y, box[5] - f.eye_f.z};
+    return behind_hits(r, qlo, qhi, ry0, ry1, span, live);
+  }
+
   // Whether the box (min xyz, max xyz) lies wholly outside one plane of the tile's beam with the
   // margin of outside_beam (then so does every triangle inside it): the largest n.x + eps |x|_1
   // over the box, x relative to the eye, is below zero. In double with a 1e-12 relative slack, so
@@ -1189,13 +1258,15 @@ class NormalClassIndex {
   // computed t is tt / det with tt and det sums of non-negative products, so it is at least the
   // bound times (1 - 8 2^-24); the margin covers that, and strictness keeps ties (lower index
   // wins) with the ray test. Such a triangle is not tested at all.
-  [[nodiscard]] static bool behind_hits(const TileRays& r, const float a[3], const float b[3], const float c[3],
-                                        int ry0, int ry1, std::uint32_t span, const std::uint16_t* live) noexcept {
+  // `qlo` and `qhi` bound the corners' coordinates relative to the eye as the ray test computes
+  // them (float differences; rounding is monotone, so the box of the float corners bounds them).
+  [[nodiscard]] static bool behind_hits(const TileRays& r, const float qlo[3], const float qhi[3], int ry0, int ry1,
+                                        std::uint32_t span, const std::uint16_t* live) noexcept {
     double bound = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 3; ++k) {
       if (r.sz_lo[k] > r.sz_hi[k]) continue;
       const double lo = r.sz_lo[k], hi = r.sz_hi[k];
-      for (const float q : {a[k], b[k], c[k]}) bound = std::min({bound, lo * double(q), hi * double(q)});
+      bound = std::min({bound, lo * double(qlo[k]), lo * double(qhi[k]), hi * double(qlo[k]), hi * double(qhi[k])});
     }
     bound *= 1.0 - 1e-6;
     if (!(bound > 1e-30) || !std::isfinite(bound)) return false;
@@ -1210,10 +1281,38 @@ class NormalClassIndex {
     return true;
   }
 
+  // Whether the triangle lies wholly beside the pixel rectangle [rx0, rx1] x [ry0, ry1] of the tile:
+  // all four corner rays outside the plane through the eye and one of its edges, by a margin of
+  // 1e-5 (relative). With one target plane for the whole screen (use_rect) the pixel rays'
+  // directions are affine in the pixel position before normalisation, so every pixel ray of the
+  // rectangle is a positive combination of the corner rays and lies outside that plane as well;
+  // the margin covers the float rounding of the directions and of the ray test (about 1e-7).
+  [[nodiscard]] static bool beside_rect(const TileRays& r, const float a[3], const float b[3], const float c[3], int rx0,
+                                        int ry0, int rx1, int ry1) noexcept {
+    const glm::dvec3 p[3] = {glm::dvec3(a[0], a[1], a[2]), glm::dvec3(b[0], b[1], b[2]), glm::dvec3(c[0], c[1], c[2])};
+    const int corner[4] = {ry0 * 16 + rx0, ry0 * 16 + rx1, ry1 * 16 + rx1, ry1 * 16 + rx0};
+    for (int k = 0; k < 3; ++k) {
+      const glm::dvec3 n = glm::cross(p[k], p[(k + 1) % 3]);
+      const double side = glm::dot(n, p[(k + 2) % 3]);  // the inside holds the third corner
+      const double len = glm::length(n);
+      if (!(std::fabs(side) > 0.0) || !(len > 0.0) || !std::isfinite(side) || !std::isfinite(len)) continue;
+      const glm::dvec3 m = side > 0.0 ? n : -n;
+      bool out = true;
+      for (int j = 0; j < 4 && out; ++j) {
+        const glm::dvec3 d(r.dir[corner[j]]);
+        out = glm::dot(m, d) < -1e-5 * len * glm::length(d);
+      }
+      if (out) return true;
+    }
+    return false;
+  }
+
   // Tests `tri` against the unfinished rays of the tile inside its screen rectangle; false when no
   // ray was tested (a back face seen from the eye, or no live pixel under its rectangle).
-  bool test_triangle(const Frame& f, std::uint32_t tri, int x0, int y0, int tw, int th, const std::uint16_t* live,
-                     TileRays& r, NciContext::Thread& thread) const {
+  // Whether `tri` may be hit by an unfinished ray of the tile (beam, screen rectangle, live
+  // pixels under it); when it may, `out` gets the pixels under its rectangle and its sort key.
+  bool admit_triangle(const Frame& f, std::uint32_t tri, int x0, int y0, int tw, int th, const std::uint16_t* live,
+                      const TileRays& r, NciContext::Thread& thread, NciContext::Thread::Cand& out) const {
     // The triangle's screen rectangle, computed once per frame and thread (cached: a triangle is
     // met by many tiles).
     auto& slot = thread.tri[tri];
@@ -1245,13 +1344,35 @@ class NormalClassIndex {
     // The same beam test when the rectangle came from the cache, so what is tested does not depend
     // on which thread met the triangle first.
     if (!in_beam && outside_beam(r, tri, f)) return false;
+    float key = std::numeric_limits<float>::infinity();
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec3 d = vertices_[tri_vertices_[3 * tri + static_cast<std::uint32_t>(k)]] - f.eye_f;
+      key = std::min(key, d.x * r.mean_dir[0] + d.y * r.mean_dir[1] + d.z * r.mean_dir[2]);
+    }
+    out = NciContext::Thread::Cand{key, tri, static_cast<std::int8_t>(rx0), static_cast<std::int8_t>(ry0),
+                                   static_cast<std::int8_t>(rx1), static_cast<std::int8_t>(ry1)};
+    return true;
+  }
+
+  // Tests an admitted triangle against the unfinished rays under its rectangle; false when no ray
+  // was tested (all of them already hold nearer hits, or the triangle passes beside them).
+  bool test_triangle(const Frame& f, const NciContext::Thread::Cand& cand, const std::uint16_t* live, TileRays& r,
+                     NciContext::Thread& thread) const {
+    const std::uint32_t tri = cand.tri;
+    const int rx0 = cand.rx0, ry0 = cand.ry0, rx1 = cand.rx1, ry1 = cand.ry1;
+    const std::uint32_t span = ((1u << (rx1 - rx0 + 1)) - 1u) << rx0;
     const glm::vec3& p0 = vertices_[tri_vertices_[3 * tri]];
     const glm::vec3& p1 = vertices_[tri_vertices_[3 * tri + 1]];
     const glm::vec3& p2 = vertices_[tri_vertices_[3 * tri + 2]];
     const float a[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};
     const float b[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
     const float c[3] = {p2.x - f.eye_f.x, p2.y - f.eye_f.y, p2.z - f.eye_f.z};
-    if (behind_hits(r, a, b, c, ry0, ry1, span, live)) return false;
+    {
+      const float qlo[3] = {std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}), std::min({a[2], b[2], c[2]})};
+      const float qhi[3] = {std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}), std::max({a[2], b[2], c[2]})};
+      if (behind_hits(r, qlo, qhi, ry0, ry1, span, live)) return false;
+    }
+    if (f.use_rect && (rx1 > rx0 || ry1 > ry0) && beside_rect(r, a, b, c, rx0, ry0, rx1, ry1)) return false;
     bool any = false;
     for (int y = ry0; y <= ry1; ++y) {
       std::uint32_t bits = live[y] & span;
@@ -1353,6 +1474,7 @@ class NormalClassIndex {
       glm::dvec3 axis(0.0);
       if (len > 1e-12) {
         axis = cone_sum / len;
+        for (int j = 0; j < 3; ++j) r.mean_dir[j] = static_cast<float>(axis[j]);
         cos_psi = 1.0;
         for (int y = 0; y < th; ++y)
           for (int x = 0; x < tw; ++x)
@@ -1479,7 +1601,8 @@ class NormalClassIndex {
                   auto visit = [&](std::uint32_t tri) {
                     if (thread.tri[tri].stamp == stamp) return;
                     thread.tri[tri].stamp = stamp;
-                    if (test_triangle(f, tri, x0, y0, tw, th, live, r, thread)) thread.tested.push_back(tri);
+                    NciContext::Thread::Cand cand;
+                    if (admit_triangle(f, tri, x0, y0, tw, th, live, r, thread, cand)) thread.cand.push_back(cand);
                   };
                   const std::uint32_t tri_base = class_tri_begin_[k];
                   std::uint32_t e = cell_tri_begin_[cell];
@@ -1488,7 +1611,8 @@ class NormalClassIndex {
                     if (!chunk_box_.empty() && r.beam) {
                       const std::uint32_t j = e / static_cast<std::uint32_t>(chunk_);
                       part_end = std::min(e_end, (j + 1) * static_cast<std::uint32_t>(chunk_));
-                      if (chunk_outside_beam(r, &chunk_box_[6 * std::size_t{j}], f)) {
+                      if (chunk_outside_beam(r, &chunk_box_[6 * std::size_t{j}], f) ||
+                          chunk_hidden(f, j, x0, y0, tw, th, live, r, thread)) {
                         e = part_end;
                         continue;
                       }
@@ -1501,6 +1625,15 @@ class NormalClassIndex {
                   }
                 }
               }
+            }
+            // Nearest first, so hits found early let behind_hits drop the triangles behind them.
+            if (!thread.cand.empty()) {
+              std::sort(thread.cand.begin(), thread.cand.end(), [](const auto& p, const auto& q) {
+                return p.key != q.key ? p.key < q.key : p.tri < q.tri;
+              });
+              for (const auto& cand : thread.cand)
+                if (test_triangle(f, cand, live, r, thread)) thread.tested.push_back(cand.tri);
+              thread.cand.clear();
             }
           }
         }
