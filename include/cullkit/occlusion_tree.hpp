@@ -335,7 +335,8 @@ class OcclusionTree {
     const glm::vec3 lo = box.min - eye_, hi = box.max - eye_;
     const glm::vec3 far = glm::max(glm::abs(lo), glm::abs(hi));
     const float scale = far.x + far.y + far.z + eye_scale_;
-    BoxFront front(box, 0.5f * (lo + hi), 0.5f * (hi - lo));
+    // Halves first: lo + hi may overflow for boxes near the float range (a fuzzer find).
+    BoxFront front(box, 0.5f * lo + 0.5f * hi, 0.5f * hi - 0.5f * lo);
     // Phase 1: the whole box goes down one path, each plane decided by `front_side`.
     // Where the front straddles a plane, the whole box goes on to the OUTSIDE. That needs no proof:
     // a hidden leaf is only reached through a complete occluder chain, every step of which was an
@@ -412,7 +413,8 @@ class OcclusionTree {
         dmin = std::min(dmin, dist);
         dmax = std::max(dmax, dist);
       }
-      if (!(dmin >= m) && !(dmax <= m)) break;  // straddles (or NaN): split from here
+      if (!detail::finite_distance(dmin) || !detail::finite_distance(dmax)) return result;  // overflow, NaN: visible
+      if (!(dmin >= m) && !(dmax <= m)) break;  // straddles: split from here
       result.together = ref;
       ref = dmin >= m ? node.inside : node.outside;
     }
@@ -607,6 +609,8 @@ class OcclusionTree {
                                                          float& dmin) const {
     const float c = signed_distance(plane, front.center);
     const float r = glm::dot(glm::abs(plane.normal), front.half);
+    // Distances that overflow (coordinates near the float range) or NaN decide nothing.
+    if (!(std::fabs(c) + r <= std::numeric_limits<float>::max())) return FrontSide::unknown;
     if (c - r >= 2.0f * m) return FrontSide::inside;
     if (c + r <= m) return FrontSide::outside;
     if (front.point_count == 0) front.point_count = detail::box_front_points(*front.box, eye_, front.points);
@@ -618,7 +622,7 @@ class OcclusionTree {
       dmin = std::min(dmin, dist);
       dmax = std::max(dmax, dist);
     }
-    if (!(dmin == dmin) || !(dmax == dmax)) return FrontSide::unknown;
+    if (!detail::finite_distance(dmin) || !detail::finite_distance(dmax)) return FrontSide::unknown;
     if (dmin >= m) return FrontSide::inside;
     if (dmax <= m) return FrontSide::outside;
     return FrontSide::straddles;

@@ -149,6 +149,19 @@ void api_and_bad_input() {
   bad.insert_occluder(quad, 4);
   CHECK(bad.stats().occluders_skipped == 1);
   CHECK(!bad.is_occluded(Aabb{{-1, -1, -10}, {1, 1, -9}}));
+  // Coordinates near the float range (a fuzzer find): eye at x = -1.77e38, a triangle in the plane
+  // x = 0 spanning +-1.7e38, a point box just on the eye's side of it. Its eye-relative centre
+  // (lo + hi) / 2 overflowed to infinity and was "inside" every plane: hidden. Must be visible.
+  {
+    OcclusionTree far_tree(glm::vec3(-1.76896463e+38f, 6.25455189e-36f, 1.98214661e-06f));
+    const glm::vec3 tri[3] = {{6.20661017e-36f, 9.26383823e-36f, 6.21046655e-36f},
+                              {6.27604139e-36f, 1.70141285e+38f, 8.10011189e+37f},
+                              {6.27720728e-36f, -1.76813386e+38f, 6.25455189e-36f}};
+    far_tree.insert_occluder(tri, 3);
+    const glm::vec3 p(-5.44529303e-06f);
+    CHECK(!far_tree.is_occluded(Aabb{p, p}));
+    CHECK(!far_tree.is_occluded(Aabb{p, glm::vec3(0.0f)}));
+  }
   // Huge coordinates far from the eye still behave.
   OcclusionTree far_tree(glm::vec3(1e6f, 0, 1e6f));
   const glm::vec3 far_quad[4] = {{1e6f - 50, -50, 1e6f - 100}, {1e6f + 50, -50, 1e6f - 100},

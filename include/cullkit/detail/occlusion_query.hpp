@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 
 #include <glm/vec3.hpp>
 
@@ -26,17 +27,22 @@ struct QueryFragment {
   std::uint32_t ref;  ///< node index or leaf code the fragment enters next
 };
 
+/// False for NaN and for infinities (a distance that overflowed: coordinates near the float range).
+[[nodiscard]] inline bool finite_distance(float d) noexcept {
+  return std::fabs(d) <= std::numeric_limits<float>::max();
+}
+
 /// Where a fragment went at one plane.
 enum class FragmentSide : std::uint8_t {
   inside,     ///< every vertex at distance >= -epsilon, some > epsilon
   outside,    ///< every vertex at distance <= epsilon, some < -epsilon
   on,         ///< every vertex within epsilon of the plane
   split,      ///< vertices clearly on both sides: `in` and `out` were written
-  undecided,  ///< a NaN distance, or a piece would exceed the capacity (nothing written)
+  undecided,  ///< a NaN or infinite distance, or a piece would exceed the capacity (nothing written)
 };
 
 /// Classifies `src` against `plane` like `split_fragment`, without writing any piece: `split` here
-/// means "straddles; call split_fragment". NaN gives `undecided`. Kept small so it inlines into the
+/// means "straddles; call split_fragment". NaN or an infinite distance gives `undecided`. Kept small so it inlines into the
 /// tree walks (most nodes only classify).
 template <std::size_t Capacity>
 [[nodiscard]] inline FragmentSide classify_fragment(const QueryFragment<Capacity>& src, const Plane& plane,
@@ -47,7 +53,7 @@ template <std::size_t Capacity>
     const float d = signed_distance(plane, src.v[i]);
     f |= d > epsilon;
     b |= d < -epsilon;
-    nan |= !(d == d);
+    nan |= !finite_distance(d);
   }
   if (nan) return FragmentSide::undecided;
   if (f && b) return FragmentSide::split;
@@ -69,7 +75,7 @@ template <std::size_t Capacity>
   const std::uint32_t n = src.size;
   for (std::uint32_t i = 0; i < n; ++i) {
     const float d = signed_distance(plane, src.v[i]);
-    if (!(d == d)) return FragmentSide::undecided;
+    if (!finite_distance(d)) return FragmentSide::undecided;
     dist[i] = d;
     f |= d > epsilon;
     b |= d < -epsilon;
