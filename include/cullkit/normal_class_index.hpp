@@ -961,6 +961,10 @@ class NormalClassIndex {
     double eye_side = 0.0;          // -target_plane . (eye, 1)
     glm::dvec4 eye_clip{0.0};       // view_proj * (eye, 1)
     glm::dvec3 clip_x{0.0}, clip_y{0.0}, clip_w{0.0};  // rows x, y, w of view_proj's 3x3 part
+    // Pixel ray directions are positive multiples of an affine function of the pixel position
+    // (one target plane whose homogeneous w keeps one sign over the screen): beside_rect may use
+    // a rectangle's corner rays for the rays inside it.
+    bool affine_rays = false;
   };
 
   [[nodiscard]] Frame make_frame(const Camera& camera) const {
@@ -989,6 +993,18 @@ class NormalClassIndex {
     }
     if (uses_far == 5 || uses_near == 5) {
       const double z0 = uses_far == 5 ? 1.0 : near_z;
+      {
+        // w of the target point is affine over the screen: one sign at the four corners holds
+        // everywhere between them.
+        int positive = 0, negative = 0;
+        for (int k = 0; k < 4; ++k) {
+          const double u = (k & 1) ? 1.0 : -1.0, v = (k & 2) ? 1.0 : -1.0;
+          const double w = (inv[0] * u + inv[1] * v + inv[2] * z0 + inv[3]).w;
+          positive += w > 0.0;
+          negative += w < 0.0;
+        }
+        f.affine_rays = positive == 4 || negative == 4;
+      }
       glm::dvec4 row2, row3;
       for (int j = 0; j < 4; ++j) {
         row2[j] = f.view_proj[j][2];
@@ -1141,7 +1157,7 @@ class NormalClassIndex {
         const double dl = std::fabs(dir.x) + std::fabs(dir.y) + std::fabs(dir.z);
         for (int k = 0; k < 4; ++k) {
           const double v = double(r.beam_n[k][0]) * dir.x + double(r.beam_n[k][1]) * dir.y + double(r.beam_n[k][2]) * dir.z;
-          worst = std::max(worst, -v / std::max(dl, 1e-30));
+          if (-v > worst * dl) worst = std::max(worst, -v / std::max(dl, 1e-30));
         }
       }
     }
@@ -1157,7 +1173,11 @@ class NormalClassIndex {
   static void narrow_beam(TileRays& r, int tw, int th, const std::uint16_t* live) noexcept {
     int box[4];
     if (!r.beam || !live_box(tw, th, live, box)) return;
-    if (box[0] == r.beam_box[0] && box[1] == r.beam_box[1] && box[2] == r.beam_box[2] && box[3] == r.beam_box[3]) return;
+    // Re-made only when the rectangle lost at least half its pixels (the re-make visits every
+    // live ray).
+    const int area = (box[2] - box[0] + 1) * (box[3] - box[1] + 1);
+    const int old_area = (r.beam_box[2] - r.beam_box[0] + 1) * (r.beam_box[3] - r.beam_box[1] + 1);
+    if (2 * area > old_area) return;
     float n[4][3];
     std::memcpy(n, r.beam_n, sizeof n);
     const float eps = r.beam_eps;
@@ -1283,8 +1303,8 @@ class NormalClassIndex {
 
   // Whether the triangle lies wholly beside the pixel rectangle [rx0, rx1] x [ry0, ry1] of the tile:
   // all four corner rays outside the plane through the eye and one of its edges, by a margin of
-  // 1e-5 (relative). With one target plane for the whole screen (use_rect) the pixel rays'
-  // directions are affine in the pixel position before normalisation, so every pixel ray of the
+  // 1e-5 (relative). With one target plane for the whole screen (affine_rays) the pixel rays'
+  // directions are positive multiples of an affine function of the pixel position, so every pixel ray of the
   // rectangle is a positive combination of the corner rays and lies outside that plane as well;
   // the margin covers the float rounding of the directions and of the ray test (about 1e-7).
   [[nodiscard]] static bool beside_rect(const TileRays& r, const float a[3], const float b[3], const float c[3], int rx0,
@@ -1372,7 +1392,7 @@ class NormalClassIndex {
       const float qhi[3] = {std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}), std::max({a[2], b[2], c[2]})};
       if (behind_hits(r, qlo, qhi, ry0, ry1, span, live)) return false;
     }
-    if (f.use_rect && (rx1 > rx0 || ry1 > ry0) && beside_rect(r, a, b, c, rx0, ry0, rx1, ry1)) return false;
+    if (f.use_rect && f.affine_rays && (rx1 > rx0 || ry1 > ry0) && beside_rect(r, a, b, c, rx0, ry0, rx1, ry1)) return false;
     bool any = false;
     for (int y = ry0; y <= ry1; ++y) {
       std::uint32_t bits = live[y] & span;
@@ -1435,7 +1455,8 @@ class NormalClassIndex {
             if (f.eye[k] < blo[k] || f.eye[k] > bhi[k]) hit = false;
             continue;
           }
-          double t0 = (blo[k] - f.eye[k]) / d[k], t1 = (bhi[k] - f.eye[k]) / d[k];
+          const double inv = 1.0 / d[k];
+          double t0 = (blo[k] - f.eye[k]) * inv, t1 = (bhi[k] - f.eye[k]) * inv;
           if (t0 > t1) std::swap(t0, t1);
           tmin = std::max(tmin, t0 - 1e-9 * std::fabs(t0));
           tmax = std::min(tmax, t1 + 1e-9 * std::fabs(t1));
