@@ -29,12 +29,13 @@
 // only when a ray finishes or improves its hit.
 //
 // Memory (memory_bytes()): vertices (12 bytes each, bitwise-equal positions merged), 3 vertex
-// ids and the mesh number per kept triangle (16 bytes), a 16-bit class per mesh triangle, 2 bytes
-// per cell entry (4 when some class has more than 65536 triangles), and per cell 4 bytes (entry
-// range) + 6 bytes (column in each axis grid) + 4 bytes (its ids in the Y and Z grids, 16-bit
-// each while every class has at most 65536 cells, else 8 bytes; the X grids list cells in id
-// order and need none), plus 6 bytes per grid row, plus 24 bytes per 16 cell entries on crowded
-// indexes (chunk boxes).
+// ids per kept triangle (2 bytes each with at most 65536 vertices, else 4), its mesh number (4
+// bytes), a 16-bit class per mesh triangle, 2 bytes per cell entry (4 when some class has more
+// than 65536 triangles), and per cell 2 bytes (entry range, relative to its class; 4 when some
+// class has more than 65535 entries) + 6 bytes (column in each axis grid) + 4 bytes (its ids in
+// the Y and Z grids, 16-bit each while every class has at most 65536 cells, else 8 bytes; the X
+// grids list cells in id order and need none), plus 6 bytes per grid row, plus 24 bytes per 16
+// cell entries on crowded indexes (chunk boxes).
 // Internally triangles are renumbered class by class in the order of their first cell in the X
 // grid, so the triangles of a cell (and their vertices and per-thread records) are mostly one run
 // of consecutive memory; answers are always given in the mesh's numbering.
@@ -449,7 +450,7 @@ class NormalClassIndex {
   [[nodiscard]] const NciStats& stats() const noexcept { return stats_; }
   /// Bytes held by the index (capacity of every array).
   [[nodiscard]] std::size_t memory_bytes() const noexcept {
-    return sizeof(*this) + bytes(vertices_) + bytes(tri_vertices_) + bytes(tri_original_) + bytes(class_axis_) +
+    return sizeof(*this) + bytes(vertices_) + bytes(tri_vertices_) + bytes(tri_vertices16_) + bytes(cell_begin16_) + bytes(class_entry_base_) + bytes(tri_original_) + bytes(class_axis_) +
            bytes(class_sin_) + bytes(class_cos_) + bytes(cell_tri_begin_) + bytes(cell_tris_) + bytes(cell_tris16_) + bytes(chunk_box_) +
            bytes(class_tri_begin_) + bytes(grid_base_) +
            bytes(slice_rows_) + bytes(row_coord_) + bytes(row_begin_) + bytes(cell_col_) + bytes(cell_id_) + bytes(cell_id16_) +
@@ -476,6 +477,11 @@ class NormalClassIndex {
   static constexpr std::uint16_t skipped_class_ = 0xFFFFu;
 
   [[nodiscard]] std::uint32_t original(std::uint32_t tri) const noexcept { return tri_original_[tri]; }
+  // Corner k of internal triangle tri.
+  [[nodiscard]] const glm::vec3& corner(std::uint32_t tri, int k) const noexcept {
+    const std::size_t i = 3 * std::size_t{tri} + static_cast<std::size_t>(k);
+    return vertices_[tri_vertices_.empty() ? tri_vertices16_[i] : tri_vertices_[i]];
+  }
 
   template <class T>
   static std::size_t bytes(const std::vector<T>& v) noexcept {
@@ -811,6 +817,33 @@ class NormalClassIndex {
             }
           }
         }
+      }
+    }
+    // 7. Narrow forms: 16-bit vertex ids when there are at most 65536 vertices; cell entry ranges
+    // in 16 bits relative to their class when every class has at most 65535 entries (one extra
+    // end per class: class k's cells c read ranges at c + k and c + k + 1).
+    if (vertices_.size() <= 65536) {
+      tri_vertices16_.assign(tri_vertices_.begin(), tri_vertices_.end());
+      std::vector<std::uint32_t>().swap(tri_vertices_);
+    }
+    {
+      bool narrow = !wide_ids_;  // class_cell_base_ holds each class's first cell
+      for (std::size_t c = 0; c < classes && narrow; ++c) {
+        const std::uint32_t first = class_cell_base_[c];
+        const std::uint32_t last = c + 1 < classes ? class_cell_base_[c + 1] : static_cast<std::uint32_t>(total_cells);
+        narrow = cell_tri_begin_[last] - cell_tri_begin_[first] <= 65535u;
+      }
+      if (narrow) {
+        class_entry_base_.resize(classes);
+        cell_begin16_.reserve(total_cells + classes);
+        for (std::size_t c = 0; c < classes; ++c) {
+          const std::uint32_t first = class_cell_base_[c];
+          const std::uint32_t last = c + 1 < classes ? class_cell_base_[c + 1] : static_cast<std::uint32_t>(total_cells);
+          class_entry_base_[c] = cell_tri_begin_[first];
+          for (std::uint32_t cell = first; cell <= last; ++cell)
+            cell_begin16_.push_back(static_cast<std::uint16_t>(cell_tri_begin_[cell] - cell_tri_begin_[first]));
+        }
+        std::vector<std::uint32_t>().swap(cell_tri_begin_);
       }
     }
     vertices_.shrink_to_fit();
@@ -1254,7 +1287,7 @@ class NormalClassIndex {
   [[nodiscard]] bool outside_beam(const TileRays& r, std::uint32_t tri, const Frame& f) const noexcept {
     float x[3][3];
     for (int k = 0; k < 3; ++k) {
-      const glm::vec3& p = vertices_[tri_vertices_[3 * tri + static_cast<std::uint32_t>(k)]];
+      const glm::vec3& p = corner(tri, k);
       x[k][0] = p.x - f.eye_f.x;
       x[k][1] = p.y - f.eye_f.y;
       x[k][2] = p.z - f.eye_f.z;
@@ -1343,8 +1376,7 @@ class NormalClassIndex {
       if (r.beam && outside_beam(r, tri, f)) return false;
       in_beam = true;
       slot.epoch = thread.frame_epoch;
-      slot.rect = screen_rect(f, vertices_[tri_vertices_[3 * tri]], vertices_[tri_vertices_[3 * tri + 1]],
-                              vertices_[tri_vertices_[3 * tri + 2]]);
+      slot.rect = screen_rect(f, corner(tri, 0), corner(tri, 1), corner(tri, 2));
     }
     const NciContext::Rect rect = slot.rect;
     if (rect.x0 > rect.x1) return false;  // back face or edge-on from the eye, or off screen
@@ -1366,7 +1398,7 @@ class NormalClassIndex {
     if (!in_beam && outside_beam(r, tri, f)) return false;
     float key = std::numeric_limits<float>::infinity();
     for (int k = 0; k < 3; ++k) {
-      const glm::vec3 d = vertices_[tri_vertices_[3 * tri + static_cast<std::uint32_t>(k)]] - f.eye_f;
+      const glm::vec3 d = corner(tri, k) - f.eye_f;
       key = std::min(key, d.x * r.mean_dir[0] + d.y * r.mean_dir[1] + d.z * r.mean_dir[2]);
     }
     out = NciContext::Thread::Cand{key, tri, static_cast<std::int8_t>(rx0), static_cast<std::int8_t>(ry0),
@@ -1381,9 +1413,9 @@ class NormalClassIndex {
     const std::uint32_t tri = cand.tri;
     const int rx0 = cand.rx0, ry0 = cand.ry0, rx1 = cand.rx1, ry1 = cand.ry1;
     const std::uint32_t span = ((1u << (rx1 - rx0 + 1)) - 1u) << rx0;
-    const glm::vec3& p0 = vertices_[tri_vertices_[3 * tri]];
-    const glm::vec3& p1 = vertices_[tri_vertices_[3 * tri + 1]];
-    const glm::vec3& p2 = vertices_[tri_vertices_[3 * tri + 2]];
+    const glm::vec3& p0 = corner(tri, 0);
+    const glm::vec3& p1 = corner(tri, 1);
+    const glm::vec3& p2 = corner(tri, 2);
     const float a[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};
     const float b[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
     const float c[3] = {p2.x - f.eye_f.x, p2.y - f.eye_f.y, p2.z - f.eye_f.z};
@@ -1618,7 +1650,14 @@ class NormalClassIndex {
                                              : wide_ids_ ? cell_id_[pos - shift]
                                                          : class_base + cell_id16_[pos - shift];
                   ++thread.stats.cells_visited;
-                  const std::uint32_t e_end = cell_tri_begin_[cell + 1];
+                  std::uint32_t e, e_end;
+                  if (cell_begin16_.empty()) {
+                    e = cell_tri_begin_[cell];
+                    e_end = cell_tri_begin_[cell + 1];
+                  } else {
+                    e = class_entry_base_[k] + cell_begin16_[cell + k];
+                    e_end = class_entry_base_[k] + cell_begin16_[cell + k + 1];
+                  }
                   auto visit = [&](std::uint32_t tri) {
                     if (thread.tri[tri].stamp == stamp) return;
                     thread.tri[tri].stamp = stamp;
@@ -1626,7 +1665,6 @@ class NormalClassIndex {
                     if (admit_triangle(f, tri, x0, y0, tw, th, live, r, thread, cand)) thread.cand.push_back(cand);
                   };
                   const std::uint32_t tri_base = class_tri_begin_[k];
-                  std::uint32_t e = cell_tri_begin_[cell];
                   while (e < e_end) {
                     std::uint32_t part_end = e_end;
                     if (!chunk_box_.empty() && r.beam) {
@@ -1753,13 +1791,16 @@ class NormalClassIndex {
   double delta_ = 0.0;
   int dims_[3] = {1, 1, 1};
   std::vector<glm::vec3> vertices_;
-  std::vector<std::uint32_t> tri_vertices_;   // 3 per kept triangle, into vertices_
+  std::vector<std::uint32_t> tri_vertices_;   // 3 per kept triangle, into vertices_, or empty:
+  std::vector<std::uint16_t> tri_vertices16_; // the same in 16 bits (at most 65536 vertices)
   std::vector<std::uint32_t> tri_original_;   // internal triangle -> mesh triangle
   std::vector<std::uint16_t> class_of_;       // mesh triangle -> class, skipped_class_ when skipped
   std::vector<std::uint32_t> class_tri_begin_;  // classes + 1: each class's run of internal ids
   std::vector<glm::vec3> class_axis_;
   std::vector<float> class_sin_, class_cos_;  // cone half-angle (with margin); sin > 1: never skip
-  std::vector<std::uint32_t> cell_tri_begin_; // cells + 1
+  std::vector<std::uint32_t> cell_tri_begin_; // cells + 1, or empty:
+  std::vector<std::uint16_t> cell_begin16_;   // cells + classes: ranges relative to the class's entries
+  std::vector<std::uint32_t> class_entry_base_;  // per class: its first entry (with cell_begin16_)
   // Internal triangle ids per cell (ascending within a cell): class-local in 16 bits (plus
   // class_tri_begin_) unless some class has more than 65536 triangles (wide_tris_): then global in
   // 32 bits.
