@@ -994,6 +994,9 @@ class NormalClassIndex {
     double eye_side = 0.0;          // -target_plane . (eye, 1)
     glm::dvec4 eye_clip{0.0};       // view_proj * (eye, 1)
     glm::dvec3 clip_x{0.0}, clip_y{0.0}, clip_w{0.0};  // rows x, y, w of view_proj's 3x3 part
+    // The projection of a point eye + dx onto the target plane, in clip coordinates, is
+    // (h_x . dx, h_y . dx, h_w . dx) / (plane . dx): one division per point for its pixel.
+    glm::dvec3 h_x{0.0}, h_y{0.0}, h_w{0.0}, plane{0.0};
     // Pixel ray directions are positive multiples of an affine function of the pixel position
     // (one target plane whose homogeneous w keeps one sign over the screen): beside_rect may use
     // a rectangle's corner rays for the rays inside it.
@@ -1053,6 +1056,12 @@ class NormalClassIndex {
         f.clip_y[j] = f.view_proj[j][1];
         f.clip_w[j] = f.view_proj[j][3];
       }
+      // clip = eye_clip + s view_proj dx with s = eye_side / (plane . dx): multiplied through by
+      // plane . dx, each coordinate is linear in dx.
+      f.plane = glm::dvec3(f.target_plane);
+      f.h_x = f.eye_clip.x * f.plane + f.eye_side * f.clip_x;
+      f.h_y = f.eye_clip.y * f.plane + f.eye_side * f.clip_y;
+      f.h_w = f.eye_clip.w * f.plane + f.eye_side * f.clip_w;
     }
     return f;
   }
@@ -1100,20 +1109,18 @@ class NormalClassIndex {
     using Rect = NciContext::Rect;
     if (!f.use_rect) return Rect{Rect::full, 0, 0, 0};
     double mnx = std::numeric_limits<double>::infinity(), mny = mnx, mxx = -mnx, mxy = -mnx;
-    const glm::dvec3 plane(f.target_plane);
     for (int k = 0; k < count; ++k) {
       const glm::dvec3 dx = glm::dvec3(p[k]) - f.eye;
-      const double s = f.eye_side / glm::dot(plane, dx);
-      // Behind the eye, or beside it (parallel to the plane): no rectangle.
-      if (!(s > 0.0) || !std::isfinite(s)) return Rect{Rect::full, 0, 0, 0};
-      // Clip coordinates of eye + s dx: view_proj (eye, 1) + s view_proj (dx, 0).
-      const double cw = f.eye_clip.w + s * glm::dot(f.clip_w, dx);
-      if (!(cw > 0.0)) return Rect{Rect::full, 0, 0, 0};
-      const double cx = f.eye_clip.x + s * glm::dot(f.clip_x, dx);
-      const double cy = f.eye_clip.y + s * glm::dot(f.clip_y, dx);
+      // s = eye_side / pd > 0: in front of the eye (not behind it or beside it).
+      const double pd = glm::dot(f.plane, dx);
+      if (!(pd != 0.0) || (pd > 0.0) != (f.eye_side > 0.0)) return Rect{Rect::full, 0, 0, 0};
+      // Clip w = qw / pd > 0.
+      const double qw = glm::dot(f.h_w, dx);
+      if (!(qw != 0.0) || (qw > 0.0) != (pd > 0.0)) return Rect{Rect::full, 0, 0, 0};
+      const double inv = 1.0 / qw;
       // Pixel-centre coordinates: pixel i has ndc (2i + 1) / width - 1.
-      const double px = ((cx / cw + 1.0) * f.width - 1.0) * 0.5;
-      const double py = ((1.0 - cy / cw) * f.height - 1.0) * 0.5;
+      const double px = ((glm::dot(f.h_x, dx) * inv + 1.0) * f.width - 1.0) * 0.5;
+      const double py = ((1.0 - glm::dot(f.h_y, dx) * inv) * f.height - 1.0) * 0.5;
       mnx = std::min(mnx, px);
       mxx = std::max(mxx, px);
       mny = std::min(mny, py);
