@@ -22,8 +22,9 @@
 // along the tile's mean ray) and then ray-tested, unless every live ray under the rectangle
 // already holds a hit strictly nearer than any t the ray test could return for the triangle (a
 // bound from the corners along each ray's dominant axis), or the triangle lies beside the
-// rectangle's four corner rays (outside the plane through the eye and one of its edges): such a
-// triangle is not tested. On crowded indexes (8 or more entries per cell on average) every 16
+// rectangle's four corner rays (outside the plane through the eye and one of its edges), or no
+// live pixel centre lies in its projected triangle grown by a proven margin (footprint_mask):
+// such a triangle is not tested; otherwise only the rays inside that footprint are. On crowded indexes (8 or more entries per cell on average) every 16
 // consecutive cell entries have a box, and a tile skips a box outside its beam, off its live
 // pixels, or behind their hits. The beam's extent and each ray's finishing slice are recomputed
 // only when a ray finishes or improves its hit.
@@ -1001,6 +1002,9 @@ class NormalClassIndex {
     // (one target plane whose homogeneous w keeps one sign over the screen): beside_rect may use
     // a rectangle's corner rays for the rays inside it.
     bool affine_rays = false;
+    // The 2D footprint pre-test (footprint_mask) may be used: screen rectangles are on and one
+    // pixel spans at least 4e-5 radians everywhere on screen (at most 25,000 pixels per radian).
+    bool footprint = false;
   };
 
   [[nodiscard]] Frame make_frame(const Camera& camera) const {
@@ -1062,6 +1066,20 @@ class NormalClassIndex {
       f.h_x = f.eye_clip.x * f.plane + f.eye_side * f.clip_x;
       f.h_y = f.eye_clip.y * f.plane + f.eye_side * f.clip_y;
       f.h_w = f.eye_clip.w * f.plane + f.eye_side * f.clip_w;
+      if (f.use_rect) {
+        // The smallest angle between neighbouring pixel rays, sampled at the centre and the four
+        // corners (with one target plane the angle per pixel is smallest at the screen's edges).
+        double smallest = std::numeric_limits<double>::infinity();
+        const double xs[5] = {0.5, camera.width - 1.5, 0.5, camera.width - 1.5, 0.5 * camera.width};
+        const double ys[5] = {0.5, 0.5, camera.height - 1.5, camera.height - 1.5, 0.5 * camera.height};
+        for (int k = 0; k < 5; ++k) {
+          const glm::dvec3 d0(f.rays.ray_at(xs[k], ys[k]).direction);
+          const glm::dvec3 dx(f.rays.ray_at(xs[k] + 1.0, ys[k]).direction);
+          const glm::dvec3 dy(f.rays.ray_at(xs[k], ys[k] + 1.0).direction);
+          smallest = std::min({smallest, glm::length(glm::cross(d0, dx)), glm::length(glm::cross(d0, dy))});
+        }
+        f.footprint = camera.width >= 2 && camera.height >= 2 && smallest >= 4e-5;
+      }
     }
     return f;
   }
@@ -1101,6 +1119,23 @@ class NormalClassIndex {
     return project_rect(f, p, 3);
   }
 
+  // A point's pixel-centre coordinates (pixel i has coordinate i): its projection from the eye onto
+  // the target plane, in double; false when it is not strictly in front of the eye (or w <= 0).
+  [[nodiscard]] static bool project_point(const Frame& f, const glm::vec3& p, double& px, double& py) noexcept {
+    const glm::dvec3 dx = glm::dvec3(p) - f.eye;
+    // s = eye_side / pd > 0: in front of the eye (not behind it or beside it).
+    const double pd = glm::dot(f.plane, dx);
+    if (!(pd != 0.0) || (pd > 0.0) != (f.eye_side > 0.0)) return false;
+    // Clip w = qw / pd > 0.
+    const double qw = glm::dot(f.h_w, dx);
+    if (!(qw != 0.0) || (qw > 0.0) != (pd > 0.0)) return false;
+    const double inv = 1.0 / qw;
+    // Pixel-centre coordinates: pixel i has ndc (2i + 1) / width - 1.
+    px = ((glm::dot(f.h_x, dx) * inv + 1.0) * f.width - 1.0) * 0.5;
+    py = ((1.0 - glm::dot(f.h_y, dx) * inv) * f.height - 1.0) * 0.5;
+    return true;
+  }
+
   // The pixels whose centres may see a point of the convex hull of `p` (count points): the
   // bounding rectangle of their projections (the hull projects into the hull of the projected
   // points when every point is in front of the eye: the conditions checked are linear in the
@@ -1110,17 +1145,8 @@ class NormalClassIndex {
     if (!f.use_rect) return Rect{Rect::full, 0, 0, 0};
     double mnx = std::numeric_limits<double>::infinity(), mny = mnx, mxx = -mnx, mxy = -mnx;
     for (int k = 0; k < count; ++k) {
-      const glm::dvec3 dx = glm::dvec3(p[k]) - f.eye;
-      // s = eye_side / pd > 0: in front of the eye (not behind it or beside it).
-      const double pd = glm::dot(f.plane, dx);
-      if (!(pd != 0.0) || (pd > 0.0) != (f.eye_side > 0.0)) return Rect{Rect::full, 0, 0, 0};
-      // Clip w = qw / pd > 0.
-      const double qw = glm::dot(f.h_w, dx);
-      if (!(qw != 0.0) || (qw > 0.0) != (pd > 0.0)) return Rect{Rect::full, 0, 0, 0};
-      const double inv = 1.0 / qw;
-      // Pixel-centre coordinates: pixel i has ndc (2i + 1) / width - 1.
-      const double px = ((glm::dot(f.h_x, dx) * inv + 1.0) * f.width - 1.0) * 0.5;
-      const double py = ((1.0 - glm::dot(f.h_y, dx) * inv) * f.height - 1.0) * 0.5;
+      double px = 0.0, py = 0.0;
+      if (!project_point(f, p[k], px, py)) return Rect{Rect::full, 0, 0, 0};
       mnx = std::min(mnx, px);
       mxx = std::max(mxx, px);
       mny = std::min(mny, py);
@@ -1413,10 +1439,80 @@ class NormalClassIndex {
     return true;
   }
 
+  // The 2D footprint pre-test (project issue #6): which live pixels of `bits` (rows ry0..ry1 of the
+  // tile at (x0, y0)) have their centre inside the projected triangle grown by a margin; only
+  // those rays can hit it. False when the test does not apply (a corner not strictly in front of
+  // the eye, a projection that is not finite or has no area): then every ray is tested as before.
+  // Why a skipped ray cannot hit (the watertight test stays the only hit decision):
+  //  * Exact geometry: the ray through a pixel centre q meets the triangle iff q lies in the
+  //    projection of the triangle from the eye onto the target plane (PixelRays aims at that plane,
+  //    and with every corner in front the projection of the triangle is the triangle of the
+  //    projected corners).
+  //  * The float ray test differs from the exact one by (a) angular errors of a few ulp: the unit
+  //    direction rounded to float, the shear constants d[kx] / d[kz], the corners' float offsets
+  //    from the eye and the sheared coordinates (each relative error <= 2^-24 of a length at most
+  //    sqrt(3) times the depth along the ray, together well below 1e-6 rad); at most 25,000 pixels
+  //    per radian (Frame::footprint) makes that < 0.025 pixel, inside the margin m = 0.05 pixel
+  //    per axis (the screen rectangles' margin, so an edge grows by m times the 1-norm of its
+  //    normal); (b) the rounding of the edge products cx * by - cy * bx, at most about 4 * 2^-24 |B| |C|:
+  //    in pixel units (the map from the shear plane to the screen is a projective map close to a
+  //    similarity near the ray, condition number well below 10) at most 1e-5 R^2, R bounding the
+  //    distance from a tested pixel centre to the corners; an edge grows by that much too (more
+  //    for short edges: the distance slack is 1e-5 R^2 / length). The double arithmetic here adds
+  //    a relative 1e-12 of the coordinates.
+  //  A pixel centre outside the grown triangle has one exact edge function below -(margin), so its
+  //  float ray sees that edge function negative and the watertight test rejects it.
+  [[nodiscard]] static bool footprint_mask(const Frame& f, const glm::vec3& p0, const glm::vec3& p1,
+                                           const glm::vec3& p2, int x0, int y0, int ry0, int ry1,
+                                           const std::uint32_t* bits, std::uint16_t* mask) noexcept {
+    double px[3], py[3];
+    if (!project_point(f, p0, px[0], py[0]) || !project_point(f, p1, px[1], py[1]) ||
+        !project_point(f, p2, px[2], py[2]))
+      return false;
+    const double area = (px[1] - px[0]) * (py[2] - py[0]) - (py[1] - py[0]) * (px[2] - px[0]);
+    if (!(std::fabs(area) > 0.0) || !std::isfinite(area)) return false;
+    const double sgn = area > 0.0 ? 1.0 : -1.0;
+    double lox = x0, hix = x0 + 15, loy = y0 + ry0, hiy = y0 + ry1;
+    for (int k = 0; k < 3; ++k) {
+      lox = std::min(lox, px[k]);
+      hix = std::max(hix, px[k]);
+      loy = std::min(loy, py[k]);
+      hiy = std::max(hiy, py[k]);
+    }
+    const double reach = (hix - lox) + (hiy - loy) + 1.0;
+    double nx[3], ny[3], off[3];
+    for (int k = 0; k < 3; ++k) {
+      const int j = k == 2 ? 0 : k + 1;
+      // e(q) = nx (qx - px[k]) + ny (qy - py[k]) >= 0 inside (orientation from the area's sign).
+      nx[k] = -(py[j] - py[k]) * sgn;
+      ny[k] = (px[j] - px[k]) * sgn;
+      const double n1 = std::fabs(nx[k]) + std::fabs(ny[k]);
+      const double slack = 0.05 * n1 + 1e-5 * reach * reach +
+                           1e-12 * n1 * (reach + std::fabs(px[k]) + std::fabs(py[k]) + f.width + f.height);
+      off[k] = -nx[k] * px[k] - ny[k] * py[k] + slack;
+      if (!std::isfinite(off[k])) return false;
+    }
+    for (int y = ry0; y <= ry1; ++y) {
+      std::uint32_t b = bits[y];
+      std::uint16_t m = 0;
+      const double qy = y0 + y;
+      while (b) {
+        const int x = __builtin_ctz(b);
+        b &= b - 1;
+        const double qx = x0 + x;
+        if (nx[0] * qx + ny[0] * qy + off[0] >= 0.0 && nx[1] * qx + ny[1] * qy + off[1] >= 0.0 &&
+            nx[2] * qx + ny[2] * qy + off[2] >= 0.0)
+          m = static_cast<std::uint16_t>(m | (1u << x));
+      }
+      mask[y] = m;
+    }
+    return true;
+  }
+
   // Tests an admitted triangle against the unfinished rays under its rectangle; false when no ray
   // was tested (all of them already hold nearer hits, or the triangle passes beside them).
-  bool test_triangle(const Frame& f, const NciContext::Thread::Cand& cand, const std::uint16_t* live, TileRays& r,
-                     NciContext::Thread& thread) const {
+  bool test_triangle(const Frame& f, int x0, int y0, const NciContext::Thread::Cand& cand, const std::uint16_t* live,
+                     TileRays& r, NciContext::Thread& thread) const {
     const std::uint32_t tri = cand.tri;
     const int rx0 = cand.rx0, ry0 = cand.ry0, rx1 = cand.rx1, ry1 = cand.ry1;
     const std::uint32_t span = ((1u << (rx1 - rx0 + 1)) - 1u) << rx0;
@@ -1432,9 +1528,20 @@ class NormalClassIndex {
       if (behind_hits(r, qlo, qhi, ry0, ry1, span, live)) return false;
     }
     if (f.use_rect && f.affine_rays && (rx1 > rx0 || ry1 > ry0) && beside_rect(r, a, b, c, rx0, ry0, rx1, ry1)) return false;
+    // Only the live rays whose pixel centres lie in the triangle's grown 2D footprint can hit it.
+    std::uint32_t rows[16];
+    for (int y = ry0; y <= ry1; ++y) rows[y] = live[y] & span;
+    if (f.footprint) {
+      std::uint16_t inside[16];
+      if (footprint_mask(f, p0, p1, p2, x0, y0, ry0, ry1, rows, inside)) {
+        std::uint32_t left = 0;
+        for (int y = ry0; y <= ry1; ++y) left |= (rows[y] &= inside[y]);
+        if (!left) return false;  // no live pixel centre can see it: not tested
+      }
+    }
     bool any = false;
     for (int y = ry0; y <= ry1; ++y) {
-      std::uint32_t bits = live[y] & span;
+      std::uint32_t bits = rows[y];
       while (bits) {
         const int x = __builtin_ctz(bits);
         bits &= bits - 1;
@@ -1698,7 +1805,7 @@ class NormalClassIndex {
                 return p.key != q.key ? p.key < q.key : p.tri < q.tri;
               });
               for (const auto& cand : thread.cand)
-                if (test_triangle(f, cand, live, r, thread)) thread.tested.push_back(cand.tri);
+                if (test_triangle(f, x0, y0, cand, live, r, thread)) thread.tested.push_back(cand.tri);
               thread.cand.clear();
             }
           }
