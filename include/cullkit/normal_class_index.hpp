@@ -1272,24 +1272,34 @@ class NormalClassIndex {
         corner[k] = glm::vec3(box[(k & 1) ? 3 : 0], box[(k & 2) ? 4 : 1], box[(k & 4) ? 5 : 2]);
       slot.rect = project_rect(f, corner, 8);
     }
-    const NciContext::Rect rect = slot.rect;
-    if (rect.x0 > rect.x1) return true;  // off screen
-    int rx0 = 0, ry0 = 0, rx1 = tw - 1, ry1 = th - 1;
+    int rx0, ry0, rx1, ry1;
+    std::uint32_t span;
+    if (!live_under(slot.rect, x0, y0, tw, th, live, rx0, ry0, rx1, ry1, span)) return true;  // no live pixel
+    const float qlo[3] = {box[0] - f.eye_f.x, box[1] - f.eye_f.y, box[2] - f.eye_f.z};
+    const float qhi[3] = {box[3] - f.eye_f.x, box[4] - f.eye_f.y, box[5] - f.eye_f.z};
+    return behind_hits(r, qlo, qhi, ry0, ry1, span, live);
+  }
+
+  // A cached screen rectangle clipped to the tile at (x0, y0) of tw x th pixels: the tile-local
+  // rectangle rx0..rx1 x ry0..ry1 and its column mask `span`. False when the rectangle is empty, off
+  // the tile, or covers no live pixel (`live`: one bit mask per tile row).
+  [[nodiscard]] static bool live_under(const NciContext::Rect& rect, int x0, int y0, int tw, int th,
+                                       const std::uint16_t* live, int& rx0, int& ry0, int& rx1, int& ry1,
+                                       std::uint32_t& span) noexcept {
+    if (rect.x0 > rect.x1) return false;
+    rx0 = 0, ry0 = 0, rx1 = tw - 1, ry1 = th - 1;
     if (rect.x0 != NciContext::Rect::full) {
       const int lx0 = rect.x0 - x0, lx1 = rect.x1 - x0, ly0 = rect.y0 - y0, ly1 = rect.y1 - y0;
-      if (lx1 < 0 || ly1 < 0 || lx0 > tw - 1 || ly0 > th - 1) return true;
+      if (lx1 < 0 || ly1 < 0 || lx0 > tw - 1 || ly0 > th - 1) return false;
       rx0 = std::max(0, lx0);
       rx1 = std::min(tw - 1, lx1);
       ry0 = std::max(0, ly0);
       ry1 = std::min(th - 1, ly1);
     }
-    const std::uint32_t span = ((1u << (rx1 - rx0 + 1)) - 1u) << rx0;
+    span = ((1u << (rx1 - rx0 + 1)) - 1u) << rx0;
     std::uint32_t under = 0;
     for (int y = ry0; y <= ry1; ++y) under |= live[y] & span;
-    if (!under) return true;
-    const float qlo[3] = {box[0] - f.eye_f.x, box[1] - f.eye_f.y, box[2] - f.eye_f.z};
-    const float qhi[3] = {box[3] - f.eye_f.x, box[4] - f.eye_f.y, box[5] - f.eye_f.z};
-    return behind_hits(r, qlo, qhi, ry0, ry1, span, live);
+    return under != 0;
   }
 
   // Whether the box (min xyz, max xyz) lies wholly outside one plane of the tile's beam with the
@@ -1411,21 +1421,10 @@ class NormalClassIndex {
       slot.epoch = thread.frame_epoch;
       slot.rect = screen_rect(f, corner(tri, 0), corner(tri, 1), corner(tri, 2));
     }
-    const NciContext::Rect rect = slot.rect;
-    if (rect.x0 > rect.x1) return false;  // back face or edge-on from the eye, or off screen
-    int rx0 = 0, ry0 = 0, rx1 = tw - 1, ry1 = th - 1;
-    if (rect.x0 != NciContext::Rect::full) {
-      const int lx0 = rect.x0 - x0, lx1 = rect.x1 - x0, ly0 = rect.y0 - y0, ly1 = rect.y1 - y0;
-      if (lx1 < 0 || ly1 < 0 || lx0 > tw - 1 || ly0 > th - 1) return false;
-      rx0 = std::max(0, lx0);
-      rx1 = std::min(tw - 1, lx1);
-      ry0 = std::max(0, ly0);
-      ry1 = std::min(th - 1, ly1);
-    }
-    const std::uint32_t span = ((1u << (rx1 - rx0 + 1)) - 1u) << rx0;
-    std::uint32_t under = 0;  // live pixels under the rectangle
-    for (int y = ry0; y <= ry1; ++y) under |= live[y] & span;
-    if (!under) return false;
+    // None (back face, edge-on from the eye, off screen) or no live pixel under it: not tested.
+    int rx0, ry0, rx1, ry1;
+    std::uint32_t span;
+    if (!live_under(slot.rect, x0, y0, tw, th, live, rx0, ry0, rx1, ry1, span)) return false;
     // The same beam test when the rectangle came from the cache, so what is tested does not depend
     // on which thread met the triangle first.
     if (!in_beam && outside_beam(r, tri, f)) return false;
