@@ -107,7 +107,10 @@ struct NciParams {
 
 /// The result of NormalClassIndex::select_visible.
 struct VisibleSet {
-  std::vector<std::uint32_t> triangles;  ///< sorted, unique triangle indices (the mesh's numbering)
+  /// Sorted, unique triangle indices (the mesh's numbering): every pixel's first hit, and where a
+  /// ray passes within float rounding of a triangle's edge also the triangles another correct
+  /// float ray tracer could see there (see NormalClassIndex::select_visible).
+  std::vector<std::uint32_t> triangles;
   std::size_t triangles_tested = 0;      ///< distinct triangles tested against at least one ray
 };
 
@@ -181,6 +184,11 @@ class NciContext {
  private:
   template <class, class, class>
   friend class NormalClassIndex;
+  struct Extra {  // a triangle selected at a pixel beside its first hit, and its depth there
+    std::uint32_t tri;
+    float t;
+    std::uint32_t pixel;
+  };
   struct Rect {  // a triangle's pixel rectangle (inclusive); x0 > x1: none; x0 == full: every pixel
     static constexpr std::int16_t full = -32768;
     std::int16_t x0, y0, x1, y1;
@@ -203,6 +211,15 @@ class NciContext {
     std::uint32_t stamp_value = 0;
     std::uint32_t frame_epoch = 0;
     std::vector<std::uint32_t> tested;  // triangles tested (unique per tile)
+    // Hits and near misses within rounding of an edge (detail::watertight_hit_band) in the current
+    // tile: reported when nearer than their pixel's solid hit (see TileRays::solid_t).
+    struct Unsure {
+      std::uint32_t tri;
+      float t;
+      std::uint16_t pixel;
+    };
+    std::vector<Unsure> unsure;
+    std::vector<Extra> extra;  // selected beside the pixels' first hits (unsure, solid)
     // Triangles of the current slice that passed the tile's cheap rejects, tested nearest first.
     struct Cand {
       float key;  // smallest depth of a corner along the tile's mean ray
@@ -216,6 +233,8 @@ class NciContext {
   std::vector<Thread> threads_;
   std::vector<std::uint32_t> pixel_tri_;  // internal ids per pixel
   std::vector<float> pixel_t_;
+  std::vector<float> pixel_solid_t_;       // per pixel: the nearest hit outside every edge band
+  std::vector<Extra> extras_;              // the last call's Thread::extra, in the mesh's numbering
   std::vector<std::uint32_t> seen_;        // per triangle: epoch of last tested-count
   std::vector<std::uint32_t> shown_;       // per triangle: epoch of last visible mark
   std::uint32_t epoch_ = 0;
@@ -227,12 +246,19 @@ struct NciContext::Objects {
   NciContext context;
   VisibleSet set;
   NciPixels pixels;
-  std::vector<float> depth;
+  std::vector<float> depth, solid;
   std::vector<std::uint32_t> triangle, object;
+  struct Candidate {  // an object's triangle selected at a pixel, at depth t
+    std::uint32_t object, triangle;
+    float t;
+    std::uint32_t pixel;
+  };
+  std::vector<Candidate> candidates;
 };
 
 /// Index of a static triangle mesh that answers "which triangles does this camera see", with the
-/// exact per-pixel answer (first hit of each pixel-centre ray, front faces only).
+/// exact per-pixel answer (first hit of each pixel-centre ray, front faces only; a triangle within
+/// float rounding of an edge keeps its pixel searching behind it, see select_visible).
 ///
 /// Build cost: O(n log n) for n triangles plus the separating-axis tests of triangles spanning
 /// cells; memory is reported by memory_bytes() (vertices, triangle corners, cell lists, grids).
@@ -261,6 +287,14 @@ class NormalClassIndex {
 
   /// The triangles that are the first front-facing surface hit by the ray of some pixel centre
   /// (pixel rule on Camera), sorted and unique, and how many distinct triangles were tested.
+  /// Edge bands: where a pixel ray passes within float rounding of a triangle's edge (a few
+  /// 2^-24 of the corners' distances from the eye; detail::watertight_hit_band), another float
+  /// ray tracer such as Embree may decide that triangle the other way and see what lies behind.
+  /// Such a triangle (hit or near miss) does not finish its pixel: the search goes on to the first
+  /// hit outside every band, and the set holds that hit and every band triangle in front of it.
+  /// So the set may be a little larger than the pixels' first hits (in ordinary views a few
+  /// triangles in ten thousand; in views a few degrees wide from kilometres away up to +60%),
+  /// never smaller. The per-pixel output stays the plain first hit of the watertight test.
   /// A camera with a non-positive width or height gives an empty set. Allocates a context.
   [[nodiscard]] VisibleSet select_visible(const Camera& camera) const {
     NciContext context;
@@ -274,7 +308,7 @@ class NormalClassIndex {
   /// depends on NciParams::threads. Cost: proportional to the rays times the triangles met near
   /// the visible surfaces, divided over the threads.
   void select_visible(const Camera& camera, NciContext& context, VisibleSet& out, NciPixels* pixels) const {
-    select_impl(camera, context, out, pixels, nullptr);
+    select_impl(camera, context, out, pixels, nullptr, nullptr);
   }
 
   /// With moving objects (DESIGN.md §8): each object has its own index, built in its local frame,
@@ -284,7 +318,9 @@ class NormalClassIndex {
   /// depths, so only static triangles in front of the objects are searched. `out` holds the static
   /// triangles; `object_triangles` (cleared first) the objects' visible triangles as sorted unique
   /// (object id, triangle) pairs. `pixels`, when given, holds static triangle ids, or for a pixel
-  /// won by an object NciPixels::miss with the object's depth (see `object_pixels`).
+  /// won by an object NciPixels::miss with the object's depth (see `object_pixels`). Edge bands
+  /// (see above) span objects and scene: an object's triangle is reported where it lies no farther
+  /// than its pixel's first hit outside every band, whichever mesh that hit belongs to.
   /// pre: every `objects[k].index` is not null. Allocates a second context inside `context`.
   template <class ObjectIndex>
   void select_visible(const Camera& camera, const NciMovingObject<ObjectIndex>* objects, std::size_t object_count,
@@ -293,13 +329,15 @@ class NormalClassIndex {
     object_triangles.clear();
     const int width = camera.width, height = camera.height;
     if (width <= 0 || height <= 0 || object_count == 0) {
-      select_impl(camera, context, out, pixels, nullptr);
+      select_impl(camera, context, out, pixels, nullptr, nullptr);
       return;
     }
     const std::size_t pixel_count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     if (!context.objects_) context.objects_ = std::make_unique<NciContext::Objects>();
     auto& o = *context.objects_;
     o.depth.assign(pixel_count, std::numeric_limits<float>::infinity());
+    o.solid.assign(pixel_count, std::numeric_limits<float>::infinity());
+    o.candidates.clear();
     o.triangle.assign(pixel_count, NciPixels::miss);
     o.object.assign(pixel_count, NciPixels::miss);
     for (std::size_t k = 0; k < object_count; ++k) {
@@ -310,20 +348,34 @@ class NormalClassIndex {
       local.eye = glm::vec3(glm::inverse(m) * glm::dvec4(glm::dvec3(camera.eye), 1.0));
       local.view_proj = glm::mat4(glm::dmat4(camera.view_proj) * m);
       objects[k].index->select_visible(local, o.context, o.set, &o.pixels);
+      const std::uint32_t id = objects[k].object_id;
+      const auto& solid = o.context.pixel_solid_t_;
       for (std::size_t p = 0; p < pixel_count; ++p) {
+        if (solid.size() == pixel_count) o.solid[p] = std::min(o.solid[p], solid[p]);
+        const std::uint32_t tri = o.pixels.triangle[p];
+        if (tri == NciPixels::miss) continue;
+        if (o.pixels.depth[p] <= o.solid[p])
+          o.candidates.push_back(NciContext::Objects::Candidate{id, tri, o.pixels.depth[p], static_cast<std::uint32_t>(p)});
         if (o.pixels.depth[p] < o.depth[p]) {
           o.depth[p] = o.pixels.depth[p];
-          o.triangle[p] = o.pixels.triangle[p];
-          o.object[p] = objects[k].object_id;
+          o.triangle[p] = tri;
+          o.object[p] = id;
         }
       }
+      // The object's triangles beside its pixels' first hits (edge bands; see select_visible).
+      for (const auto& e : o.context.extras_)
+        if (e.t <= o.solid[e.pixel]) o.candidates.push_back(NciContext::Objects::Candidate{id, e.tri, e.t, e.pixel});
     }
-    select_impl(camera, context, out, pixels, o.depth.data());
-    // Objects keep the pixels where no static triangle came in front.
+    select_impl(camera, context, out, pixels, o.depth.data(), o.solid.data());
+    // An object's triangle is reported where it lies no farther than the pixel's solid depth after
+    // the static scene (then nothing certain hides it); the pixels keep the objects' first hits
+    // where no static triangle came in front.
+    const auto& solid = context.pixel_solid_t_;
+    for (const auto& c : o.candidates)
+      if (solid.size() == pixel_count && c.t <= solid[c.pixel]) object_triangles.push_back(NciObjectTriangle{c.object, c.triangle});
     for (std::size_t p = 0; p < pixel_count; ++p) {
       if (o.object[p] == NciPixels::miss) continue;
       if (context.pixel_tri_.size() == pixel_count && context.pixel_tri_[p] != none_) continue;
-      object_triangles.push_back(NciObjectTriangle{o.object[p], o.triangle[p]});
       if (pixels && pixels->depth.size() == pixel_count) pixels->depth[p] = o.depth[p];
     }
     std::sort(object_triangles.begin(), object_triangles.end());
@@ -332,7 +384,7 @@ class NormalClassIndex {
 
  private:
   void select_impl(const Camera& camera, NciContext& context, VisibleSet& out, NciPixels* pixels,
-                   const float* initial_depth) const {
+                   const float* initial_depth, const float* initial_solid) const {
     out.triangles.clear();
     out.triangles_tested = 0;
     context.stats = NciSelectStats{};
@@ -347,9 +399,13 @@ class NormalClassIndex {
     const std::size_t pixel_count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     context.pixel_tri_.assign(pixel_count, none_);
     context.pixel_t_.assign(pixel_count, std::numeric_limits<float>::infinity());
+    context.extras_.clear();
+    if (initial_solid) context.pixel_solid_t_.assign(initial_solid, initial_solid + pixel_count);
+    else context.pixel_solid_t_.assign(pixel_count, std::numeric_limits<float>::infinity());
     if (triangle_count() > 0) {
       Frame frame = make_frame(camera);
       frame.initial_depth = initial_depth;
+      frame.initial_solid = initial_solid;
       context.stats.axis = frame.axis;
       const int tile = params_.tile_size;
       const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
@@ -375,6 +431,8 @@ class NormalClassIndex {
           th.frame_epoch = 1;
         }
         th.tested.clear();
+        th.extra.clear();
+        th.unsure.clear();
         th.stats = NciSelectStats{};
       }
       context.tile_tested.assign(tile_count, 0u);
@@ -430,6 +488,15 @@ class NormalClassIndex {
         if (tri != none_ && context.shown_[tri] != epoch) {
           context.shown_[tri] = epoch;
           out.triangles.push_back(original(tri));
+        }
+      }
+      for (unsigned i = 0; i < thread_count; ++i) {
+        for (const auto& e : context.threads_[i].extra) {
+          context.extras_.push_back(NciContext::Extra{original(e.tri), e.t, e.pixel});
+          if (context.shown_[e.tri] != epoch) {
+            context.shown_[e.tri] = epoch;
+            out.triangles.push_back(original(e.tri));
+          }
         }
       }
       std::sort(out.triangles.begin(), out.triangles.end());
@@ -991,6 +1058,7 @@ class NormalClassIndex {
     bool use_rect = false;   // screen rectangles of triangles may prune rays
     glm::dvec4 target_plane{0.0};  // plane holding the pixel rays' target points (world space)
     const float* initial_depth = nullptr;  // per pixel: start from this depth (moving objects)
+    const float* initial_solid = nullptr;  // per pixel: and from this solid depth (>= initial_depth)
     int width = 0, height = 0;
     double eye_side = 0.0;          // -target_plane . (eye, 1)
     glm::dvec4 eye_clip{0.0};       // view_proj * (eye, 1)
@@ -1005,11 +1073,15 @@ class NormalClassIndex {
     // The 2D footprint pre-test (footprint_mask) may be used: screen rectangles are on and one
     // pixel spans at least 4e-5 radians everywhere on screen (at most 25,000 pixels per radian).
     bool footprint = false;
+    // Margin of screen rectangles and footprints in pixels: a twentieth of a pixel for the float
+    // rounding of the ray directions, plus the ray test's edge band (tiny unless a pixel spans only
+    // a few float roundings: very narrow fields of view).
+    double margin = 0.05;
   };
 
   [[nodiscard]] Frame make_frame(const Camera& camera) const {
     Frame f{PixelRays(camera), glm::dvec3(camera.eye), camera.eye, 2, glm::dmat4(camera.view_proj), false,
-            glm::dvec4(0.0), nullptr, camera.width, camera.height};
+            glm::dvec4(0.0), nullptr, nullptr, camera.width, camera.height};
     const Ray center = f.rays.ray_at(0.5 * camera.width, 0.5 * camera.height);
     const glm::vec3 d = center.direction;
     const float ax = std::fabs(d.x), ay = std::fabs(d.y), az = std::fabs(d.z);
@@ -1079,6 +1151,10 @@ class NormalClassIndex {
           smallest = std::min({smallest, glm::length(glm::cross(d0, dx)), glm::length(glm::cross(d0, dy))});
         }
         f.footprint = camera.width >= 2 && camera.height >= 2 && smallest >= 4e-5;
+        // The ray test's edge band (near misses are reported too) as an angle: the band's distance
+        // over the depth, at most about 4 band widths near an edge; in pixels at the narrowest spot.
+        const double band_angle = 4.0 * double(band_);
+        f.margin = 0.05 + (smallest > 0.0 && std::isfinite(smallest) ? band_angle / smallest : 1e6);
       }
     }
     return f;
@@ -1089,10 +1165,15 @@ class NormalClassIndex {
     detail::WatertightRay<float> wray[256];
     float best_t[256];
     std::uint32_t best[256];
+    // The nearest hit that no edge-rounding question hangs over (a hit within rounding of an edge
+    // may be a miss for another float ray tracer, which then sees what lies behind): finishing and
+    // the depth rejects use it, so the search goes on behind such hits up to a solid one.
+    float solid_t[256];
+    std::uint32_t solid[256];
     float slope_b[256], slope_c[256];
     float t_exit[256];  // where the ray leaves the inflated scene box (rounded up): nothing beyond
     int finish[256];    // the walk may stop this ray once it has processed this slice
-    bool dirty[256];    // best_t changed since `finish` was computed
+    bool dirty[256];    // solid_t changed since `finish` was computed
     bool any_dirty = true;  // some ray became dirty since the walk last looked
     int axis = 2;       // the frame's walk axis
     bool flat[256];
@@ -1154,10 +1235,10 @@ class NormalClassIndex {
     }
     if (!(std::isfinite(mnx) && std::isfinite(mxx) && std::isfinite(mny) && std::isfinite(mxy)))
       return Rect{Rect::full, 0, 0, 0};
-    // A pixel centre can see the triangle only inside its projection; the margin (a twentieth of
-    // a pixel) covers the float rounding of the ray directions. Clamped to the screen (in double
+    // A pixel centre can see the triangle only inside its projection; the margin (Frame::margin)
+    // covers the float rounding of the ray directions and the ray test's edge band. Clamped to the screen (in double
     // first: projected corners may be far off screen).
-    const double m = 0.05;
+    const double m = f.margin;
     const double lx0 = std::ceil(mnx - m), lx1 = std::floor(mxx + m);
     const double ly0 = std::ceil(mny - m), ly1 = std::floor(mxy + m);
     if (lx1 < 0.0 || ly1 < 0.0 || lx0 > f.width - 1 || ly0 > f.height - 1) return Rect{0, 0, -1, -1};
@@ -1371,7 +1452,7 @@ class NormalClassIndex {
       while (bits) {
         const int x = __builtin_ctz(bits);
         bits &= bits - 1;
-        if (!(double(r.best_t[y * 16 + x]) < bound)) return false;
+        if (!(double(r.solid_t[y * 16 + x]) < bound)) return false;
       }
     }
     return true;
@@ -1452,8 +1533,8 @@ class NormalClassIndex {
   //    from the eye and the sheared coordinates (each relative error <= 2^-24 of a length at most
   //    sqrt(3) times the depth along the ray, together well below 1e-6 rad); at most 25,000 pixels
   //    per radian (Frame::footprint) makes that < 0.025 pixel, inside the margin m = 0.05 pixel
-  //    per axis (the screen rectangles' margin, so an edge grows by m times the 1-norm of its
-  //    normal); (b) the rounding of the edge products cx * by - cy * bx, at most about 4 * 2^-24 |B| |C|:
+  //    per axis (the screen rectangles' margin Frame::margin, which adds the ray test's edge band
+  //    so near misses are tested too; an edge grows by m times the 1-norm of its normal); (b) the rounding of the edge products cx * by - cy * bx, at most about 4 * 2^-24 |B| |C|:
   //    in pixel units (the map from the shear plane to the screen is a projective map close to a
   //    similarity near the ray, condition number well below 10) at most 1e-5 R^2, R bounding the
   //    distance from a tested pixel centre to the corners; an edge grows by that much too (more
@@ -1486,7 +1567,7 @@ class NormalClassIndex {
       nx[k] = -(py[j] - py[k]) * sgn;
       ny[k] = (px[j] - px[k]) * sgn;
       const double n1 = std::fabs(nx[k]) + std::fabs(ny[k]);
-      const double slack = 0.05 * n1 + 1e-5 * reach * reach +
+      const double slack = f.margin * n1 + 1e-5 * reach * reach +
                            1e-12 * n1 * (reach + std::fabs(px[k]) + std::fabs(py[k]) + f.width + f.height);
       off[k] = -nx[k] * px[k] - ny[k] * py[k] + slack;
       if (!std::isfinite(off[k])) return false;
@@ -1521,6 +1602,9 @@ class NormalClassIndex {
     const float a[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};
     const float b[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
     const float c[3] = {p2.x - f.eye_f.x, p2.y - f.eye_f.y, p2.z - f.eye_f.z};
+    const float mag[3] = {std::max({std::fabs(a[0]), std::fabs(a[1]), std::fabs(a[2])}),
+                          std::max({std::fabs(b[0]), std::fabs(b[1]), std::fabs(b[2])}),
+                          std::max({std::fabs(c[0]), std::fabs(c[1]), std::fabs(c[2])})};
     {
       const float qlo[3] = {std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}), std::min({a[2], b[2], c[2]})};
       const float qhi[3] = {std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}), std::max({a[2], b[2], c[2]})};
@@ -1547,18 +1631,25 @@ class NormalClassIndex {
         const int i = y * 16 + x;
         ++thread.stats.ray_tests;
         any = true;
-        float t;
-        if (detail::watertight_hit(r.wray[i], a, b, c, t)) {
-          // Ties go to the lower mesh index (the internal numbering is not the mesh's).
-          if (t < r.best_t[i] ||
-              (t == r.best_t[i] && (r.best[i] == none_ || tri_original_[tri] < tri_original_[r.best[i]]))) {
-            if (t < r.best_t[i]) {
-              r.dirty[i] = true;
-              r.any_dirty = true;
-            }
-            r.best_t[i] = t;
-            r.best[i] = tri;
+        float t = 0.0f;
+        bool near = false;
+        const bool hit = detail::watertight_hit_band(r.wray[i], a, b, c, mag, band_, t, near);
+        // Ties go to the lower mesh index (the internal numbering is not the mesh's).
+        if (hit && (t < r.best_t[i] ||
+                    (t == r.best_t[i] && (r.best[i] == none_ || tri_original_[tri] < tri_original_[r.best[i]])))) {
+          r.best_t[i] = t;
+          r.best[i] = tri;
+        }
+        if (near) {
+          if (t <= r.solid_t[i]) thread.unsure.push_back(NciContext::Thread::Unsure{tri, t, static_cast<std::uint16_t>(i)});
+        } else if (hit && (t < r.solid_t[i] || (t == r.solid_t[i] && (r.solid[i] == none_ ||
+                                                                      tri_original_[tri] < tri_original_[r.solid[i]])))) {
+          if (t < r.solid_t[i]) {
+            r.dirty[i] = true;
+            r.any_dirty = true;
           }
+          r.solid_t[i] = t;
+          r.solid[i] = tri;
         }
       }
     }
@@ -1589,6 +1680,10 @@ class NormalClassIndex {
                                                         static_cast<std::size_t>(x0 + x)]
                                       : std::numeric_limits<float>::infinity();
         r.best[i] = none_;
+        r.solid_t[i] = f.initial_solid ? f.initial_solid[static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) +
+                                                         static_cast<std::size_t>(x0 + x)]
+                                       : r.best_t[i];
+        r.solid[i] = none_;
         r.dirty[i] = true;
         if (!r.wray[i].valid) continue;
         // Does the ray reach the (inflated) scene box at all?
@@ -1842,6 +1937,22 @@ class NormalClassIndex {
         mask[y] = 0;
       }
     }
+    // Beside each pixel's first hit: the triangles within rounding of an edge in front of its
+    // solid hit, and that solid hit itself.
+    const auto global = [&](int i) {
+      return static_cast<std::uint32_t>(y0 + i / 16) * static_cast<std::uint32_t>(f.width) +
+             static_cast<std::uint32_t>(x0 + i % 16);
+    };
+    for (const auto& u : thread.unsure)
+      if (u.t <= r.solid_t[u.pixel] && u.tri != r.best[u.pixel])
+        thread.extra.push_back(NciContext::Extra{u.tri, u.t, global(u.pixel)});
+    thread.unsure.clear();
+    for (int y = 0; y < th; ++y)
+      for (int x = 0; x < tw; ++x) {
+        const int i = y * 16 + x;
+        if (r.solid[i] != none_ && r.solid[i] != r.best[i])
+          thread.extra.push_back(NciContext::Extra{r.solid[i], r.solid_t[i], global(i)});
+      }
     write_tile(f, r, x0, y0, tw, th, context);
   }
 
@@ -1852,7 +1963,7 @@ class NormalClassIndex {
     const int a = axis_of(r);
     if (walk == 0 ? s + 1 >= na : s <= 0) return true;
     if (r.dir[i][a] == 0.0f) return true;
-    const float t_stop = std::min(r.best_t[i], r.t_exit[i]);
+    const float t_stop = std::min(r.solid_t[i], r.t_exit[i]);
     const double reach = double(t_stop) * (1.0 + 1e-5) * double(r.dir[i][a]);
     const double margin = 0.25 * delta_ - 1e-6 * std::fabs(reach);
     const double next_plane = walk == 0 ? lo_[a] + (s + 1) * h_ : lo_[a] + s * h_;
@@ -1868,7 +1979,7 @@ class NormalClassIndex {
     const int end = walk == 0 ? na - 1 : 0;
     int s = from;
     if (r.dir[i][a] != 0.0f) {
-      const float t_stop = std::min(r.best_t[i], r.t_exit[i]);
+      const float t_stop = std::min(r.solid_t[i], r.t_exit[i]);
       const double x = ea + double(t_stop) * double(r.dir[i][a]);
       if (std::isfinite(x)) {
         const double est = std::floor((x - lo_[a]) / h_) + (walk == 0 ? -1.0 : 1.0);
@@ -1892,6 +2003,7 @@ class NormalClassIndex {
         const std::size_t p = static_cast<std::size_t>(y0 + y) * width + static_cast<std::size_t>(x0 + x);
         context.pixel_tri_[p] = r.best[y * 16 + x];
         context.pixel_t_[p] = r.best_t[y * 16 + x];
+        context.pixel_solid_t_[p] = r.solid_t[y * 16 + x];
       }
     }
   }
@@ -1938,6 +2050,8 @@ class NormalClassIndex {
   std::vector<std::uint32_t> class_cell_base_;  // per class: its first cell (0 when wide_ids_)
   std::vector<std::uint32_t> grid_shift_;  // (class, axis): X: cell = position - shift; else id at position - shift
   bool wide_ids_ = false;
+  // Width of the ray test's edge band (detail::watertight_hit_band) in units of the coordinates.
+  float band_ = detail::edge_band_units * 0x1p-24f;
 };
 
 }  // namespace cullkit

@@ -1,9 +1,12 @@
 // tests/nci/nci_test_util.hpp: brute-force oracles and cameras shared by the NormalClassIndex tests.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -11,6 +14,18 @@
 #include <cullkit/cullkit.hpp>
 #include <cullkit/normal_class_index.hpp>
 #include <cullkit_support/scene.hpp>
+
+// 1 under AddressSanitizer (the tests shrink their screens there).
+#if defined(__SANITIZE_ADDRESS__)
+#define NCI_SANITIZED 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define NCI_SANITIZED 1
+#endif
+#endif
+#ifndef NCI_SANITIZED
+#define NCI_SANITIZED 0
+#endif
 
 namespace nci_test {
 
@@ -22,10 +37,18 @@ constexpr std::uint32_t miss = 0xFFFFFFFFu;
 struct BruteHits {
   std::vector<std::uint32_t> tri;
   std::vector<float> t;
+  /// (float only) The set select_visible must return: every pixel's first hit, plus at each pixel
+  /// the triangles the ray passes within the edge band of (detail::watertight_hit_band, hit or
+  /// near miss) in front of its first hit outside any band, and that hit. Sorted, unique.
+  std::vector<std::uint32_t> selected;
 };
 
 template <class Real>
-inline BruteHits brute_force(const cullkit::support::Scene& scene, const cullkit::Camera& cam) {
+/// `window` (x0, y0, x1, y1 exclusive; default the whole screen): only those pixels are traced
+/// (the others stay misses and add nothing to `selected`).
+inline BruteHits brute_force(const cullkit::support::Scene& scene, const cullkit::Camera& cam,
+                             float band = cullkit::detail::edge_band_units * 0x1p-24f,
+                             std::array<int, 4> window = {0, 0, 1 << 30, 1 << 30}) {
   const cullkit::PixelRays rays(cam);
   const std::size_t n = scene.triangle_count();
   std::vector<char> ok(n, 0);
@@ -49,26 +72,51 @@ inline BruteHits brute_force(const cullkit::support::Scene& scene, const cullkit
       }
   }
   BruteHits out;
+  std::vector<std::pair<Real, std::uint32_t>> unsure;
   out.tri.assign(static_cast<std::size_t>(cam.width) * cam.height, miss);
   out.t.assign(out.tri.size(), std::numeric_limits<float>::infinity());
-  for (int y = 0; y < cam.height; ++y) {
-    for (int x = 0; x < cam.width; ++x) {
+  for (int y = window[1]; y < std::min(cam.height, window[3]); ++y) {
+    for (int x = window[0]; x < std::min(cam.width, window[2]); ++x) {
       const auto wr = cullkit::detail::WatertightRay<Real>::make(rays.ray(x, y).direction);
-      Real best = std::numeric_limits<Real>::infinity();
-      std::uint32_t best_tri = miss;
+      Real best = std::numeric_limits<Real>::infinity(), solid = best;
+      std::uint32_t best_tri = miss, solid_tri = miss;
+      unsure.clear();
       for (std::size_t t = 0; t < n; ++t) {
         if (!ok[t]) continue;
         Real th;
-        if (cullkit::detail::watertight_hit(wr, &rel[9 * t], &rel[9 * t + 3], &rel[9 * t + 6], th) && th < best) {
+        if constexpr (std::is_same_v<Real, float>) {
+          bool near = false;
+          const float* q = &rel[9 * t];
+          float mag[3];
+          for (int k = 0; k < 3; ++k)
+            mag[k] = std::max({std::fabs(q[3 * k]), std::fabs(q[3 * k + 1]), std::fabs(q[3 * k + 2])});
+          const bool hit = cullkit::detail::watertight_hit_band(wr, q, q + 3, q + 6, mag, band, th, near);
+          if (hit && th < best) {
+            best = th;
+            best_tri = static_cast<std::uint32_t>(t);
+          }
+          if (near) unsure.push_back({th, static_cast<std::uint32_t>(t)});
+          else if (hit && th < solid) {
+            solid = th;
+            solid_tri = static_cast<std::uint32_t>(t);
+          }
+        } else if (cullkit::detail::watertight_hit(wr, &rel[9 * t], &rel[9 * t + 3], &rel[9 * t + 6], th) &&
+                   th < best) {
           best = th;
           best_tri = static_cast<std::uint32_t>(t);
         }
       }
+      if (best_tri != miss) out.selected.push_back(best_tri);
+      if (solid_tri != miss) out.selected.push_back(solid_tri);
+      for (const auto& u : unsure)
+        if (u.first <= solid) out.selected.push_back(u.second);
       const std::size_t p = static_cast<std::size_t>(y) * cam.width + x;
       out.tri[p] = best_tri;
       out.t[p] = static_cast<float>(best);
     }
   }
+  std::sort(out.selected.begin(), out.selected.end());
+  out.selected.erase(std::unique(out.selected.begin(), out.selected.end()), out.selected.end());
   return out;
 }
 

@@ -39,10 +39,11 @@ void compare(const char* label, const Scene& scene, const NciParams& params, con
     }
     CHECK_MSG(diff == 0, "%s cam %zu: %d pixels differ from the float brute force (seed %llu)", label, ci, diff,
               static_cast<unsigned long long>(seed));
-    // The set is exactly the per-pixel winners.
-    std::set<std::uint32_t> expect;
+    // The set is exactly the per-pixel winners plus the edge-band triangles in front of each
+    // pixel's solid hit (and that hit).
+    std::set<std::uint32_t> expect(brute.selected.begin(), brute.selected.end());
     for (auto t : brute.tri)
-      if (t != nci_test::miss) expect.insert(t);
+      if (t != nci_test::miss) CHECK(expect.count(t) == 1);
     CHECK_MSG(std::vector<std::uint32_t>(expect.begin(), expect.end()) == set.triangles,
               "%s cam %zu: set differs (%zu vs %zu)", label, ci, set.triangles.size(), expect.size());
     CHECK(std::is_sorted(set.triangles.begin(), set.triangles.end()));

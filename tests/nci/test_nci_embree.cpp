@@ -13,17 +13,6 @@
 #include "check.hpp"
 #include "nci_test_util.hpp"
 
-#if defined(__SANITIZE_ADDRESS__)
-#define NCI_SANITIZED 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define NCI_SANITIZED 1
-#endif
-#endif
-#ifndef NCI_SANITIZED
-#define NCI_SANITIZED 0
-#endif
-
 using namespace cullkit;
 using cullkit::support::Scene;
 

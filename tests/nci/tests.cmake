@@ -8,3 +8,4 @@ cullkit_add_test(test_nci_input SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_input
 cullkit_add_test(test_nci_moving SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_moving.cpp LIBS Threads::Threads)
 cullkit_add_test(test_nci_layout SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_layout.cpp LIBS Threads::Threads)
 cullkit_add_test(test_nci_footprint SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_footprint.cpp LIBS Threads::Threads)
+cullkit_add_test(test_nci_narrow SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_narrow.cpp EMBREE LIBS Threads::Threads)
