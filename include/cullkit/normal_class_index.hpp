@@ -1521,11 +1521,9 @@ class NormalClassIndex {
     const float a[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};
     const float b[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
     const float c[3] = {p2.x - f.eye_f.x, p2.y - f.eye_f.y, p2.z - f.eye_f.z};
-    {
-      const float qlo[3] = {std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}), std::min({a[2], b[2], c[2]})};
-      const float qhi[3] = {std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}), std::max({a[2], b[2], c[2]})};
-      if (behind_hits(r, qlo, qhi, ry0, ry1, span, live)) return false;
-    }
+    const float qlo[3] = {std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}), std::min({a[2], b[2], c[2]})};
+    const float qhi[3] = {std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}), std::max({a[2], b[2], c[2]})};
+    if (behind_hits(r, qlo, qhi, ry0, ry1, span, live)) return false;
     if (f.use_rect && f.affine_rays && (rx1 > rx0 || ry1 > ry0) && beside_rect(r, a, b, c, rx0, ry0, rx1, ry1)) return false;
     // Only the live rays whose pixel centres lie in the triangle's grown 2D footprint can hit it.
     std::uint32_t rows[16];
@@ -1545,6 +1543,15 @@ class NormalClassIndex {
         const int x = __builtin_ctz(bits);
         bits &= bits - 1;
         const int i = y * 16 + x;
+        // The depth reject of behind_hits for this ray alone (its own scale sz on its own dominant
+        // axis, the same bound and margin): a ray that already holds a hit strictly nearer than
+        // any t the test could return is not tested. Skipping it changes no answer.
+        if (r.best_t[i] < std::numeric_limits<float>::infinity()) {
+          const detail::WatertightRay<float>& w = r.wray[i];
+          const double sz = w.sz;
+          double bound = std::min(sz * double(qlo[w.kz]), sz * double(qhi[w.kz])) * (1.0 - 1e-6);
+          if (bound > 1e-30 && std::isfinite(bound) && double(r.best_t[i]) < bound) continue;
+        }
         ++thread.stats.ray_tests;
         any = true;
         float t;
