@@ -1095,6 +1095,9 @@ class NormalClassIndex {
     bool dirty[256];    // best_t changed since `finish` was computed
     bool any_dirty = true;  // some ray became dirty since the walk last looked
     int axis = 2;       // the frame's walk axis
+    float dir_a[256];   // dir[i][axis], read by the finishing test (no per-call component switch)
+    double lo_a = 0.0;  // the grid's origin on the walk axis
+    double inv_h = 1.0; // 1 / cell edge (finish_slice's first estimate only)
     bool flat[256];
     // The tile's beam: four planes through the eye (unit normals, inside positive) holding every
     // live ray of the tile up to `beam_eps` (the largest measured violation plus rounding).
@@ -1576,6 +1579,8 @@ class NormalClassIndex {
                     NciContext& context) const {
     TileRays r;
     r.axis = f.axis;
+    r.lo_a = lo_[f.axis];
+    r.inv_h = 1.0 / h_;
     const int tw = x1 - x0, th = y1 - y0;
     const int a = f.axis, b = (a + 1) % 3, c = (a + 2) % 3;
     std::uint16_t live[16] = {};  // unfinished rays, both walks
@@ -1591,6 +1596,7 @@ class NormalClassIndex {
         const int i = y * 16 + x;
         const Ray ray = f.rays.ray(x0 + x, y0 + y);
         r.dir[i] = ray.direction;
+        r.dir_a[i] = ray.direction[f.axis];
         r.wray[i] = detail::WatertightRay<float>::make(ray.direction);
         r.best_t[i] = f.initial_depth ? f.initial_depth[static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) +
                                                         static_cast<std::size_t>(x0 + x)]
@@ -1756,14 +1762,20 @@ class NormalClassIndex {
               const std::uint32_t class_base = class_cell_base_[k];
               const std::uint32_t row_first = slice_rows_[base + static_cast<std::size_t>(s)];
               const std::uint32_t row_last = slice_rows_[base + static_cast<std::size_t>(s) + 1];
-              if (row_first == row_last) continue;
-              auto row_it = std::lower_bound(row_coord_.begin() + row_first, row_coord_.begin() + row_last,
-                                             static_cast<std::uint16_t>(rlo));
+              // Rows are sorted: a class whose rows in this slice all lie outside [rlo, rhi] is
+              // passed over without a search.
+              if (row_first == row_last || row_coord_[row_first] > rhi || row_coord_[row_last - 1] < rlo) continue;
+              auto row_it = row_coord_[row_first] >= rlo
+                                ? row_coord_.begin() + row_first
+                                : std::lower_bound(row_coord_.begin() + row_first, row_coord_.begin() + row_last,
+                                                   static_cast<std::uint16_t>(rlo));
               for (; row_it != row_coord_.begin() + row_last && *row_it <= rhi; ++row_it) {
                 const std::size_t row = static_cast<std::size_t>(row_it - row_coord_.begin());
                 const std::uint32_t cf = row_begin_[row], cl = row_begin_[row + 1];
-                auto cell_it = std::lower_bound(cell_col_.begin() + cf, cell_col_.begin() + cl,
-                                                static_cast<std::uint16_t>(clo));
+                if (cell_col_[cf] > chi || cell_col_[cl - 1] < clo) continue;  // sorted columns, none in range
+                auto cell_it = cell_col_[cf] >= clo ? cell_col_.begin() + cf
+                                                    : std::lower_bound(cell_col_.begin() + cf, cell_col_.begin() + cl,
+                                                                       static_cast<std::uint16_t>(clo));
                 for (; cell_it != cell_col_.begin() + cl && *cell_it <= chi; ++cell_it) {
                   const std::uint32_t pos = static_cast<std::uint32_t>(cell_it - cell_col_.begin());
                   const std::uint32_t cell = a == 0     ? pos - shift
@@ -1856,29 +1868,29 @@ class NormalClassIndex {
   // nothing lies beyond) comes before where it enters the next slice, with margins that only keep
   // it longer. Rays exactly parallel to the slices never reach another slice.
   [[nodiscard]] bool done_after(const TileRays& r, int i, int walk, int s, double ea, int na) const noexcept {
-    const int a = axis_of(r);
     if (walk == 0 ? s + 1 >= na : s <= 0) return true;
-    if (r.dir[i][a] == 0.0f) return true;
+    if (r.dir_a[i] == 0.0f) return true;
     const float t_stop = std::min(r.best_t[i], r.t_exit[i]);
-    const double reach = double(t_stop) * (1.0 + 1e-5) * double(r.dir[i][a]);
+    const double reach = double(t_stop) * (1.0 + 1e-5) * double(r.dir_a[i]);
     const double margin = 0.25 * delta_ - 1e-6 * std::fabs(reach);
-    const double next_plane = walk == 0 ? lo_[a] + (s + 1) * h_ : lo_[a] + s * h_;
+    const double next_plane = walk == 0 ? r.lo_a + (s + 1) * h_ : r.lo_a + s * h_;
     return walk == 0 ? ea + reach < next_plane + margin : ea + reach > next_plane - margin;
   }
-  static int axis_of(const TileRays& r) noexcept { return r.axis; }
 
   // The first slice (in walk order, from `from`) after which `done_after` holds. The predicate is
   // monotone along the walk; an estimate from the stop coordinate is corrected by the predicate
   // itself, so the answer is exactly the first slice where it holds.
   [[nodiscard]] int finish_slice(const TileRays& r, int i, int walk, int from, double ea, int na) const noexcept {
-    const int a = r.axis;
     const int end = walk == 0 ? na - 1 : 0;
     int s = from;
-    if (r.dir[i][a] != 0.0f) {
+    if (r.dir_a[i] != 0.0f) {
       const float t_stop = std::min(r.best_t[i], r.t_exit[i]);
-      const double x = ea + double(t_stop) * double(r.dir[i][a]);
+      const double x = ea + double(t_stop) * double(r.dir_a[i]);
       if (std::isfinite(x)) {
-        const double est = std::floor((x - lo_[a]) / h_) + (walk == 0 ? -1.0 : 1.0);
+        // Any start gives the same answer (the loops below correct it); starting at the slice
+        // holding the stop point usually needs two evaluations of done_after.
+        const double cell = std::clamp((x - r.lo_a) * r.inv_h, -2.0, double(na) + 2.0);
+        const double est = std::floor(cell);  // the slice holding the stop point
         if (walk == 0 && est > from) s = static_cast<int>(std::min(est, double(end)));
         if (walk == 1 && est < from) s = static_cast<int>(std::max(est, double(end)));
       } else {
