@@ -1586,6 +1586,12 @@ class NormalClassIndex {
     std::uint16_t live[16] = {};  // unfinished rays, both walks
     std::uint16_t walk_mask[2][16] = {};  // [0]: toward +axis (and flat), [1]: toward -axis
     const glm::dvec3 blo = glm::dvec3(box_.min) - delta_, bhi = glm::dvec3(box_.max) + delta_;
+    // The same per component in plain arrays (the per-ray loop below indexes them by a variable;
+    // glm's component access is a switch), and the box relative to the eye.
+    const double eye3[3] = {f.eye.x, f.eye.y, f.eye.z};
+    const double blo3[3] = {blo.x, blo.y, blo.z}, bhi3[3] = {bhi.x, bhi.y, bhi.z};
+    const double rlo3[3] = {blo3[0] - eye3[0], blo3[1] - eye3[1], blo3[2] - eye3[2]};
+    const double rhi3[3] = {bhi3[0] - eye3[0], bhi3[1] - eye3[1], bhi3[2] - eye3[2]};
     glm::dvec3 cone_sum(0.0);
     for (int k = 0; k < 3; ++k) {
       r.sz_lo[k] = std::numeric_limits<float>::infinity();
@@ -1596,7 +1602,8 @@ class NormalClassIndex {
         const int i = y * 16 + x;
         const Ray ray = f.rays.ray(x0 + x, y0 + y);
         r.dir[i] = ray.direction;
-        r.dir_a[i] = ray.direction[f.axis];
+        const double d3[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
+        r.dir_a[i] = static_cast<float>(d3[a]);
         r.wray[i] = detail::WatertightRay<float>::make(ray.direction);
         r.best_t[i] = f.initial_depth ? f.initial_depth[static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) +
                                                         static_cast<std::size_t>(x0 + x)]
@@ -1605,16 +1612,15 @@ class NormalClassIndex {
         r.dirty[i] = true;
         if (!r.wray[i].valid) continue;
         // Does the ray reach the (inflated) scene box at all?
-        const glm::dvec3 d(ray.direction);
         double tmin = 0.0, tmax = std::numeric_limits<double>::infinity();
         bool hit = true;
         for (int k = 0; k < 3 && hit; ++k) {
-          if (d[k] == 0.0) {
-            if (f.eye[k] < blo[k] || f.eye[k] > bhi[k]) hit = false;
+          if (d3[k] == 0.0) {
+            if (eye3[k] < blo3[k] || eye3[k] > bhi3[k]) hit = false;
             continue;
           }
-          const double inv = 1.0 / d[k];
-          double t0 = (blo[k] - f.eye[k]) * inv, t1 = (bhi[k] - f.eye[k]) * inv;
+          const double inv = 1.0 / d3[k];
+          double t0 = rlo3[k] * inv, t1 = rhi3[k] * inv;
           if (t0 > t1) std::swap(t0, t1);
           tmin = std::max(tmin, t0 - 1e-9 * std::fabs(t0));
           tmax = std::min(tmax, t1 + 1e-9 * std::fabs(t1));
@@ -1622,16 +1628,16 @@ class NormalClassIndex {
         }
         if (!hit) continue;
         r.t_exit[i] = static_cast<float>(tmax * (1.0 + 1e-6)) * (1.0f + 1e-6f);
-        const double da = d[a];
+        const double da = d3[a];
         r.flat[i] = std::fabs(da) < 1e-6;
-        r.slope_b[i] = r.flat[i] ? 0.0f : static_cast<float>(d[b] / da);
-        r.slope_c[i] = r.flat[i] ? 0.0f : static_cast<float>(d[c] / da);
+        r.slope_b[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[b] / da);
+        r.slope_c[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[c] / da);
         live[y] = static_cast<std::uint16_t>(live[y] | (1u << x));
         const detail::WatertightRay<float>& w = r.wray[i];
         r.sz_lo[w.kz] = std::min(r.sz_lo[w.kz], w.sz);
         r.sz_hi[w.kz] = std::max(r.sz_hi[w.kz], w.sz);
         walk_mask[da >= 0.0 ? 0 : 1][y] = static_cast<std::uint16_t>(walk_mask[da >= 0.0 ? 0 : 1][y] | (1u << x));
-        cone_sum += d;
+        cone_sum += glm::dvec3(d3[0], d3[1], d3[2]);
       }
     }
     bool any = false;
