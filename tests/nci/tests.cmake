@@ -8,3 +8,5 @@ cullkit_add_test(test_nci_input SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_input
 cullkit_add_test(test_nci_moving SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_moving.cpp LIBS Threads::Threads)
 cullkit_add_test(test_nci_layout SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_layout.cpp LIBS Threads::Threads)
 cullkit_add_test(test_nci_footprint SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_footprint.cpp LIBS Threads::Threads)
+cullkit_add_test(test_nci_precision SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_precision.cpp EMBREE
+                 LIBS Threads::Threads)
