@@ -1176,6 +1176,9 @@ class NormalClassIndex {
     bool dirty[256];    // solid_t changed since `finish` was computed
     bool any_dirty = true;  // some ray became dirty since the walk last looked
     int axis = 2;       // the frame's walk axis
+    float dir_a[256];   // dir[i][axis], read by the finishing test (no per-call component switch)
+    double lo_a = 0.0;  // the grid's origin on the walk axis
+    double inv_h = 1.0; // 1 / cell edge (finish_slice's first estimate only)
     bool flat[256];
     // The tile's beam: four planes through the eye (unit normals, inside positive) holding every
     // live ray of the tile up to `beam_eps` (the largest measured violation plus rounding).
@@ -1605,11 +1608,9 @@ class NormalClassIndex {
     const float mag[3] = {std::max({std::fabs(a[0]), std::fabs(a[1]), std::fabs(a[2])}),
                           std::max({std::fabs(b[0]), std::fabs(b[1]), std::fabs(b[2])}),
                           std::max({std::fabs(c[0]), std::fabs(c[1]), std::fabs(c[2])})};
-    {
-      const float qlo[3] = {std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}), std::min({a[2], b[2], c[2]})};
-      const float qhi[3] = {std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}), std::max({a[2], b[2], c[2]})};
-      if (behind_hits(r, qlo, qhi, ry0, ry1, span, live)) return false;
-    }
+    const float qlo[3] = {std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}), std::min({a[2], b[2], c[2]})};
+    const float qhi[3] = {std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}), std::max({a[2], b[2], c[2]})};
+    if (behind_hits(r, qlo, qhi, ry0, ry1, span, live)) return false;
     if (f.use_rect && f.affine_rays && (rx1 > rx0 || ry1 > ry0) && beside_rect(r, a, b, c, rx0, ry0, rx1, ry1)) return false;
     // Only the live rays whose pixel centres lie in the triangle's grown 2D footprint can hit it.
     std::uint32_t rows[16];
@@ -1629,6 +1630,15 @@ class NormalClassIndex {
         const int x = __builtin_ctz(bits);
         bits &= bits - 1;
         const int i = y * 16 + x;
+        // The depth reject of behind_hits for this ray alone (its own scale sz on its own dominant
+        // axis, the same bound and margin): a ray that already holds a solid hit strictly nearer
+        // than any t the test could return is not tested. Skipping it changes no answer.
+        if (r.solid_t[i] < std::numeric_limits<float>::infinity()) {
+          const detail::WatertightRay<float>& w = r.wray[i];
+          const double sz = w.sz;
+          double bound = std::min(sz * double(qlo[w.kz]), sz * double(qhi[w.kz])) * (1.0 - 1e-6);
+          if (bound > 1e-30 && std::isfinite(bound) && double(r.solid_t[i]) < bound) continue;
+        }
         ++thread.stats.ray_tests;
         any = true;
         float t = 0.0f;
@@ -1660,11 +1670,19 @@ class NormalClassIndex {
                     NciContext& context) const {
     TileRays r;
     r.axis = f.axis;
+    r.lo_a = lo_[f.axis];
+    r.inv_h = 1.0 / h_;
     const int tw = x1 - x0, th = y1 - y0;
     const int a = f.axis, b = (a + 1) % 3, c = (a + 2) % 3;
     std::uint16_t live[16] = {};  // unfinished rays, both walks
     std::uint16_t walk_mask[2][16] = {};  // [0]: toward +axis (and flat), [1]: toward -axis
     const glm::dvec3 blo = glm::dvec3(box_.min) - delta_, bhi = glm::dvec3(box_.max) + delta_;
+    // The same per component in plain arrays (the per-ray loop below indexes them by a variable;
+    // glm's component access is a switch), and the box relative to the eye.
+    const double eye3[3] = {f.eye.x, f.eye.y, f.eye.z};
+    const double blo3[3] = {blo.x, blo.y, blo.z}, bhi3[3] = {bhi.x, bhi.y, bhi.z};
+    const double rlo3[3] = {blo3[0] - eye3[0], blo3[1] - eye3[1], blo3[2] - eye3[2]};
+    const double rhi3[3] = {bhi3[0] - eye3[0], bhi3[1] - eye3[1], bhi3[2] - eye3[2]};
     glm::dvec3 cone_sum(0.0);
     for (int k = 0; k < 3; ++k) {
       r.sz_lo[k] = std::numeric_limits<float>::infinity();
@@ -1675,6 +1693,8 @@ class NormalClassIndex {
         const int i = y * 16 + x;
         const Ray ray = f.rays.ray(x0 + x, y0 + y);
         r.dir[i] = ray.direction;
+        const double d3[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
+        r.dir_a[i] = static_cast<float>(d3[a]);
         r.wray[i] = detail::WatertightRay<float>::make(ray.direction);
         r.best_t[i] = f.initial_depth ? f.initial_depth[static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) +
                                                         static_cast<std::size_t>(x0 + x)]
@@ -1687,16 +1707,15 @@ class NormalClassIndex {
         r.dirty[i] = true;
         if (!r.wray[i].valid) continue;
         // Does the ray reach the (inflated) scene box at all?
-        const glm::dvec3 d(ray.direction);
         double tmin = 0.0, tmax = std::numeric_limits<double>::infinity();
         bool hit = true;
         for (int k = 0; k < 3 && hit; ++k) {
-          if (d[k] == 0.0) {
-            if (f.eye[k] < blo[k] || f.eye[k] > bhi[k]) hit = false;
+          if (d3[k] == 0.0) {
+            if (eye3[k] < blo3[k] || eye3[k] > bhi3[k]) hit = false;
             continue;
           }
-          const double inv = 1.0 / d[k];
-          double t0 = (blo[k] - f.eye[k]) * inv, t1 = (bhi[k] - f.eye[k]) * inv;
+          const double inv = 1.0 / d3[k];
+          double t0 = rlo3[k] * inv, t1 = rhi3[k] * inv;
           if (t0 > t1) std::swap(t0, t1);
           tmin = std::max(tmin, t0 - 1e-9 * std::fabs(t0));
           tmax = std::min(tmax, t1 + 1e-9 * std::fabs(t1));
@@ -1704,16 +1723,16 @@ class NormalClassIndex {
         }
         if (!hit) continue;
         r.t_exit[i] = static_cast<float>(tmax * (1.0 + 1e-6)) * (1.0f + 1e-6f);
-        const double da = d[a];
+        const double da = d3[a];
         r.flat[i] = std::fabs(da) < 1e-6;
-        r.slope_b[i] = r.flat[i] ? 0.0f : static_cast<float>(d[b] / da);
-        r.slope_c[i] = r.flat[i] ? 0.0f : static_cast<float>(d[c] / da);
+        r.slope_b[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[b] / da);
+        r.slope_c[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[c] / da);
         live[y] = static_cast<std::uint16_t>(live[y] | (1u << x));
         const detail::WatertightRay<float>& w = r.wray[i];
         r.sz_lo[w.kz] = std::min(r.sz_lo[w.kz], w.sz);
         r.sz_hi[w.kz] = std::max(r.sz_hi[w.kz], w.sz);
         walk_mask[da >= 0.0 ? 0 : 1][y] = static_cast<std::uint16_t>(walk_mask[da >= 0.0 ? 0 : 1][y] | (1u << x));
-        cone_sum += d;
+        cone_sum += glm::dvec3(d3[0], d3[1], d3[2]);
       }
     }
     bool any = false;
@@ -1844,14 +1863,20 @@ class NormalClassIndex {
               const std::uint32_t class_base = class_cell_base_[k];
               const std::uint32_t row_first = slice_rows_[base + static_cast<std::size_t>(s)];
               const std::uint32_t row_last = slice_rows_[base + static_cast<std::size_t>(s) + 1];
-              if (row_first == row_last) continue;
-              auto row_it = std::lower_bound(row_coord_.begin() + row_first, row_coord_.begin() + row_last,
-                                             static_cast<std::uint16_t>(rlo));
+              // Rows are sorted: a class whose rows in this slice all lie outside [rlo, rhi] is
+              // passed over without a search.
+              if (row_first == row_last || row_coord_[row_first] > rhi || row_coord_[row_last - 1] < rlo) continue;
+              auto row_it = row_coord_[row_first] >= rlo
+                                ? row_coord_.begin() + row_first
+                                : std::lower_bound(row_coord_.begin() + row_first, row_coord_.begin() + row_last,
+                                                   static_cast<std::uint16_t>(rlo));
               for (; row_it != row_coord_.begin() + row_last && *row_it <= rhi; ++row_it) {
                 const std::size_t row = static_cast<std::size_t>(row_it - row_coord_.begin());
                 const std::uint32_t cf = row_begin_[row], cl = row_begin_[row + 1];
-                auto cell_it = std::lower_bound(cell_col_.begin() + cf, cell_col_.begin() + cl,
-                                                static_cast<std::uint16_t>(clo));
+                if (cell_col_[cf] > chi || cell_col_[cl - 1] < clo) continue;  // sorted columns, none in range
+                auto cell_it = cell_col_[cf] >= clo ? cell_col_.begin() + cf
+                                                    : std::lower_bound(cell_col_.begin() + cf, cell_col_.begin() + cl,
+                                                                       static_cast<std::uint16_t>(clo));
                 for (; cell_it != cell_col_.begin() + cl && *cell_it <= chi; ++cell_it) {
                   const std::uint32_t pos = static_cast<std::uint32_t>(cell_it - cell_col_.begin());
                   const std::uint32_t cell = a == 0     ? pos - shift
@@ -1960,29 +1985,29 @@ class NormalClassIndex {
   // nothing lies beyond) comes before where it enters the next slice, with margins that only keep
   // it longer. Rays exactly parallel to the slices never reach another slice.
   [[nodiscard]] bool done_after(const TileRays& r, int i, int walk, int s, double ea, int na) const noexcept {
-    const int a = axis_of(r);
     if (walk == 0 ? s + 1 >= na : s <= 0) return true;
-    if (r.dir[i][a] == 0.0f) return true;
+    if (r.dir_a[i] == 0.0f) return true;
     const float t_stop = std::min(r.solid_t[i], r.t_exit[i]);
-    const double reach = double(t_stop) * (1.0 + 1e-5) * double(r.dir[i][a]);
+    const double reach = double(t_stop) * (1.0 + 1e-5) * double(r.dir_a[i]);
     const double margin = 0.25 * delta_ - 1e-6 * std::fabs(reach);
-    const double next_plane = walk == 0 ? lo_[a] + (s + 1) * h_ : lo_[a] + s * h_;
+    const double next_plane = walk == 0 ? r.lo_a + (s + 1) * h_ : r.lo_a + s * h_;
     return walk == 0 ? ea + reach < next_plane + margin : ea + reach > next_plane - margin;
   }
-  static int axis_of(const TileRays& r) noexcept { return r.axis; }
 
   // The first slice (in walk order, from `from`) after which `done_after` holds. The predicate is
   // monotone along the walk; an estimate from the stop coordinate is corrected by the predicate
   // itself, so the answer is exactly the first slice where it holds.
   [[nodiscard]] int finish_slice(const TileRays& r, int i, int walk, int from, double ea, int na) const noexcept {
-    const int a = r.axis;
     const int end = walk == 0 ? na - 1 : 0;
     int s = from;
-    if (r.dir[i][a] != 0.0f) {
+    if (r.dir_a[i] != 0.0f) {
       const float t_stop = std::min(r.solid_t[i], r.t_exit[i]);
-      const double x = ea + double(t_stop) * double(r.dir[i][a]);
+      const double x = ea + double(t_stop) * double(r.dir_a[i]);
       if (std::isfinite(x)) {
-        const double est = std::floor((x - lo_[a]) / h_) + (walk == 0 ? -1.0 : 1.0);
+        // Any start gives the same answer (the loops below correct it); starting at the slice
+        // holding the stop point usually needs two evaluations of done_after.
+        const double cell = std::clamp((x - r.lo_a) * r.inv_h, -2.0, double(na) + 2.0);
+        const double est = std::floor(cell);  // the slice holding the stop point
         if (walk == 0 && est > from) s = static_cast<int>(std::min(est, double(end)));
         if (walk == 1 && est < from) s = static_cast<int>(std::max(est, double(end)));
       } else {

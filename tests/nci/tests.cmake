@@ -9,3 +9,5 @@ cullkit_add_test(test_nci_moving SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_movi
 cullkit_add_test(test_nci_layout SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_layout.cpp LIBS Threads::Threads)
 cullkit_add_test(test_nci_footprint SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_footprint.cpp LIBS Threads::Threads)
 cullkit_add_test(test_nci_narrow SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_narrow.cpp EMBREE LIBS Threads::Threads)
+cullkit_add_test(test_nci_precision SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_precision.cpp EMBREE
+                 LIBS Threads::Threads)
