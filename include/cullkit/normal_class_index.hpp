@@ -172,7 +172,8 @@ class NciContext;
 /// not allocate once the buffers have grown. One context per concurrent caller; not thread-safe.
 /// Size: 16 bytes per indexed triangle per worker thread (test stamps and cached screen
 /// rectangles), on crowded indexes 12 bytes per 16 cell entries per worker thread (chunk
-/// rectangles), 8 bytes per triangle for the merge, and 8 bytes per pixel.
+/// rectangles), 8 bytes per triangle for the merge, 12 bytes per pixel, and 12 bytes per edge-band
+/// triangle selected beside a pixel's first hit (rare outside very narrow views).
 class NciContext {
  public:
   NciSelectStats stats;  ///< statistics of the last call that used this context
