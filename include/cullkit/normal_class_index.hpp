@@ -66,6 +66,11 @@
 #include <type_traits>
 #include <vector>
 
+#if defined(__SSE2__) || defined(_M_X64)
+#include <emmintrin.h>
+#define CULLKIT_NCI_SSE2 1
+#endif
+
 #include <glm/geometric.hpp>
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
@@ -1165,6 +1170,10 @@ class NormalClassIndex {
 
   struct TileRays {
     glm::vec3 dir[256];
+    // The same directions by component (make_beam's 4-wide pre-test); zero beyond the tile's width.
+    alignas(16) float dx[256];
+    alignas(16) float dy[256];
+    alignas(16) float dz[256];
     detail::WatertightRay<float> wray[256];
     float best_t[256];
     std::uint32_t best[256];
@@ -1303,6 +1312,33 @@ class NormalClassIndex {
     double worst = 0.0;
     for (int y = 0; y < th; ++y) {
       std::uint32_t bits = live[y];
+      if (!bits) continue;
+#ifdef CULLKIT_NCI_SSE2
+      // Pre-test, 4 rays at a time in float: a ray with n.d > 5e-7 |d|_1 in float for all four
+      // planes has exact n.d > 0 (the float dot product is within 3 2^-24 |d|_1 of it, |n| <= 1),
+      // so its double value below is not negative and cannot raise `worst`: only the other rays
+      // are measured. The same `worst`, bit for bit.
+      {
+        std::uint32_t maybe = 0;
+        const __m128 sign = _mm_set1_ps(-0.0f), lim = _mm_set1_ps(5e-7f);
+        for (int q = 0; q < 4; ++q) {
+          if (!((bits >> (4 * q)) & 15u)) continue;
+          const int i0 = y * 16 + 4 * q;
+          const __m128 vx = _mm_load_ps(&r.dx[i0]), vy = _mm_load_ps(&r.dy[i0]), vz = _mm_load_ps(&r.dz[i0]);
+          const __m128 dl = _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, vx), _mm_andnot_ps(sign, vy)), _mm_andnot_ps(sign, vz));
+          const __m128 bound = _mm_mul_ps(lim, dl);
+          __m128 near = _mm_setzero_ps();
+          for (int k = 0; k < 4; ++k) {
+            const __m128 v = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(r.beam_n[k][0]), vx),
+                                                   _mm_mul_ps(_mm_set1_ps(r.beam_n[k][1]), vy)),
+                                        _mm_mul_ps(_mm_set1_ps(r.beam_n[k][2]), vz));
+            near = _mm_or_ps(near, _mm_cmple_ps(v, bound));
+          }
+          maybe |= static_cast<std::uint32_t>(_mm_movemask_ps(near)) << (4 * q);
+        }
+        bits &= maybe;
+      }
+#endif
       while (bits) {
         const int x = __builtin_ctz(bits);
         bits &= bits - 1;
@@ -1578,6 +1614,31 @@ class NormalClassIndex {
       off[k] = -nx[k] * px[k] - ny[k] * py[k] + slack;
       if (!std::isfinite(off[k])) return false;
     }
+#ifdef CULLKIT_NCI_SSE2
+    // Two pixel centres at a time, the same double expressions (so the same mask) as below.
+    const __m128d nx0 = _mm_set1_pd(nx[0]), nx1 = _mm_set1_pd(nx[1]), nx2 = _mm_set1_pd(nx[2]);
+    const __m128d of0 = _mm_set1_pd(off[0]), of1 = _mm_set1_pd(off[1]), of2 = _mm_set1_pd(off[2]);
+    const __m128d zero = _mm_setzero_pd();
+    for (int y = ry0; y <= ry1; ++y) {
+      const std::uint32_t b = bits[y];
+      if (!b) {
+        mask[y] = 0;
+        continue;
+      }
+      const double qy = y0 + y;
+      const __m128d ey0 = _mm_set1_pd(ny[0] * qy), ey1 = _mm_set1_pd(ny[1] * qy), ey2 = _mm_set1_pd(ny[2] * qy);
+      std::uint32_t m = 0;
+      for (int x = __builtin_ctz(b), x_end = 31 - __builtin_clz(b); x <= x_end; x += 2) {
+        const __m128d qx = _mm_set_pd(double(x0 + x + 1), double(x0 + x));
+        const __m128d e0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(nx0, qx), ey0), of0);
+        const __m128d e1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(nx1, qx), ey1), of1);
+        const __m128d e2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(nx2, qx), ey2), of2);
+        const __m128d in = _mm_and_pd(_mm_and_pd(_mm_cmpge_pd(e0, zero), _mm_cmpge_pd(e1, zero)), _mm_cmpge_pd(e2, zero));
+        m |= static_cast<std::uint32_t>(_mm_movemask_pd(in)) << x;
+      }
+      mask[y] = static_cast<std::uint16_t>(m & b);
+    }
+#else
     for (int y = ry0; y <= ry1; ++y) {
       std::uint32_t b = bits[y];
       std::uint16_t m = 0;
@@ -1592,6 +1653,7 @@ class NormalClassIndex {
       }
       mask[y] = m;
     }
+#endif
     return true;
   }
 
@@ -1697,13 +1759,16 @@ class NormalClassIndex {
       r.sz_hi[k] = -std::numeric_limits<float>::infinity();
     }
     for (int y = 0; y < th; ++y) {
+      for (int x = tw; x < 16; ++x) r.dx[y * 16 + x] = r.dy[y * 16 + x] = r.dz[y * 16 + x] = 0.0f;
       for (int x = 0; x < tw; ++x) {
         const int i = y * 16 + x;
         const Ray ray = f.rays.ray(x0 + x, y0 + y);
         r.dir[i] = ray.direction;
+        r.dx[i] = ray.direction.x;
+        r.dy[i] = ray.direction.y;
+        r.dz[i] = ray.direction.z;
         const double d3[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
         r.dir_a[i] = static_cast<float>(d3[a]);
-        r.wray[i] = detail::WatertightRay<float>::make(ray.direction);
         r.best_t[i] = f.initial_depth ? f.initial_depth[static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) +
                                                         static_cast<std::size_t>(x0 + x)]
                                       : std::numeric_limits<float>::infinity();
@@ -1713,6 +1778,11 @@ class NormalClassIndex {
                                        : r.best_t[i];
         r.solid[i] = none_;
         r.dirty[i] = true;
+        // WatertightRay::make's validity (finite, not zero) without its shear: a ray that misses
+        // the scene box is never tested, only its validity is read (make_beam's corners).
+        // (the 1-norm in double cannot overflow; it is NaN or infinite iff a component is).
+        const double norm1 = std::fabs(d3[0]) + std::fabs(d3[1]) + std::fabs(d3[2]);
+        r.wray[i].valid = norm1 > 0.0 && norm1 < std::numeric_limits<double>::infinity();
         if (!r.wray[i].valid) continue;
         // Does the ray reach the (inflated) scene box at all? Entry and exit per axis (the face
         // by the direction's sign: rlo <= rhi, so that is the smaller and the larger of the two
@@ -1742,6 +1812,7 @@ class NormalClassIndex {
         }
         const double tmin = enter - 1e-9 * std::fabs(enter), tmax = leave + 1e-9 * std::fabs(leave);
         if (!hit || tmin > tmax) continue;
+        r.wray[i] = detail::WatertightRay<float>::make(ray.direction);
         r.t_exit[i] = static_cast<float>(tmax * (1.0 + 1e-6)) * (1.0f + 1e-6f);
         const double da = d3[a];
         r.flat[i] = std::fabs(da) < 1e-6;
