@@ -1327,14 +1327,14 @@ class NormalClassIndex {
           const __m128 vx = _mm_load_ps(&r.dx[i0]), vy = _mm_load_ps(&r.dy[i0]), vz = _mm_load_ps(&r.dz[i0]);
           const __m128 dl = _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, vx), _mm_andnot_ps(sign, vy)), _mm_andnot_ps(sign, vz));
           const __m128 bound = _mm_mul_ps(lim, dl);
-          __m128 near = _mm_setzero_ps();
+          __m128 doubt = _mm_setzero_ps();
           for (int k = 0; k < 4; ++k) {
             const __m128 v = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(r.beam_n[k][0]), vx),
                                                    _mm_mul_ps(_mm_set1_ps(r.beam_n[k][1]), vy)),
                                         _mm_mul_ps(_mm_set1_ps(r.beam_n[k][2]), vz));
-            near = _mm_or_ps(near, _mm_cmple_ps(v, bound));
+            doubt = _mm_or_ps(doubt, _mm_cmple_ps(v, bound));
           }
-          maybe |= static_cast<std::uint32_t>(_mm_movemask_ps(near)) << (4 * q);
+          maybe |= static_cast<std::uint32_t>(_mm_movemask_ps(doubt)) << (4 * q);
         }
         bits &= maybe;
       }
@@ -1760,6 +1760,9 @@ class NormalClassIndex {
     }
     for (int y = 0; y < th; ++y) {
       for (int x = tw; x < 16; ++x) r.dx[y * 16 + x] = r.dy[y * 16 + x] = r.dz[y * 16 + x] = 0.0f;
+      const std::size_t row = static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(x0);
+      const float* initial_depth = f.initial_depth ? f.initial_depth + row : nullptr;
+      const float* initial_solid = f.initial_solid ? f.initial_solid + row : nullptr;
       for (int x = 0; x < tw; ++x) {
         const int i = y * 16 + x;
         const Ray ray = f.rays.ray(x0 + x, y0 + y);
@@ -1769,13 +1772,9 @@ class NormalClassIndex {
         r.dz[i] = ray.direction.z;
         const double d3[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
         r.dir_a[i] = static_cast<float>(d3[a]);
-        r.best_t[i] = f.initial_depth ? f.initial_depth[static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) +
-                                                        static_cast<std::size_t>(x0 + x)]
-                                      : std::numeric_limits<float>::infinity();
+        r.best_t[i] = initial_depth ? initial_depth[x] : std::numeric_limits<float>::infinity();
         r.best[i] = none_;
-        r.solid_t[i] = f.initial_solid ? f.initial_solid[static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) +
-                                                         static_cast<std::size_t>(x0 + x)]
-                                       : r.best_t[i];
+        r.solid_t[i] = initial_solid ? initial_solid[x] : r.best_t[i];
         r.solid[i] = none_;
         r.dirty[i] = true;
         // WatertightRay::make's validity (finite, not zero) without its shear: a ray that misses
@@ -1888,9 +1887,9 @@ class NormalClassIndex {
       bool slopes_stale = true, full = false;
       float smin_b = 0.0f, smax_b = 0.0f, smin_c = 0.0f, smax_c = 0.0f;
       for (int s = start; s >= 0 && s < na; s += step) {
-        bool pending = false;
-        for (int y = 0; y < th; ++y) pending = pending || mask[y] != 0;
-        if (!pending) break;
+        std::uint64_t words[4];  // the 16 row masks (rows past the tile are zero) as 4 words
+        std::memcpy(words, mask, sizeof words);
+        if (!(words[0] | words[1] | words[2] | words[3])) break;
         ++thread.stats.slices_walked;
         // The part of the slab this walk's rays cross, inflated like the cells.
         double s0 = lo_[a] + s * h_ - delta_, s1 = lo_[a] + (s + 1) * h_ + delta_;
