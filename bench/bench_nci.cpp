@@ -12,9 +12,11 @@
 // Flags: --no-big, --only-big, --no-precision, --quick (precision at the default parameters only,
 // timing at 640x480 only), --hash (only a hash of the per-pixel triangle and depth of both views at
 // 640x480 and 1024x768 per scene, to check that a change keeps every answer). CSV on stdout.
-// --profile SCENE VIEW [FRAMES]: for callgrind (`--collect-atstart=no --toggle-collect='*select_impl*'`):
+// --profile SCENE VIEW [FRAMES]: for callgrind (instructions per frame: a run of 3 frames minus a run of 1,
+// halved; or `--collect-atstart=no --toggle-collect='*process_tile*'` for the tiles alone):
 // one thread, select_visible only, at 640x480, FRAMES frames (default 1) of view VIEW (0: outside,
-// 1: inside) of SCENE ("city" or a real scene's file name); prints the tested count.
+// 1: inside) of SCENE ("city", "bigcity" (10.1M triangles) or a real scene's file name); prints the
+// tested count.
 // CULLKIT_BENCH_SMOKE=1: a tiny city at 64x48, one setting.
 #include <atomic>
 #include <chrono>
@@ -287,6 +289,7 @@ void pixel_hash(const std::string& name, const Scene& s, unsigned threads) {
 int profile(const std::string& name, int view, int frames) {
   std::optional<Scene> s;
   if (name == "city") s = support::make_city(7, 20);
+  else if (name == "bigcity") s = support::make_city(8, 284);
   else s = support::load_obj(support::scenes_dir() + "/" + name);
   if (!s) {
     std::fprintf(stderr, "profile: no scene %s\n", name.c_str());
