@@ -12,11 +12,18 @@
 // Flags: --no-big, --only-big, --no-precision, --quick (precision at the default parameters only,
 // timing at 640x480 only), --hash (only a hash of the per-pixel triangle and depth of both views at
 // 640x480 and 1024x768 per scene, to check that a change keeps every answer). CSV on stdout.
+// --profile SCENE VIEW [FRAMES]: for callgrind (instructions per frame: a run of 3 frames minus a run of 1,
+// halved; or `--collect-atstart=no --toggle-collect='*process_tile*'` for the tiles alone):
+// one thread, select_visible only, at 640x480, FRAMES frames (default 1) of view VIEW (0: outside,
+// 1: inside) of SCENE ("city", "bigcity" (10.1M triangles) or a real scene's file name); prints the
+// tested count.
 // CULLKIT_BENCH_SMOKE=1: a tiny city at 64x48, one setting.
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -278,9 +285,34 @@ void pixel_hash(const std::string& name, const Scene& s, unsigned threads) {
   }
 }
 
+// --profile: one scene, one view, one thread, select only (instruction counts with callgrind).
+int profile(const std::string& name, int view, int frames) {
+  std::optional<Scene> s;
+  if (name == "city") s = support::make_city(7, 20);
+  else if (name == "bigcity") s = support::make_city(8, 284);
+  else s = support::load_obj(support::scenes_dir() + "/" + name);
+  if (!s) {
+    std::fprintf(stderr, "profile: no scene %s\n", name.c_str());
+    return 1;
+  }
+  NciParams p;
+  p.threads = 1;
+  p.build_threads = 1;
+  const NormalClassIndex<glm::vec3> index(s->mesh(), p);
+  const auto cams = views(*s, 640, 480);
+  NciContext ctx;
+  VisibleSet out;
+  for (int k = 0; k < frames; ++k) index.select_visible(cams[static_cast<std::size_t>(view) % 2], ctx, out, nullptr);
+  std::printf("profile,%s,view%d,frames=%d,selected=%zu,tested=%zu\n", name.c_str(), view, frames,
+              out.triangles.size(), out.triangles_tested);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 4 && !std::strcmp(argv[1], "--profile"))
+    return profile(argv[2], std::atoi(argv[3]), argc >= 5 ? std::max(1, std::atoi(argv[4])) : 1);
   const bool smoke = cullkit_bench::smoke();
   bool big = !smoke, small = true, precision = true, timing = true, hash = false;
   for (int i = 1; i < argc; ++i) {

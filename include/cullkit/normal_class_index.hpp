@@ -66,6 +66,11 @@
 #include <type_traits>
 #include <vector>
 
+#if defined(__SSE2__) || defined(_M_X64)
+#include <emmintrin.h>
+#define CULLKIT_NCI_SSE2 1
+#endif
+
 #include <glm/geometric.hpp>
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
@@ -441,6 +446,9 @@ class NormalClassIndex {
       std::atomic<std::size_t> next{0};
       auto work = [&](unsigned index) {
         auto& th = context.threads_[index];
+        // Per-tile ray scratch, made once per worker and call (not per tile: 256 rays' worth of
+        // constructors); process_tile sets every field it reads.
+        TileRays rays;
         for (;;) {
           const std::size_t t = next.fetch_add(1, std::memory_order_relaxed);
           if (t >= tile_count) break;
@@ -448,7 +456,7 @@ class NormalClassIndex {
           const int ty = static_cast<int>(t / static_cast<std::size_t>(tiles_x));
           const std::size_t before = th.tested.size();
           process_tile(frame, tx * tile, ty * tile, std::min(width, (tx + 1) * tile),
-                       std::min(height, (ty + 1) * tile), th, context);
+                       std::min(height, (ty + 1) * tile), rays, th, context);
           context.tile_tested[t] = static_cast<std::uint32_t>(th.tested.size() - before);
         }
       };
@@ -1163,6 +1171,10 @@ class NormalClassIndex {
 
   struct TileRays {
     glm::vec3 dir[256];
+    // The same directions by component (make_beam's 4-wide pre-test); zero beyond the tile's width.
+    alignas(16) float dx[256];
+    alignas(16) float dy[256];
+    alignas(16) float dz[256];
     detail::WatertightRay<float> wray[256];
     float best_t[256];
     std::uint32_t best[256];
@@ -1301,6 +1313,33 @@ class NormalClassIndex {
     double worst = 0.0;
     for (int y = 0; y < th; ++y) {
       std::uint32_t bits = live[y];
+      if (!bits) continue;
+#ifdef CULLKIT_NCI_SSE2
+      // Pre-test, 4 rays at a time in float: a ray with n.d > 5e-7 |d|_1 in float for all four
+      // planes has exact n.d > 0 (the float dot product is within 3 2^-24 |d|_1 of it, |n| <= 1),
+      // so its double value below is not negative and cannot raise `worst`: only the other rays
+      // are measured. The same `worst`, bit for bit.
+      {
+        std::uint32_t maybe = 0;
+        const __m128 sign = _mm_set1_ps(-0.0f), lim = _mm_set1_ps(5e-7f);
+        for (int q = 0; q < 4; ++q) {
+          if (!((bits >> (4 * q)) & 15u)) continue;
+          const int i0 = y * 16 + 4 * q;
+          const __m128 vx = _mm_load_ps(&r.dx[i0]), vy = _mm_load_ps(&r.dy[i0]), vz = _mm_load_ps(&r.dz[i0]);
+          const __m128 dl = _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, vx), _mm_andnot_ps(sign, vy)), _mm_andnot_ps(sign, vz));
+          const __m128 bound = _mm_mul_ps(lim, dl);
+          __m128 doubt = _mm_setzero_ps();
+          for (int k = 0; k < 4; ++k) {
+            const __m128 v = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(r.beam_n[k][0]), vx),
+                                                   _mm_mul_ps(_mm_set1_ps(r.beam_n[k][1]), vy)),
+                                        _mm_mul_ps(_mm_set1_ps(r.beam_n[k][2]), vz));
+            doubt = _mm_or_ps(doubt, _mm_cmple_ps(v, bound));
+          }
+          maybe |= static_cast<std::uint32_t>(_mm_movemask_ps(doubt)) << (4 * q);
+        }
+        bits &= maybe;
+      }
+#endif
       while (bits) {
         const int x = __builtin_ctz(bits);
         bits &= bits - 1;
@@ -1576,6 +1615,31 @@ class NormalClassIndex {
       off[k] = -nx[k] * px[k] - ny[k] * py[k] + slack;
       if (!std::isfinite(off[k])) return false;
     }
+#ifdef CULLKIT_NCI_SSE2
+    // Two pixel centres at a time, the same double expressions (so the same mask) as below.
+    const __m128d nx0 = _mm_set1_pd(nx[0]), nx1 = _mm_set1_pd(nx[1]), nx2 = _mm_set1_pd(nx[2]);
+    const __m128d of0 = _mm_set1_pd(off[0]), of1 = _mm_set1_pd(off[1]), of2 = _mm_set1_pd(off[2]);
+    const __m128d zero = _mm_setzero_pd();
+    for (int y = ry0; y <= ry1; ++y) {
+      const std::uint32_t b = bits[y];
+      if (!b) {
+        mask[y] = 0;
+        continue;
+      }
+      const double qy = y0 + y;
+      const __m128d ey0 = _mm_set1_pd(ny[0] * qy), ey1 = _mm_set1_pd(ny[1] * qy), ey2 = _mm_set1_pd(ny[2] * qy);
+      std::uint32_t m = 0;
+      for (int x = __builtin_ctz(b), x_end = 31 - __builtin_clz(b); x <= x_end; x += 2) {
+        const __m128d qx = _mm_set_pd(double(x0 + x + 1), double(x0 + x));
+        const __m128d e0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(nx0, qx), ey0), of0);
+        const __m128d e1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(nx1, qx), ey1), of1);
+        const __m128d e2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(nx2, qx), ey2), of2);
+        const __m128d in = _mm_and_pd(_mm_and_pd(_mm_cmpge_pd(e0, zero), _mm_cmpge_pd(e1, zero)), _mm_cmpge_pd(e2, zero));
+        m |= static_cast<std::uint32_t>(_mm_movemask_pd(in)) << x;
+      }
+      mask[y] = static_cast<std::uint16_t>(m & b);
+    }
+#else
     for (int y = ry0; y <= ry1; ++y) {
       std::uint32_t b = bits[y];
       std::uint16_t m = 0;
@@ -1590,6 +1654,7 @@ class NormalClassIndex {
       }
       mask[y] = m;
     }
+#endif
     return true;
   }
 
@@ -1667,9 +1732,14 @@ class NormalClassIndex {
     return any;
   }
 
-  void process_tile(const Frame& f, int x0, int y0, int x1, int y1, NciContext::Thread& thread,
+  // `r` is the caller's scratch (any contents): every field read below is set here first.
+  void process_tile(const Frame& f, int x0, int y0, int x1, int y1, TileRays& r, NciContext::Thread& thread,
                     NciContext& context) const {
-    TileRays r;
+    r.any_dirty = true;
+    r.beam = false;
+    r.beam_eps = 0.0f;
+    for (int k = 0; k < 4; ++k) r.beam_box[k] = -1;
+    for (int k = 0; k < 3; ++k) r.mean_dir[k] = 0.0f;
     r.axis = f.axis;
     r.lo_a = lo_[f.axis];
     r.inv_h = 1.0 / h_;
@@ -1690,39 +1760,59 @@ class NormalClassIndex {
       r.sz_hi[k] = -std::numeric_limits<float>::infinity();
     }
     for (int y = 0; y < th; ++y) {
+      for (int x = tw; x < 16; ++x) r.dx[y * 16 + x] = r.dy[y * 16 + x] = r.dz[y * 16 + x] = 0.0f;
+      const std::size_t row = static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(x0);
+      const float* initial_depth = f.initial_depth ? f.initial_depth + row : nullptr;
+      const float* initial_solid = f.initial_solid ? f.initial_solid + row : nullptr;
       for (int x = 0; x < tw; ++x) {
         const int i = y * 16 + x;
         const Ray ray = f.rays.ray(x0 + x, y0 + y);
         r.dir[i] = ray.direction;
+        r.dx[i] = ray.direction.x;
+        r.dy[i] = ray.direction.y;
+        r.dz[i] = ray.direction.z;
         const double d3[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
         r.dir_a[i] = static_cast<float>(d3[a]);
-        r.wray[i] = detail::WatertightRay<float>::make(ray.direction);
-        r.best_t[i] = f.initial_depth ? f.initial_depth[static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) +
-                                                        static_cast<std::size_t>(x0 + x)]
-                                      : std::numeric_limits<float>::infinity();
+        r.best_t[i] = initial_depth ? initial_depth[x] : std::numeric_limits<float>::infinity();
         r.best[i] = none_;
-        r.solid_t[i] = f.initial_solid ? f.initial_solid[static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) +
-                                                         static_cast<std::size_t>(x0 + x)]
-                                       : r.best_t[i];
+        r.solid_t[i] = initial_solid ? initial_solid[x] : r.best_t[i];
         r.solid[i] = none_;
         r.dirty[i] = true;
+        // WatertightRay::make's validity (finite, not zero) without its shear: a ray that misses
+        // the scene box is never tested, only its validity is read (make_beam's corners).
+        // (the 1-norm in double cannot overflow; it is NaN or infinite iff a component is).
+        const double norm1 = std::fabs(d3[0]) + std::fabs(d3[1]) + std::fabs(d3[2]);
+        r.wray[i].valid = norm1 > 0.0 && norm1 < std::numeric_limits<double>::infinity();
         if (!r.wray[i].valid) continue;
-        // Does the ray reach the (inflated) scene box at all?
-        double tmin = 0.0, tmax = std::numeric_limits<double>::infinity();
+        // Does the ray reach the (inflated) scene box at all? Entry and exit per axis (the face
+        // by the direction's sign: rlo <= rhi, so that is the smaller and the larger of the two
+        // products), each widened by a relative 1e-9. The widening x -> x -/+ 1e-9 |x| is
+        // monotone (also after rounding), so it is applied once to the largest entry and the
+        // smallest exit: the same values as widening every axis's, in fewer instructions.
+        double enter = 0.0, leave = std::numeric_limits<double>::infinity();
         bool hit = true;
-        for (int k = 0; k < 3 && hit; ++k) {
-          if (d3[k] == 0.0) {
-            if (eye3[k] < blo3[k] || eye3[k] > bhi3[k]) hit = false;
-            continue;
+        if (d3[0] != 0.0 && d3[1] != 0.0 && d3[2] != 0.0) {
+          for (int k = 0; k < 3; ++k) {  // branch-free: min / max instructions
+            const double inv = 1.0 / d3[k];
+            const double t0 = rlo3[k] * inv, t1 = rhi3[k] * inv;
+            enter = std::max(enter, std::min(t0, t1));
+            leave = std::min(leave, std::max(t0, t1));
           }
-          const double inv = 1.0 / d3[k];
-          double t0 = rlo3[k] * inv, t1 = rhi3[k] * inv;
-          if (t0 > t1) std::swap(t0, t1);
-          tmin = std::max(tmin, t0 - 1e-9 * std::fabs(t0));
-          tmax = std::min(tmax, t1 + 1e-9 * std::fabs(t1));
-          if (tmin > tmax) hit = false;
+        } else {
+          for (int k = 0; k < 3; ++k) {
+            if (d3[k] == 0.0) {
+              hit = hit && !(eye3[k] < blo3[k] || eye3[k] > bhi3[k]);
+              continue;
+            }
+            const double inv = 1.0 / d3[k];
+            const double t0 = rlo3[k] * inv, t1 = rhi3[k] * inv;
+            enter = std::max(enter, std::min(t0, t1));
+            leave = std::min(leave, std::max(t0, t1));
+          }
         }
-        if (!hit) continue;
+        const double tmin = enter - 1e-9 * std::fabs(enter), tmax = leave + 1e-9 * std::fabs(leave);
+        if (!hit || tmin > tmax) continue;
+        r.wray[i] = detail::WatertightRay<float>::make(ray.direction);
         r.t_exit[i] = static_cast<float>(tmax * (1.0 + 1e-6)) * (1.0f + 1e-6f);
         const double da = d3[a];
         r.flat[i] = std::fabs(da) < 1e-6;
@@ -1798,9 +1888,9 @@ class NormalClassIndex {
       bool slopes_stale = true, full = false;
       float smin_b = 0.0f, smax_b = 0.0f, smin_c = 0.0f, smax_c = 0.0f;
       for (int s = start; s >= 0 && s < na; s += step) {
-        bool pending = false;
-        for (int y = 0; y < th; ++y) pending = pending || mask[y] != 0;
-        if (!pending) break;
+        std::uint64_t words[4];  // the 16 row masks (rows past the tile are zero) as 4 words
+        std::memcpy(words, mask, sizeof words);
+        if (!(words[0] | words[1] | words[2] | words[3])) break;
         ++thread.stats.slices_walked;
         // The part of the slab this walk's rays cross, inflated like the cells.
         double s0 = lo_[a] + s * h_ - delta_, s1 = lo_[a] + (s + 1) * h_ + delta_;
@@ -1982,43 +2072,45 @@ class NormalClassIndex {
     write_tile(f, r, x0, y0, tw, th, context);
   }
 
-  // Whether ray i may stop after processing slice s of its walk: its nearest hit (or the box exit:
-  // nothing lies beyond) comes before where it enters the next slice, with margins that only keep
-  // it longer. Rays exactly parallel to the slices never reach another slice.
-  [[nodiscard]] bool done_after(const TileRays& r, int i, int walk, int s, double ea, int na) const noexcept {
-    if (walk == 0 ? s + 1 >= na : s <= 0) return true;
-    if (r.dir_a[i] == 0.0f) return true;
-    const float t_stop = std::min(r.solid_t[i], r.t_exit[i]);
-    const double reach = double(t_stop) * (1.0 + 1e-5) * double(r.dir_a[i]);
-    const double margin = 0.25 * delta_ - 1e-6 * std::fabs(reach);
-    const double next_plane = walk == 0 ? r.lo_a + (s + 1) * h_ : r.lo_a + s * h_;
-    return walk == 0 ? ea + reach < next_plane + margin : ea + reach > next_plane - margin;
-  }
-
-  // The first slice (in walk order, from `from`) after which `done_after` holds. The predicate is
+  // The first slice (in walk order, from `from`) after which ray i may stop: its nearest solid
+  // hit (or the box exit: nothing lies beyond) comes before where it enters the next slice, with
+  // margins that only keep it longer (the predicate `done` below; the last slice of a walk always
+  // qualifies). Rays exactly parallel to the slices never reach another slice. The predicate is
   // monotone along the walk; an estimate from the stop coordinate is corrected by the predicate
-  // itself, so the answer is exactly the first slice where it holds.
+  // itself, so the answer is exactly the first slice where it holds. The predicate's per-ray parts
+  // (stop coordinate and margin) are computed once, not per evaluation.
   [[nodiscard]] int finish_slice(const TileRays& r, int i, int walk, int from, double ea, int na) const noexcept {
     const int end = walk == 0 ? na - 1 : 0;
+    if (r.dir_a[i] == 0.0f) return from;
+    const float t_stop = std::min(r.solid_t[i], r.t_exit[i]);
+    const double reach = double(t_stop) * (1.0 + 1e-5) * double(r.dir_a[i]);
+    const double pos = ea + reach;
+    const double margin = 0.25 * delta_ - 1e-6 * std::fabs(reach);
+    const auto done = [&](int k) {
+      if (walk == 0 ? k + 1 >= na : k <= 0) return true;
+      const double next_plane = walk == 0 ? r.lo_a + (k + 1) * h_ : r.lo_a + k * h_;
+      return walk == 0 ? pos < next_plane + margin : pos > next_plane - margin;
+    };
     int s = from;
-    if (r.dir_a[i] != 0.0f) {
-      const float t_stop = std::min(r.solid_t[i], r.t_exit[i]);
-      const double x = ea + double(t_stop) * double(r.dir_a[i]);
-      if (std::isfinite(x)) {
-        // Any start gives the same answer (the loops below correct it); starting at the slice
-        // holding the stop point usually needs two evaluations of done_after.
-        const double cell = std::clamp((x - r.lo_a) * r.inv_h, -2.0, double(na) + 2.0);
-        const double est = std::floor(cell);  // the slice holding the stop point
-        if (walk == 0 && est > from) s = static_cast<int>(std::min(est, double(end)));
-        if (walk == 1 && est < from) s = static_cast<int>(std::max(est, double(end)));
-      } else {
-        s = end;
-      }
+    const double x = ea + double(t_stop) * double(r.dir_a[i]);
+    if (std::isfinite(x)) {
+      // Any start gives the same answer (the loops below correct it); starting at the slice
+      // holding the stop point usually needs two evaluations of the predicate.
+      const double cell = std::clamp((x - r.lo_a) * r.inv_h, -2.0, double(na) + 2.0);
+      // The slice holding the stop point: floor (cell is clamped, so an int holds it; no libm
+      // call without SSE4.1).
+      int cut = static_cast<int>(cell);
+      if (double(cut) > cell) --cut;
+      const double est = cut;
+      if (walk == 0 && est > from) s = static_cast<int>(std::min(est, double(end)));
+      if (walk == 1 && est < from) s = static_cast<int>(std::max(est, double(end)));
+    } else {
+      s = end;
     }
     const int step = walk == 0 ? 1 : -1;
     // Back up while the previous slice already qualifies, then move on until this one does.
-    while (s != from && done_after(r, i, walk, s - step, ea, na)) s -= step;
-    while (s != end && !done_after(r, i, walk, s, ea, na)) s += step;
+    while (s != from && done(s - step)) s -= step;
+    while (s != end && !done(s)) s += step;
     return s;
   }
 
