@@ -5,7 +5,9 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -118,6 +120,26 @@ inline BruteHits brute_force(const cullkit::support::Scene& scene, const cullkit
   std::sort(out.selected.begin(), out.selected.end());
   out.selected.erase(std::unique(out.selected.begin(), out.selected.end()), out.selected.end());
   return out;
+}
+
+/// Calls fn(file, scene) for every real scene present (smallest first); says which were absent, could
+/// not be loaded, or are skipped under sanitizers (more than 100,000 triangles).
+template <class Fn>
+inline void for_each_real_scene(Fn&& fn) {
+  const auto files = cullkit::support::real_scene_files();
+  if (files.empty()) std::printf("real scenes absent: skipped\n");
+  for (const auto& file : files) {
+    const auto scene = cullkit::support::load_obj(cullkit::support::scenes_dir() + "/" + file);
+    if (!scene) {
+      std::printf("%s: could not load, skipped\n", file.c_str());
+      continue;
+    }
+    if (NCI_SANITIZED && scene->triangle_count() > 100000) {
+      std::printf("%s: large, skipped under sanitizers\n", file.c_str());
+      continue;
+    }
+    fn(file, *scene);
+  }
 }
 
 /// Our own float test of one mesh triangle against one pixel ray (for the tie rule).

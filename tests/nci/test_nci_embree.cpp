@@ -98,19 +98,8 @@ int main() {
   const int W = NCI_SANITIZED ? 80 : 160, H = NCI_SANITIZED ? 60 : 120;
   run_scene("city", support::make_city(21, 4), {params(32, 64), params(128, 32), params(512, 128)}, 15, W, H, 201);
   run_scene("office", support::make_office(22, 3, 3), {params(32, 64), params(8, 200)}, 15, W, H, 202);
-  const auto files = support::real_scene_files();
-  if (files.empty()) std::printf("real scenes absent: skipped\n");
-  for (const auto& file : files) {
-    const auto scene = support::load_obj(support::scenes_dir() + "/" + file);
-    if (!scene) {
-      std::printf("%s: could not load, skipped\n", file.c_str());
-      continue;
-    }
-    if (NCI_SANITIZED && scene->triangle_count() > 100000) {
-      std::printf("%s: large, skipped under sanitizers\n", file.c_str());
-      continue;
-    }
-    run_scene(file, *scene, {params(32, 64)}, NCI_SANITIZED ? 3 : 6, W, H, 203);
-  }
+  nci_test::for_each_real_scene([&](const std::string& file, const Scene& scene) {
+    run_scene(file, scene, {params(32, 64)}, NCI_SANITIZED ? 3 : 6, W, H, 203);
+  });
   return cullkit_test::report("test_nci_embree");
 }

@@ -14,17 +14,6 @@
 #include "check.hpp"
 #include "nci_test_util.hpp"
 
-#if defined(__SANITIZE_ADDRESS__)
-#define NCI_SANITIZED 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define NCI_SANITIZED 1
-#endif
-#endif
-#ifndef NCI_SANITIZED
-#define NCI_SANITIZED 0
-#endif
-
 using namespace cullkit;
 using cullkit::support::Scene;
 
@@ -83,19 +72,6 @@ void check_scene(const std::string& label, const Scene& scene, int w, int h) {
 int main() {
   const int W = NCI_SANITIZED ? 320 : 640, H = NCI_SANITIZED ? 240 : 480;
   check_scene("city", support::make_city(7, NCI_SANITIZED ? 8 : 20), W, H);
-  const auto files = support::real_scene_files();
-  if (files.empty()) std::printf("real scenes absent: skipped\n");
-  for (const auto& file : files) {
-    const auto scene = support::load_obj(support::scenes_dir() + "/" + file);
-    if (!scene) {
-      std::printf("%s: could not load, skipped\n", file.c_str());
-      continue;
-    }
-    if (NCI_SANITIZED && scene->triangle_count() > 100000) {
-      std::printf("%s: large, skipped under sanitizers\n", file.c_str());
-      continue;
-    }
-    check_scene(file, *scene, W, H);
-  }
+  nci_test::for_each_real_scene([&](const std::string& file, const Scene& scene) { check_scene(file, scene, W, H); });
   return cullkit_test::report("test_nci_precision");
 }
