@@ -410,6 +410,23 @@ class NormalClassIndex {
     else context.pixel_solid_t_.assign(pixel_count, std::numeric_limits<float>::infinity());
     if (triangle_count() > 0) {
       Frame frame = make_frame(camera);
+      {
+        // The box grown by delta_ (as the per-ray box test), rounded outward to float.
+        const glm::dvec3 lo = glm::dvec3(box_.min) - delta_, hi = glm::dvec3(box_.max) + delta_;
+        const auto down = [](double x) {
+          const float v = static_cast<float>(x);
+          return double(v) > x ? std::nextafter(v, -std::numeric_limits<float>::infinity()) : v;
+        };
+        const auto up = [](double x) {
+          const float v = static_cast<float>(x);
+          return double(v) < x ? std::nextafter(v, std::numeric_limits<float>::infinity()) : v;
+        };
+        glm::vec3 corner[8];
+        for (int k = 0; k < 8; ++k)
+          corner[k] = glm::vec3((k & 1) ? up(hi.x) : down(lo.x), (k & 2) ? up(hi.y) : down(lo.y),
+                                (k & 4) ? up(hi.z) : down(lo.z));
+        frame.box_rect = project_rect(frame, corner, 8);
+      }
       frame.initial_depth = initial_depth;
       frame.initial_solid = initial_solid;
       context.stats.axis = frame.axis;
@@ -1086,6 +1103,9 @@ class NormalClassIndex {
     // rounding of the ray directions, plus the ray test's edge band (tiny unless a pixel spans only
     // a few float roundings: very narrow fields of view).
     double margin = 0.05;
+    // The pixels whose centres may see the (inflated) scene box: project_rect of its corners, so it
+    // holds every triangle's rectangle. A tile wholly outside it has no ray to set up.
+    NciContext::Rect box_rect{NciContext::Rect::full, 0, 0, 0};
   };
 
   [[nodiscard]] Frame make_frame(const Camera& camera) const {
@@ -1735,6 +1755,26 @@ class NormalClassIndex {
   // `r` is the caller's scratch (any contents): every field read below is set here first.
   void process_tile(const Frame& f, int x0, int y0, int x1, int y1, TileRays& r, NciContext::Thread& thread,
                     NciContext& context) const {
+    const int tw = x1 - x0, th = y1 - y0;
+    {
+      // A tile beside the scene box's screen rectangle: every pixel keeps its initial depth (no
+      // triangle's rectangle reaches it, so no ray of it would be tested).
+      const NciContext::Rect& b = f.box_rect;
+      if (b.x0 > b.x1 || (b.x0 != NciContext::Rect::full && (b.x1 < x0 || b.x0 > x1 - 1 || b.y1 < y0 || b.y0 > y1 - 1))) {
+        for (int y = 0; y < th; ++y) {
+          const std::size_t row = static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(x0);
+          for (int x = 0; x < tw; ++x) {
+            const int i = y * 16 + x;
+            r.best_t[i] = f.initial_depth ? f.initial_depth[row + static_cast<std::size_t>(x)] : std::numeric_limits<float>::infinity();
+            r.best[i] = none_;
+            r.solid_t[i] = f.initial_solid ? f.initial_solid[row + static_cast<std::size_t>(x)] : r.best_t[i];
+            r.solid[i] = none_;
+          }
+        }
+        write_tile(f, r, x0, y0, tw, th, context);
+        return;
+      }
+    }
     r.any_dirty = true;
     r.beam = false;
     r.beam_eps = 0.0f;
@@ -1743,7 +1783,6 @@ class NormalClassIndex {
     r.axis = f.axis;
     r.lo_a = lo_[f.axis];
     r.inv_h = 1.0 / h_;
-    const int tw = x1 - x0, th = y1 - y0;
     const int a = f.axis, b = (a + 1) % 3, c = (a + 2) % 3;
     std::uint16_t live[16] = {};  // unfinished rays, both walks
     std::uint16_t walk_mask[2][16] = {};  // [0]: toward +axis (and flat), [1]: toward -axis
