@@ -84,7 +84,9 @@ struct Embree {
     rtcReleaseDevice(device);
   }
 
-  // One ray per pixel; returns the number of hits (so the work cannot be dropped).
+  // One ray per pixel; returns the number of hits (so the work cannot be dropped). Directions come
+  // from PixelRays::directions, a row at a time (the same bits as ray(), at the cost select_visible
+  // pays for them).
   long long render1(const Camera& cam, unsigned threads) const {
     std::atomic<long long> hits{0};
     const PixelRays rays(cam);
@@ -92,16 +94,18 @@ struct Embree {
       RTCIntersectContext ctx;
       rtcInitIntersectContext(&ctx);
       long long n = 0;
+      std::vector<float> dx(static_cast<std::size_t>(cam.width)), dy(dx.size()), dz(dx.size());
       for (int y = static_cast<int>(k); y < cam.height; y += static_cast<int>(threads)) {
+        rays.directions(0, y, cam.width, dx.data(), dy.data(), dz.data());
         for (int x = 0; x < cam.width; ++x) {
-          const Ray r = rays.ray(x, y);
+          const std::size_t i = static_cast<std::size_t>(x);
           RTCRayHit rh;
-          rh.ray.org_x = r.origin.x;
-          rh.ray.org_y = r.origin.y;
-          rh.ray.org_z = r.origin.z;
-          rh.ray.dir_x = r.direction.x;
-          rh.ray.dir_y = r.direction.y;
-          rh.ray.dir_z = r.direction.z;
+          rh.ray.org_x = cam.eye.x;
+          rh.ray.org_y = cam.eye.y;
+          rh.ray.org_z = cam.eye.z;
+          rh.ray.dir_x = dx[i];
+          rh.ray.dir_y = dy[i];
+          rh.ray.dir_z = dz[i];
           rh.ray.tnear = 0.0f;
           rh.ray.tfar = 3.0e38f;
           rh.ray.mask = 0xFFFFFFFFu;
@@ -132,16 +136,20 @@ struct Embree {
         alignas(64) RTCRayHit16 rh;
         alignas(64) int valid[16];
         const int x0 = (b % bx) * 4, y0 = (b / bx) * 4;
+        float dx[16], dy[16], dz[16];  // 4 rows of 4 (rows past the image repeat the last one)
+        const int cols = std::min(4, cam.width - x0);
+        for (int row = 0; row < 4; ++row)
+          rays.directions(x0, std::min(y0 + row, cam.height - 1), cols, dx + 4 * row, dy + 4 * row, dz + 4 * row);
         for (int i = 0; i < 16; ++i) {
           const int x = x0 + (i & 3), y = y0 + (i >> 2);
           valid[i] = (x < cam.width && y < cam.height) ? -1 : 0;
-          const Ray r = rays.ray(std::min(x, cam.width - 1), std::min(y, cam.height - 1));
-          rh.ray.org_x[i] = r.origin.x;
-          rh.ray.org_y[i] = r.origin.y;
-          rh.ray.org_z[i] = r.origin.z;
-          rh.ray.dir_x[i] = r.direction.x;
-          rh.ray.dir_y[i] = r.direction.y;
-          rh.ray.dir_z[i] = r.direction.z;
+          const int j = (i & ~3) + std::min(i & 3, cols - 1);
+          rh.ray.org_x[i] = cam.eye.x;
+          rh.ray.org_y[i] = cam.eye.y;
+          rh.ray.org_z[i] = cam.eye.z;
+          rh.ray.dir_x[i] = dx[j];
+          rh.ray.dir_y[i] = dy[j];
+          rh.ray.dir_z[i] = dz[j];
           rh.ray.tnear[i] = 0.0f;
           rh.ray.tfar[i] = 3.0e38f;
           rh.ray.mask[i] = 0xFFFFFFFFu;

@@ -1190,11 +1190,12 @@ class NormalClassIndex {
   }
 
   struct TileRays {
-    glm::vec3 dir[256];
-    // The same directions by component (make_beam's 4-wide pre-test); zero beyond the tile's width.
+    // The pixel rays' directions by component (PixelRays::directions, make_beam's 4-wide
+    // pre-test); zero beyond the tile's width.
     alignas(16) float dx[256];
     alignas(16) float dy[256];
     alignas(16) float dz[256];
+    [[nodiscard]] glm::dvec3 direction(int i) const noexcept { return glm::dvec3(dx[i], dy[i], dz[i]); }
     detail::WatertightRay<float> wray[256];
     float best_t[256];
     std::uint32_t best[256];
@@ -1318,7 +1319,7 @@ class NormalClassIndex {
     const int corner[4] = {box[1] * 16 + box[0], box[1] * 16 + box[2], box[3] * 16 + box[2], box[3] * 16 + box[0]};
     glm::dvec3 d[4], centre(0.0);
     for (int k = 0; k < 4; ++k) {
-      d[k] = glm::dvec3(r.dir[corner[k]]);
+      d[k] = r.direction(corner[k]);
       if (!r.wray[corner[k]].valid) return;
       centre += d[k];
     }
@@ -1363,7 +1364,7 @@ class NormalClassIndex {
       while (bits) {
         const int x = __builtin_ctz(bits);
         bits &= bits - 1;
-        const glm::dvec3 dir(r.dir[y * 16 + x]);
+        const glm::dvec3 dir = r.direction(y * 16 + x);
         const double dl = std::fabs(dir.x) + std::fabs(dir.y) + std::fabs(dir.z);
         for (int k = 0; k < 4; ++k) {
           const double v = double(r.beam_n[k][0]) * dir.x + double(r.beam_n[k][1]) * dir.y + double(r.beam_n[k][2]) * dir.z;
@@ -1539,7 +1540,7 @@ class NormalClassIndex {
       const glm::dvec3 m = side > 0.0 ? n : -n;
       bool out = true;
       for (int j = 0; j < 4 && out; ++j) {
-        const glm::dvec3 d(r.dir[corner[j]]);
+        const glm::dvec3 d = r.direction(corner[j]);
         out = glm::dot(m, d) < -1e-5 * len * glm::length(d);
       }
       if (out) return true;
@@ -1803,14 +1804,11 @@ class NormalClassIndex {
       const std::size_t row = static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(x0);
       const float* initial_depth = f.initial_depth ? f.initial_depth + row : nullptr;
       const float* initial_solid = f.initial_solid ? f.initial_solid + row : nullptr;
+      f.rays.directions(x0, y0 + y, tw, &r.dx[y * 16], &r.dy[y * 16], &r.dz[y * 16]);
       for (int x = 0; x < tw; ++x) {
         const int i = y * 16 + x;
-        const Ray ray = f.rays.ray(x0 + x, y0 + y);
-        r.dir[i] = ray.direction;
-        r.dx[i] = ray.direction.x;
-        r.dy[i] = ray.direction.y;
-        r.dz[i] = ray.direction.z;
-        const double d3[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
+        const glm::vec3 direction(r.dx[i], r.dy[i], r.dz[i]);
+        const double d3[3] = {direction.x, direction.y, direction.z};
         r.dir_a[i] = static_cast<float>(d3[a]);
         r.best_t[i] = initial_depth ? initial_depth[x] : std::numeric_limits<float>::infinity();
         r.best[i] = none_;
@@ -1829,10 +1827,11 @@ class NormalClassIndex {
         // monotone (also after rounding), so it is applied once to the largest entry and the
         // smallest exit: the same values as widening every axis's, in fewer instructions.
         double enter = 0.0, leave = std::numeric_limits<double>::infinity();
+        double inv3[3] = {0.0, 0.0, 0.0};
         bool hit = true;
         if (d3[0] != 0.0 && d3[1] != 0.0 && d3[2] != 0.0) {
           for (int k = 0; k < 3; ++k) {  // branch-free: min / max instructions
-            const double inv = 1.0 / d3[k];
+            const double inv = inv3[k] = 1.0 / d3[k];
             const double t0 = rlo3[k] * inv, t1 = rhi3[k] * inv;
             enter = std::max(enter, std::min(t0, t1));
             leave = std::min(leave, std::max(t0, t1));
@@ -1843,7 +1842,7 @@ class NormalClassIndex {
               hit = hit && !(eye3[k] < blo3[k] || eye3[k] > bhi3[k]);
               continue;
             }
-            const double inv = 1.0 / d3[k];
+            const double inv = inv3[k] = 1.0 / d3[k];
             const double t0 = rlo3[k] * inv, t1 = rhi3[k] * inv;
             enter = std::max(enter, std::min(t0, t1));
             leave = std::min(leave, std::max(t0, t1));
@@ -1851,12 +1850,14 @@ class NormalClassIndex {
         }
         const double tmin = enter - 1e-9 * std::fabs(enter), tmax = leave + 1e-9 * std::fabs(leave);
         if (!hit || tmin > tmax) continue;
-        r.wray[i] = detail::WatertightRay<float>::make(ray.direction);
+        r.wray[i] = detail::WatertightRay<float>::make(direction);
         r.t_exit[i] = static_cast<float>(tmax * (1.0 + 1e-6)) * (1.0f + 1e-6f);
         const double da = d3[a];
         r.flat[i] = std::fabs(da) < 1e-6;
-        r.slope_b[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[b] / da);
-        r.slope_c[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[c] / da);
+        // Slopes by the reciprocal the box test took (inv3[a] is 1 / da when not flat): within a
+        // double rounding of the quotient, far inside the float rounding the beam allows for.
+        r.slope_b[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[b] * inv3[a]);
+        r.slope_c[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[c] * inv3[a]);
         live[y] = static_cast<std::uint16_t>(live[y] | (1u << x));
         const detail::WatertightRay<float>& w = r.wray[i];
         r.sz_lo[w.kz] = std::min(r.sz_lo[w.kz], w.sz);
@@ -1888,7 +1889,7 @@ class NormalClassIndex {
         cos_psi = 1.0;
         for (int y = 0; y < th; ++y)
           for (int x = 0; x < tw; ++x)
-            if (live[y] & (1u << x)) cos_psi = std::min(cos_psi, glm::dot(axis, glm::dvec3(r.dir[y * 16 + x])));
+            if (live[y] & (1u << x)) cos_psi = std::min(cos_psi, glm::dot(axis, r.direction(y * 16 + x)));
       }
       const double psi = std::acos(std::clamp(cos_psi, -1.0, 1.0)) + 2e-3;
       const bool can_skip = psi < 1.5707963267948966;

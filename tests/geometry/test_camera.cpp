@@ -1,6 +1,11 @@
 // The pixel-ray rule: every pixel ray projects back onto its pixel centre, and the same view gives
 // the same rays whatever the depth range, reversed-Z or an infinite far plane.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <vector>
 
 #include <check.hpp>
 #include <cullkit/cullkit.hpp>
@@ -48,6 +53,62 @@ int main() {
         CHECK(clip.w > 0.0);  // in front of the eye
       }
     }
+  }
+  // PixelRays::directions is bit for bit ray(x, y).direction: every row segment (odd and even
+  // lengths and starts) of the same six kinds of view, an eye far from the origin, a near-singular
+  // and a singular matrix, and matrices with NaN or infinite entries.
+  {
+    support::Rng drng(17);
+    std::vector<Camera> cams;
+    for (int it = 0; it < 12; ++it) {
+      const float scale = it < 6 ? 100.0f : 5e4f;
+      const glm::vec3 eye(drng.uniform(-scale, scale), drng.uniform(0, scale), drng.uniform(-scale, scale));
+      const glm::vec3 target = eye + glm::vec3(drng.uniform(-1, 1), drng.uniform(-0.9f, 0.9f), drng.uniform(-1, 1));
+      const int w = drng.range(1, 90), h = drng.range(1, 60);
+      const float fov = it % 3 == 0 ? drng.uniform(0.05f, 1.0f) : drng.uniform(20, 150);
+      const float n = drng.uniform(0.01f, 1.0f), f = drng.uniform(100, 1000);
+      cams.push_back(support::make_camera(eye, target, fov, w, h, n, f, DepthRange::negative_one_to_one));
+      cams.push_back(support::make_camera(eye, target, fov, w, h, n, f, DepthRange::zero_to_one, true));
+      cams.push_back(support::make_camera(eye, target, fov, w, h, n, 0.0f, DepthRange::negative_one_to_one));
+      cams.push_back(support::make_camera(eye, target, fov, w, h, n, 0.0f, DepthRange::zero_to_one, true));
+    }
+    glm::mat4 thin(1.0f);
+    thin[2][2] = 1e-30f;
+    cams.push_back(Camera{glm::vec3(1, 2, 3), thin, 7, 5});
+    cams.push_back(Camera{glm::vec3(0), glm::mat4(0.0f), 6, 3});
+    glm::mat4 nan_m = cams[0].view_proj, inf_m = cams[0].view_proj;
+    nan_m[1][2] = std::numeric_limits<float>::quiet_NaN();
+    inf_m[3][0] = std::numeric_limits<float>::infinity();
+    cams.push_back(Camera{cams[0].eye, nan_m, 5, 4});
+    cams.push_back(Camera{cams[0].eye, inf_m, 5, 4});
+    const auto same = [](float a, float b) {  // equal bits (NaN included)
+      std::uint32_t ua, ub;
+      std::memcpy(&ua, &a, 4);
+      std::memcpy(&ub, &b, 4);
+      return ua == ub;
+    };
+    int compared = 0;
+    for (std::size_t ci = 0; ci < cams.size(); ++ci) {
+      const PixelRays rays(cams[ci]);
+      const int w = cams[ci].width, h = cams[ci].height;
+      std::vector<float> dx(static_cast<std::size_t>(w)), dy(dx.size()), dz(dx.size());
+      for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; x += 1 + y % 3) {
+          const int count = std::min(w - x, 1 + (x * 7 + y) % 17);
+          rays.directions(x, y, count, dx.data(), dy.data(), dz.data());
+          for (int i = 0; i < count; ++i) {
+            const glm::vec3 d = rays.ray(x + i, y).direction;
+            ++compared;
+            CHECK_MSG(same(d.x, dx[static_cast<std::size_t>(i)]) && same(d.y, dy[static_cast<std::size_t>(i)]) &&
+                          same(d.z, dz[static_cast<std::size_t>(i)]),
+                      "camera %zu pixel %d %d: directions() %.9g %.9g %.9g, ray() %.9g %.9g %.9g", ci, x + i, y,
+                      double(dx[static_cast<std::size_t>(i)]), double(dy[static_cast<std::size_t>(i)]),
+                      double(dz[static_cast<std::size_t>(i)]), double(d.x), double(d.y), double(d.z));
+          }
+        }
+      }
+    }
+    CHECK(compared > 20000);
   }
   // A singular matrix gives zero directions, never NaN.
   const Camera bad{glm::vec3(0), glm::mat4(0.0f), 4, 4};

@@ -3,6 +3,12 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
+
+#if defined(__SSE2__) || defined(_M_X64)
+#include <emmintrin.h>
+#define CULLKIT_CAMERA_SSE2 1
+#endif
 
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
@@ -73,6 +79,65 @@ class PixelRays {
     if (len > 0.0 && std::isfinite(len)) dir /= len;
     else dir = glm::dvec3(0.0);
     return Ray{eye_, glm::vec3(dir)};
+  }
+
+  /// The directions of `count` consecutive pixels of row y, from pixel (x, y) on: component by
+  /// component into dx, dy, dz (each `count` floats). Bit for bit `ray(x + i, y).direction`, at about
+  /// half its cost on x86-64: two pixels per SSE2 instruction (the same IEEE operations in the
+  /// same order; like `ray`, it must not be compiled with floating-point contraction into FMA,
+  /// e.g. -ffp-contract=fast with -mfma, or the two may differ in the last bit).
+  void directions(int x, int y, int count, float* dx, float* dy, float* dz) const noexcept {
+    int i = 0;
+#ifdef CULLKIT_CAMERA_SSE2
+    const double py = static_cast<double>(y) + 0.5;
+    const __m128d v = _mm_set1_pd(1.0 - 2.0 * py / height_);
+    const __m128d two = _mm_set1_pd(2.0), one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5);
+    const __m128d width = _mm_set1_pd(static_cast<double>(width_)), tiny = _mm_set1_pd(1e-9);
+    const __m128d sign = _mm_set1_pd(-0.0), zero = _mm_setzero_pd();
+    const __m128d inf = _mm_set1_pd(std::numeric_limits<double>::infinity());
+    const __m128d ex = _mm_set1_pd(double(eye_.x)), ey = _mm_set1_pd(double(eye_.y)), ez = _mm_set1_pd(double(eye_.z));
+    // Rows of the homogeneous map with v already applied: xy = col_x u + col_y v.
+    __m128d cx[4], cyv[4], fr[4], nr[4];
+    for (int k = 0; k < 4; ++k) {
+      cx[k] = _mm_set1_pd(col_x_[k]);
+      cyv[k] = _mm_mul_pd(_mm_set1_pd(col_y_[k]), v);
+      fr[k] = _mm_set1_pd(far_[k]);
+      nr[k] = _mm_set1_pd(near_[k]);
+    }
+    for (; i + 2 <= count; i += 2) {
+      const __m128d px = _mm_add_pd(_mm_set_pd(double(x + i + 1), double(x + i)), half);
+      const __m128d u = _mm_sub_pd(_mm_div_pd(_mm_mul_pd(two, px), width), one);
+      __m128d xy[4], h[4];
+      for (int k = 0; k < 4; ++k) {
+        xy[k] = _mm_add_pd(_mm_mul_pd(cx[k], u), cyv[k]);
+        h[k] = _mm_add_pd(xy[k], fr[k]);
+      }
+      const __m128d mag = _mm_add_pd(_mm_add_pd(_mm_andnot_pd(sign, h[0]), _mm_andnot_pd(sign, h[1])),
+                                     _mm_andnot_pd(sign, h[2]));
+      // !(|w| > 1e-9 mag): the near-plane point instead.
+      const __m128d use_far = _mm_cmpgt_pd(_mm_andnot_pd(sign, h[3]), _mm_mul_pd(tiny, mag));
+      for (int k = 0; k < 4; ++k)
+        h[k] = _mm_or_pd(_mm_and_pd(use_far, h[k]), _mm_andnot_pd(use_far, _mm_add_pd(xy[k], nr[k])));
+      const __m128d gx = _mm_sub_pd(_mm_div_pd(h[0], h[3]), ex);
+      const __m128d gy = _mm_sub_pd(_mm_div_pd(h[1], h[3]), ey);
+      const __m128d gz = _mm_sub_pd(_mm_div_pd(h[2], h[3]), ez);
+      const __m128d len = _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(gx, gx), _mm_mul_pd(gy, gy)), _mm_mul_pd(gz, gz)));
+      // len > 0 and finite (NaN fails both compares): unit; else zero.
+      const __m128d ok = _mm_and_pd(_mm_cmpgt_pd(len, zero), _mm_cmplt_pd(len, inf));
+      const __m128 fx = _mm_cvtpd_ps(_mm_and_pd(ok, _mm_div_pd(gx, len)));
+      const __m128 fy = _mm_cvtpd_ps(_mm_and_pd(ok, _mm_div_pd(gy, len)));
+      const __m128 fz = _mm_cvtpd_ps(_mm_and_pd(ok, _mm_div_pd(gz, len)));
+      _mm_storel_pi(reinterpret_cast<__m64*>(dx + i), fx);
+      _mm_storel_pi(reinterpret_cast<__m64*>(dy + i), fy);
+      _mm_storel_pi(reinterpret_cast<__m64*>(dz + i), fz);
+    }
+#endif
+    for (; i < count; ++i) {
+      const glm::vec3 d = ray(x + i, y).direction;
+      dx[i] = d.x;
+      dy[i] = d.y;
+      dz[i] = d.z;
+    }
   }
 
   [[nodiscard]] int width() const noexcept { return width_; }
