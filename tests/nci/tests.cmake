@@ -11,3 +11,5 @@ cullkit_add_test(test_nci_footprint SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_f
 cullkit_add_test(test_nci_narrow SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_narrow.cpp EMBREE LIBS Threads::Threads)
 cullkit_add_test(test_nci_precision SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_precision.cpp EMBREE
                  LIBS Threads::Threads)
+cullkit_add_test(test_nci_moving_narrow SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_moving_narrow.cpp EMBREE
+                 LIBS Threads::Threads)
