@@ -177,8 +177,9 @@ class NciContext;
 /// not allocate once the buffers have grown. One context per concurrent caller; not thread-safe.
 /// Size: 16 bytes per indexed triangle per worker thread (test stamps and cached screen
 /// rectangles), on crowded indexes 12 bytes per 16 cell entries per worker thread (chunk
-/// rectangles), 8 bytes per triangle for the merge, 12 bytes per pixel, and 12 bytes per edge-band
-/// triangle selected beside a pixel's first hit (rare outside very narrow views).
+/// rectangles), 2 bits per indexed triangle per worker thread and 1 bit per mesh triangle for the
+/// merge, 12 bytes per pixel, and 12 bytes per edge-band triangle selected beside a pixel's first
+/// hit (rare outside very narrow views).
 class NciContext {
  public:
   NciSelectStats stats;  ///< statistics of the last call that used this context
@@ -216,7 +217,11 @@ class NciContext {
     std::vector<Chunk> chunk;
     std::uint32_t stamp_value = 0;
     std::uint32_t frame_epoch = 0;
-    std::vector<std::uint32_t> tested;  // triangles tested (unique per tile)
+    // Bit sets over the internal triangle ids, cleared by their worker at the start of a call: the
+    // triangles it tested and the ones it selected (pixel winners and edge-band extras). The merge
+    // ORs them: no serial pass over the pixels, no sort.
+    std::vector<std::uint64_t> tested_bits, shown_bits;
+    std::uint32_t tested_count = 0;  // ray-tested (triangle, tile) pairs so far in this call
     // Hits and near misses within rounding of an edge (detail::watertight_hit_band) in the current
     // tile: reported when nearer than their pixel's solid hit (see TileRays::solid_t).
     struct Unsure {
@@ -241,9 +246,7 @@ class NciContext {
   std::vector<float> pixel_t_;
   std::vector<float> pixel_solid_t_;       // per pixel: the nearest hit outside every edge band
   std::vector<Extra> extras_;              // the last call's Thread::extra, in the mesh's numbering
-  std::vector<std::uint32_t> seen_;        // per triangle: epoch of last tested-count
-  std::vector<std::uint32_t> shown_;       // per triangle: epoch of last visible mark
-  std::uint32_t epoch_ = 0;
+  std::vector<std::uint64_t> shown_mesh_;  // the merge's selected set as a bit set over mesh ids
   struct Objects;
   std::unique_ptr<Objects> objects_;  // moving objects' scratch, made on first use
 };
@@ -403,11 +406,18 @@ class NormalClassIndex {
     }
     if (width <= 0 || height <= 0) return;
     const std::size_t pixel_count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-    context.pixel_tri_.assign(pixel_count, none_);
-    context.pixel_t_.assign(pixel_count, std::numeric_limits<float>::infinity());
     context.extras_.clear();
-    if (initial_solid) context.pixel_solid_t_.assign(initial_solid, initial_solid + pixel_count);
-    else context.pixel_solid_t_.assign(pixel_count, std::numeric_limits<float>::infinity());
+    if (triangle_count() == 0) {
+      context.pixel_tri_.assign(pixel_count, none_);
+      context.pixel_t_.assign(pixel_count, std::numeric_limits<float>::infinity());
+      if (initial_solid) context.pixel_solid_t_.assign(initial_solid, initial_solid + pixel_count);
+      else context.pixel_solid_t_.assign(pixel_count, std::numeric_limits<float>::infinity());
+    } else {
+      // Every pixel belongs to one tile, and each tile writes all three for each of its pixels.
+      context.pixel_tri_.resize(pixel_count);
+      context.pixel_t_.resize(pixel_count);
+      context.pixel_solid_t_.resize(pixel_count);
+    }
     if (triangle_count() > 0) {
       Frame frame = make_frame(camera);
       {
@@ -453,7 +463,7 @@ class NormalClassIndex {
           for (auto& c : th.chunk) c.epoch = 0u;
           th.frame_epoch = 1;
         }
-        th.tested.clear();
+        th.tested_count = 0;
         th.extra.clear();
         th.unsure.clear();
         th.stats = NciSelectStats{};
@@ -466,15 +476,18 @@ class NormalClassIndex {
         // Per-tile ray scratch, made once per worker and call (not per tile: 256 rays' worth of
         // constructors); process_tile sets every field it reads.
         TileRays rays;
+        const std::size_t words = (triangle_count() + 63) / 64;
+        th.tested_bits.assign(words, 0u);
+        th.shown_bits.assign(words, 0u);
         for (;;) {
           const std::size_t t = next.fetch_add(1, std::memory_order_relaxed);
           if (t >= tile_count) break;
           const int tx = static_cast<int>(t % static_cast<std::size_t>(tiles_x));
           const int ty = static_cast<int>(t / static_cast<std::size_t>(tiles_x));
-          const std::size_t before = th.tested.size();
+          const std::uint32_t before = th.tested_count;
           process_tile(frame, tx * tile, ty * tile, std::min(width, (tx + 1) * tile),
                        std::min(height, (ty + 1) * tile), rays, th, context);
-          context.tile_tested[t] = static_cast<std::uint32_t>(th.tested.size() - before);
+          context.tile_tested[t] = th.tested_count - before;
         }
       };
       if (thread_count == 1) {
@@ -486,46 +499,35 @@ class NormalClassIndex {
         work(0);
         for (auto& w : workers) w.join();
       }
-      // Merge: distinct tested triangles and the visible set.
-      if (context.seen_.size() != triangle_count()) {
-        context.seen_.assign(triangle_count(), 0u);
-        context.shown_.assign(triangle_count(), 0u);
-        context.epoch_ = 0;
-      }
-      if (++context.epoch_ == 0) {
-        std::fill(context.seen_.begin(), context.seen_.end(), 0u);
-        std::fill(context.shown_.begin(), context.shown_.end(), 0u);
-        context.epoch_ = 1;
-      }
-      const std::uint32_t epoch = context.epoch_;
+      // Merge: distinct tested triangles (the union of the workers' bit sets) and the visible set
+      // (pixel winners and edge-band extras), sorted by mesh id through a bit set over the mesh.
       for (unsigned i = 0; i < thread_count; ++i) {
         const auto& th = context.threads_[i];
-        for (std::uint32_t tri : th.tested) {
-          if (context.seen_[tri] != epoch) {
-            context.seen_[tri] = epoch;
-            ++out.triangles_tested;
-          }
-        }
         context.stats.ray_tests += th.stats.ray_tests;
         context.stats.cells_visited += th.stats.cells_visited;
         context.stats.slices_walked += th.stats.slices_walked;
+        for (const auto& e : th.extra) context.extras_.push_back(NciContext::Extra{original(e.tri), e.t, e.pixel});
       }
-      for (std::uint32_t tri : context.pixel_tri_) {
-        if (tri != none_ && context.shown_[tri] != epoch) {
-          context.shown_[tri] = epoch;
-          out.triangles.push_back(original(tri));
+      auto& mesh_bits = context.shown_mesh_;
+      mesh_bits.assign((stats_.triangles_input + 63) / 64, 0u);
+      const std::size_t words = (triangle_count() + 63) / 64;
+      for (std::size_t w = 0; w < words; ++w) {
+        std::uint64_t tested = 0, shown = 0;
+        for (unsigned i = 0; i < thread_count; ++i) {
+          tested |= context.threads_[i].tested_bits[w];
+          shown |= context.threads_[i].shown_bits[w];
+        }
+        out.triangles_tested += static_cast<std::size_t>(__builtin_popcountll(tested));
+        while (shown) {
+          const std::uint32_t m = original(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(__builtin_ctzll(shown)));
+          shown &= shown - 1;
+          mesh_bits[m / 64] |= std::uint64_t{1} << (m % 64);
         }
       }
-      for (unsigned i = 0; i < thread_count; ++i) {
-        for (const auto& e : context.threads_[i].extra) {
-          context.extras_.push_back(NciContext::Extra{original(e.tri), e.t, e.pixel});
-          if (context.shown_[e.tri] != epoch) {
-            context.shown_[e.tri] = epoch;
-            out.triangles.push_back(original(e.tri));
-          }
-        }
+      for (std::size_t w = 0; w < mesh_bits.size(); ++w) {
+        for (std::uint64_t bits = mesh_bits[w]; bits; bits &= bits - 1)
+          out.triangles.push_back(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(__builtin_ctzll(bits)));
       }
-      std::sort(out.triangles.begin(), out.triangles.end());
     }
     if (pixels) {
       pixels->triangle.resize(pixel_count);
@@ -1772,7 +1774,7 @@ class NormalClassIndex {
             r.solid[i] = none_;
           }
         }
-        write_tile(f, r, x0, y0, tw, th, context);
+        write_tile(f, r, x0, y0, tw, th, context, thread);
         return;
       }
     }
@@ -1869,7 +1871,7 @@ class NormalClassIndex {
     bool any = false;
     for (int y = 0; y < th; ++y) any = any || live[y] != 0;
     if (!any) {
-      write_tile(f, r, x0, y0, tw, th, context);
+      write_tile(f, r, x0, y0, tw, th, context, thread);
       return;
     }
 
@@ -2055,7 +2057,10 @@ class NormalClassIndex {
                 return p.key != q.key ? p.key < q.key : p.tri < q.tri;
               });
               for (const auto& cand : thread.cand)
-                if (test_triangle(f, x0, y0, cand, live, r, thread)) thread.tested.push_back(cand.tri);
+                if (test_triangle(f, x0, y0, cand, live, r, thread)) {
+                  ++thread.tested_count;
+                  thread.tested_bits[cand.tri / 64] |= std::uint64_t{1} << (cand.tri % 64);
+                }
               thread.cand.clear();
             }
           }
@@ -2099,17 +2104,23 @@ class NormalClassIndex {
       return static_cast<std::uint32_t>(y0 + i / 16) * static_cast<std::uint32_t>(f.width) +
              static_cast<std::uint32_t>(x0 + i % 16);
     };
-    for (const auto& u : thread.unsure)
-      if (u.t <= r.solid_t[u.pixel] && u.tri != r.best[u.pixel])
+    const auto show = [&](std::uint32_t tri) { thread.shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64); };
+    for (const auto& u : thread.unsure) {
+      if (u.t <= r.solid_t[u.pixel] && u.tri != r.best[u.pixel]) {
         thread.extra.push_back(NciContext::Extra{u.tri, u.t, global(u.pixel)});
+        show(u.tri);
+      }
+    }
     thread.unsure.clear();
     for (int y = 0; y < th; ++y)
       for (int x = 0; x < tw; ++x) {
         const int i = y * 16 + x;
-        if (r.solid[i] != none_ && r.solid[i] != r.best[i])
+        if (r.solid[i] != none_ && r.solid[i] != r.best[i]) {
           thread.extra.push_back(NciContext::Extra{r.solid[i], r.solid_t[i], global(i)});
+          show(r.solid[i]);
+        }
       }
-    write_tile(f, r, x0, y0, tw, th, context);
+    write_tile(f, r, x0, y0, tw, th, context, thread);
   }
 
   // The first slice (in walk order, from `from`) after which ray i may stop: its nearest solid
@@ -2154,7 +2165,8 @@ class NormalClassIndex {
     return s;
   }
 
-  static void write_tile(const Frame& f, const TileRays& r, int x0, int y0, int tw, int th, NciContext& context) {
+  static void write_tile(const Frame& f, const TileRays& r, int x0, int y0, int tw, int th, NciContext& context,
+                         NciContext::Thread& thread) {
     const std::size_t width = static_cast<std::size_t>(f.width);
     for (int y = 0; y < th; ++y) {
       for (int x = 0; x < tw; ++x) {
@@ -2162,6 +2174,8 @@ class NormalClassIndex {
         context.pixel_tri_[p] = r.best[y * 16 + x];
         context.pixel_t_[p] = r.best_t[y * 16 + x];
         context.pixel_solid_t_[p] = r.solid_t[y * 16 + x];
+        const std::uint32_t tri = r.best[y * 16 + x];
+        if (tri != none_) thread.shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
       }
     }
   }
