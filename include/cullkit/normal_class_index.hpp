@@ -233,8 +233,9 @@ class NciContext;
 /// Size: 16 bytes per indexed triangle per worker thread (test stamps and cached screen
 /// rectangles), about 80 KB of tile scratch per worker thread (made on first use), on crowded
 /// indexes 12 bytes per 16 cell entries per worker thread (chunk rectangles), 2 bits per indexed
-/// triangle per worker thread and 1 bit per mesh triangle for the merge, 12 bytes per pixel, and 12 bytes per edge-band triangle selected beside a pixel's first
-/// hit (rare outside very narrow views).
+/// triangle per worker thread and 1 bit per mesh triangle for the merge, 12 bytes per pixel, and
+/// 12 bytes per edge-band triangle selected beside a pixel's first hit (rare outside very narrow
+/// views).
 class NciContext {
  public:
   NciSelectStats stats;  ///< statistics of the last call that used this context
