@@ -11,7 +11,8 @@
 //     scene (default flags: not robust, two-sided): the fast configuration a user would pick.
 // Flags: --no-big, --only-big, --no-precision, --quick (precision at the default parameters only,
 // timing at 640x480 only), --hash (only a hash of the per-pixel triangle and depth of both views at
-// 640x480 and 1024x768 per scene, to check that a change keeps every answer). CSV on stdout.
+// 640x480 and 1024x768 per scene, to check that a change keeps every answer; env CULLKIT_NCI_TILE sets
+// NciParams::tile_size for it). CSV on stdout.
 // --profile SCENE VIEW [FRAMES]: for callgrind (instructions per frame: a run of 3 frames minus a run of 1,
 // halved; or `--collect-atstart=no --toggle-collect='*process_tile*'` for the tiles alone):
 // one thread, select_visible only, at 640x480, FRAMES frames (default 1) of view VIEW (0: outside,
@@ -265,6 +266,7 @@ void pixel_hash(const std::string& name, const Scene& s, unsigned threads) {
   NciParams p;
   p.threads = threads;
   p.build_threads = threads;
+  if (const char* tile = std::getenv("CULLKIT_NCI_TILE")) p.tile_size = std::atoi(tile);  // answers must not move
   const NormalClassIndex<glm::vec3> index(s.mesh(), p);
   for (auto [w, h] : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}}) {
     const auto cams = views(s, w, h);

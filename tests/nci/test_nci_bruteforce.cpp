@@ -107,6 +107,11 @@ int main() {
     const Scene office = support::make_office(12, 2, 2);
     const auto cams = nci_test::cameras_for(office.bounds, 10, W, H, 102);
     compare("office", office, NciParams{}, cams, 102);
+    NciParams p;
+    p.tile_size = 16;  // the default before tiles grew to 32
+    compare("office/t16", office, p, cams, 102);
+    p.tile_size = 29;  // rows not a multiple of 4 wide, partial tiles on both edges
+    compare("office/t29", office, p, cams, 102);
   }
   {
     const Scene soup = random_soup(14, 400, 1e-4f);
