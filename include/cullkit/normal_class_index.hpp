@@ -1265,6 +1265,11 @@ class NormalClassIndex {
   // the target plane, in double; false when it is not strictly in front of the eye (or w <= 0).
   [[nodiscard]] static bool project_point(const Frame& f, const glm::vec3& p, double& px, double& py) noexcept {
     const glm::dvec3 dx = glm::dvec3(p) - f.eye;
+    // A point (nearly) at the eye: its offsets, as the float ray test takes them, are subnormal or
+    // their products underflow, so that test has no relative precision near it and the margins of
+    // rectangles and footprints (relative rounding) do not hold. No projection then (callers test
+    // every ray). Above 1e-15 every product of two such offsets stays a normal float (>= 2^24 FLT_MIN).
+    if (!(std::max({std::fabs(dx.x), std::fabs(dx.y), std::fabs(dx.z)}) >= 1e-15)) return false;
     // s = eye_side / pd > 0: in front of the eye (not behind it or beside it).
     const double pd = glm::dot(f.plane, dx);
     if (!(pd != 0.0) || (pd > 0.0) != (f.eye_side > 0.0)) return false;
