@@ -1261,15 +1261,21 @@ class NormalClassIndex {
     return project_rect(f, p, 3);
   }
 
+  // Whether a corner lies (nearly) at the eye: its offsets from the eye, as the float ray test takes
+  // them, are subnormal or their products underflow, so that test has no relative precision near it
+  // and no rejection whose margin is relative rounding holds for its triangle (screen rectangle,
+  // footprint, beam planes, corner-ray planes): such a triangle is tested against every live ray.
+  // Above 1e-15 every product of two offsets stays a normal float (>= 2^24 FLT_MIN). NaN counts as
+  // near (never rejected).
+  [[nodiscard]] static bool near_eye(double x, double y, double z) noexcept {
+    return !(std::max({std::fabs(x), std::fabs(y), std::fabs(z)}) >= 1e-15);
+  }
+
   // A point's pixel-centre coordinates (pixel i has coordinate i): its projection from the eye onto
   // the target plane, in double; false when it is not strictly in front of the eye (or w <= 0).
   [[nodiscard]] static bool project_point(const Frame& f, const glm::vec3& p, double& px, double& py) noexcept {
     const glm::dvec3 dx = glm::dvec3(p) - f.eye;
-    // A point (nearly) at the eye: its offsets, as the float ray test takes them, are subnormal or
-    // their products underflow, so that test has no relative precision near it and the margins of
-    // rectangles and footprints (relative rounding) do not hold. No projection then (callers test
-    // every ray). Above 1e-15 every product of two such offsets stays a normal float (>= 2^24 FLT_MIN).
-    if (!(std::max({std::fabs(dx.x), std::fabs(dx.y), std::fabs(dx.z)}) >= 1e-15)) return false;
+    if (near_eye(dx.x, dx.y, dx.z)) return false;  // no projection: callers test every ray
     // s = eye_side / pd > 0: in front of the eye (not behind it or beside it).
     const double pd = glm::dot(f.plane, dx);
     if (!(pd != 0.0) || (pd > 0.0) != (f.eye_side > 0.0)) return false;
@@ -1481,12 +1487,14 @@ class NormalClassIndex {
   // over the box, x relative to the eye, is below zero. In double with a 1e-12 relative slack, so
   // the sign is exact for the float data.
   [[nodiscard]] static bool chunk_outside_beam(const TileRays& r, const float* box, const Frame& f) noexcept {
-    double lo[3], hi[3], l1 = 0.0;
+    double lo[3], hi[3], l1 = 0.0, gap[3];
     for (int a = 0; a < 3; ++a) {
       lo[a] = double(box[a]) - f.eye[a];
       hi[a] = double(box[3 + a]) - f.eye[a];
       l1 += std::max(std::fabs(lo[a]), std::fabs(hi[a]));
+      gap[a] = std::max({lo[a], -hi[a], 0.0});
     }
+    if (near_eye(gap[0], gap[1], gap[2])) return false;  // may hold a corner (nearly) at the eye
     const double e = double(r.beam_eps) + 1e-12;
     for (int j = 0; j < 4; ++j) {
       const float* n = r.beam_n[j];
@@ -1508,6 +1516,7 @@ class NormalClassIndex {
       x[k][0] = p.x - f.eye_f.x;
       x[k][1] = p.y - f.eye_f.y;
       x[k][2] = p.z - f.eye_f.z;
+      if (near_eye(x[k][0], x[k][1], x[k][2])) return false;
     }
     const float e = r.beam_eps;
     for (int j = 0; j < 4; ++j) {
@@ -1560,6 +1569,8 @@ class NormalClassIndex {
   [[nodiscard]] static bool beside_rect(const TileRays& r, const float a[3], const float b[3], const float c[3], int rx0,
                                         int ry0, int rx1, int ry1) noexcept {
     const glm::dvec3 p[3] = {glm::dvec3(a[0], a[1], a[2]), glm::dvec3(b[0], b[1], b[2]), glm::dvec3(c[0], c[1], c[2])};
+    for (const glm::dvec3& q : p)
+      if (near_eye(q.x, q.y, q.z)) return false;
     const int corner[4] = {ry0 * max_tile_ + rx0, ry0 * max_tile_ + rx1, ry1 * max_tile_ + rx1, ry1 * max_tile_ + rx0};
     for (int k = 0; k < 3; ++k) {
       const glm::dvec3 n = glm::cross(p[k], p[(k + 1) % 3]);

@@ -160,13 +160,15 @@ void test_eye_at_corner() {
   support::Scene scene;
   scene.add_triangles({corner, {-1.0f, 1.0f, -4.0f}, {-4.0f, -4.0f, -1.0f}}, "fuzz");
   scene.add_triangles({{-1.0f, 1.0f, -4.0f}, corner, {-3.0f, 2.0f, -5.0f}}, "neighbour");
-  const float offsets[] = {0.0f, 3.5733111e-43f, -3.5733111e-43f, 1e-40f, 1e-38f, 1e-30f, 1e-20f, 1e-12f};
+  scene.add_triangles({corner, {-1.0f, 1.0f, -4.0f}, {-2.0f, -4.0f, -1.0f}}, "fuzz 2");
+  scene.add_triangles({corner, {-2.0f, -4.0f, -2.0f}, {-1.0f, 1.0f, -4.0f}}, "fuzz 3");
+  const float offsets[] = {0.0f, 3.5733111e-43f, -3.5733111e-43f, 5.465064e-44f, 1e-40f, 1e-38f, 1e-30f, 1e-20f, 1e-12f};
   const glm::vec3 targets[] = {{-4.0f, -4.0f, -4.0f}, {-1.7f, -2.3f, -3.0f}, {-4.0f, -3.0f, -2.0f}};
   int checked = 0, hits = 0;
-  for (int tile : {9, 16, 32}) {
+  for (int tile : {2, 8, 9, 16, 32}) {
     NciParams params;
     params.classes = 2;
-    params.grid = 1 + tile % 7;
+    params.grid = tile == 2 ? 46 : 1 + tile % 7;
     params.tile_size = tile;
     params.threads = 1;
     const NormalClassIndex<glm::vec3> index(scene.mesh(), params);
