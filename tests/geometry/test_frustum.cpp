@@ -193,6 +193,26 @@ void degenerate_matrices() {
   // The default frustum has no planes: everything is inside.
   CHECK(Frustum().classify(unit) == Containment::inside);
   CHECK(Frustum().active_mask() == 0);
+  // A plane whose unit normal has a component too small for a float (found by fuzz_abt): row
+  // (0, 1.3e7, -1.56e-39, -1.16e-10) has the unit normal (0, 1, -1.2e-46), which rounds to (0, 1, 0);
+  // at z = -1.8e38 the lost component moves the plane by 0.28, far beyond the float tolerance, and a
+  // box straddling the true plane was reported outside. Such a plane is now dropped (as at infinity).
+  {
+    glm::mat4 thin(0.0f);
+    thin[1][0] = 1.3e7f;
+    thin[2][0] = -1.56e-39f;
+    thin[3][0] = -1.16e-10f;
+    const Frustum ft = Frustum::from_matrix(thin);
+    const Aabb slab{glm::vec3(-1.0f, 0.0f, -1.8e38f), glm::vec3(1.0f, 1e-20f, 0.0f)};
+    // The true planes: row0 >= 0 and -row0 >= 0 (the others vanish); the box has corners on both sides.
+    const double lo = 1.3e7 * 0.0 - double(-1.56e-39f) * 0.0 - double(1.16e-10f);
+    const double hi = 1.3e7 * 0.0 + double(-1.56e-39f) * -1.8e38 + double(-1.16e-10f);
+    CHECK(lo < 0.0 && hi > 0.0);
+    CHECK(ft.classify(slab) != Containment::outside);
+    for (int i = 0; i < 6; ++i) {
+      if (ft.has_plane(i)) CHECK(is_valid(ft.plane(i)));
+    }
+  }
   // An empty sphere (negative radius) is outside everything.
   CHECK(g.classify(Sphere{glm::vec3(0, 0, -5), -1.0f}) == Containment::outside);
 }

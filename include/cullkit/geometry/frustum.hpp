@@ -41,7 +41,10 @@ class Frustum {
   /// Extracts the planes from the rows of `view_proj` (clip = view_proj * world, column vectors,
   /// GLM layout), computed in double precision and normalized. Works for perspective and
   /// orthographic projections, both depth ranges, reversed-Z and infinite far planes. `depth` must
-  /// match the projection; GLM's clip-control macros are never read.
+  /// match the projection; GLM's clip-control macros are never read. A plane is dropped (the
+  /// frustum grows, never shrinks) when its normal vanishes (an infinite far plane), when it is not
+  /// finite, or when a coefficient of the unit plane is below the smallest normal float
+  /// (`std::numeric_limits<float>::min()`) without being zero: float could not hold it.
   [[nodiscard]] static Frustum from_matrix(const glm::mat4& view_proj,
                                            DepthRange depth = DepthRange::negative_one_to_one) noexcept {
     double m[4][4];  // m[row][col]
@@ -64,6 +67,16 @@ class Frustum {
       // normal that is zero up to rounding) from a genuine plane.
       const double scale = std::fabs(r[0]) + std::fabs(r[1]) + std::fabs(r[2]) + std::fabs(r[3]);
       if (!(len > 1e-6 * scale) || !std::isfinite(len) || !std::isfinite(r[3])) continue;
+      // A unit-plane coefficient that is not zero but below the smallest normal float would lose
+      // its relative precision (or vanish) in float, and the box and sphere tolerances are relative:
+      // with coordinates near 1e38 a lost 1e-46 moves the plane by far more than they cover. Such a
+      // plane is dropped (as at infinity): the frustum only grows.
+      bool tiny = false;
+      for (int k = 0; k < 4; ++k) {
+        const double q = std::fabs(r[k] / len);
+        tiny = tiny || (q > 0.0 && q < static_cast<double>(std::numeric_limits<float>::min()));
+      }
+      if (tiny) continue;
       Plane p{glm::vec3(static_cast<float>(r[0] / len), static_cast<float>(r[1] / len),
                         static_cast<float>(r[2] / len)),
               static_cast<float>(r[3] / len)};
