@@ -99,7 +99,7 @@ struct NciParams {
   unsigned threads = 0;
   /// Worker threads for the build (per class); 0: all hardware threads. Never changes the index.
   unsigned build_threads = 0;
-  /// Screen tile edge in pixels, clamped to [2, 32]. Each tile walks the slices on its own and
+  /// Screen tile edge in pixels, clamped to [2, 64]. Each tile walks the slices on its own and
   /// pays the per-triangle work (cell entry visits, screen-rectangle tests) once, so bigger tiles
   /// amortize it over more pixels; the answer (per-pixel triangle and depth, selected set) does not
   /// depend on it. Default 32: single-thread ms per 640x480 frame, min of 5 alternating runs, tile
@@ -107,6 +107,12 @@ struct NciParams {
   /// 23.0 -> 20.5; sportsCar 34.6 -> 30.5, 21.1 -> 19.0; lasdunasarena 19.4 -> 17.2, 37.2 -> 32.4;
   /// oacmpdm9 16.9 -> 15.3, 20.1 -> 19.2; fzk_haus 18.1 -> 16.5, 19.1 -> 17.7 (4.5-15 % faster; 24
   /// lies between). Ray-tested triangles rise by 0-2 % on these scenes, 7 % on a 10M-triangle city.
+  /// Tiles of 48 and 64 (same scenes and views, min of 5 alternating runs, geometric mean of the
+  /// ratio to 32; 640x480 has 300 / 140 / 80 tiles of 32 / 48 / 64, 1024x768 768 / 352 / 192):
+  /// single-thread 640x480 48: 0.99, 64: 1.00 (per scene 0.93-1.06); 1024x768 48: 0.97, 64: 0.96
+  /// (stanford-bunny outside 0.80); 2 threads 640x480 0.99 / 0.97, 1024x768 0.94 / 0.91 (on a
+  /// shared 2-core machine). No clear gain at 640x480, so 32 stays; 64 pays from about 1024x768
+  /// up. Ray-tested triangles rise by 1-6 % at 64 (13 % on the 10M-triangle city).
   int tile_size = 32;
   /// Seed of the k-means (sampling and re-seeding of empty classes). Same seed, same index.
   std::uint64_t seed = 0x6e63692d6b6dULL;
@@ -179,38 +185,58 @@ struct NciObjectTriangle {
 };
 
 namespace detail {
-// Per-pixel state of one screen tile of NormalClassIndex::select_visible (about 80 KB: kept in
+// Per-pixel state of one screen tile of NormalClassIndex::select_visible (about 320 KB: kept in
 // NciContext, one per worker, made once and reused across calls; every field a tile reads is set
 // by that tile first).
 struct NciTileRays {
-  // The largest tile edge (NciParams::tile_size is clamped to it); pixel (x, y) of a tile is
-  // entry y * max_tile + x of every per-pixel array, its row masks are 32-bit.
-  static constexpr int max_tile = 32;
+  // The largest tile edge (NciParams::tile_size is clamped to it; a multiple of 4, the make_beam
+  // pre-test's width); pixel (x, y) of a tile is entry y * stride + x of every per-pixel array
+  // (below 4096: Unsure::pixel is 16-bit, Cand's rectangle 8-bit), bit x of its row's mask.
+  static constexpr int max_tile = 64;
   static constexpr int cap = max_tile * max_tile;
+  // The current tile's row pitch: its width rounded up to 4 (rows packed: a tile smaller than
+  // max_tile touches no more cache lines, nor fewer cache sets, than it needs).
+  int stride = max_tile;
+  static_assert(max_tile % 4 == 0 && max_tile <= 64, "row masks hold at most 64 pixels");
+  // Entries per per-pixel array: cap plus a pad of 32, so that the arrays (whose sizes would all
+  // be multiples of 4 KB) do not all start at the same offset within a page (the ray setup and the
+  // finishing loop touch a dozen of them at one index: one L1 cache set otherwise).
+  static constexpr int slots = cap + 32;
+  // A tile row's pixel set: bit x is pixel x.
+  using Mask = std::conditional_t<(max_tile > 32), std::uint64_t, std::uint32_t>;
+  static constexpr int mask_bits = 8 * static_cast<int>(sizeof(Mask));
+  // Lowest and highest set bit of a non-empty mask.
+  [[nodiscard]] static int low_bit(Mask m) noexcept { return __builtin_ctzll(m); }
+  [[nodiscard]] static int high_bit(Mask m) noexcept { return 63 - __builtin_clzll(m); }
+  [[nodiscard]] static Mask bit(int x) noexcept { return Mask{1} << x; }
+  // Columns x0..x1 (0 <= x0 <= x1 < max_tile): no shift by the mask's width.
+  [[nodiscard]] static Mask columns(int x0, int x1) noexcept {
+    return static_cast<Mask>(~Mask{0} >> (mask_bits - 1 - (x1 - x0))) << x0;
+  }
   // The pixel rays' directions by component (PixelRays::directions, make_beam's 4-wide
   // pre-test); zero beyond the tile's width up to the next multiple of 4.
-  alignas(16) float dx[cap];
-  alignas(16) float dy[cap];
-  alignas(16) float dz[cap];
+  alignas(16) float dx[slots];
+  alignas(16) float dy[slots];
+  alignas(16) float dz[slots];
   [[nodiscard]] glm::dvec3 direction(int i) const noexcept { return glm::dvec3(dx[i], dy[i], dz[i]); }
-  detail::WatertightRay<float> wray[cap];
-  float best_t[cap];
-  std::uint32_t best[cap];
+  detail::WatertightRay<float> wray[slots];
+  float best_t[slots];
+  std::uint32_t best[slots];
   // The nearest hit that no edge-rounding question hangs over (a hit within rounding of an edge
   // may be a miss for another float ray tracer, which then sees what lies behind): finishing and
   // the depth rejects use it, so the search goes on behind such hits up to a solid one.
-  float solid_t[cap];
-  std::uint32_t solid[cap];
-  float slope_b[cap], slope_c[cap];
-  float t_exit[cap];  // where the ray leaves the inflated scene box (rounded up): nothing beyond
-  int finish[cap];    // the walk may stop this ray once it has processed this slice
-  bool dirty[cap];    // solid_t changed since `finish` was computed
+  float solid_t[slots];
+  std::uint32_t solid[slots];
+  float slope_b[slots], slope_c[slots];
+  float t_exit[slots];  // where the ray leaves the inflated scene box (rounded up): nothing beyond
+  int finish[slots];    // the walk may stop this ray once it has processed this slice
+  bool dirty[slots];    // solid_t changed since `finish` was computed
   bool any_dirty = true;  // some ray became dirty since the walk last looked
   int axis = 2;       // the frame's walk axis
-  float dir_a[cap];   // dir[i][axis], read by the finishing test (no per-call component switch)
+  float dir_a[slots];   // dir[i][axis], read by the finishing test (no per-call component switch)
   double lo_a = 0.0;  // the grid's origin on the walk axis
   double inv_h = 1.0; // 1 / cell edge (finish_slice's first estimate only)
-  bool flat[cap];
+  bool flat[slots];
   // The tile's beam: four planes through the eye (unit normals, inside positive) holding every
   // live ray of the tile up to `beam_eps` (the largest measured violation plus rounding).
   float beam_n[4][3];
@@ -231,7 +257,7 @@ class NciContext;
 /// Reusable scratch for select_visible: keeps per-thread buffers between frames so a frame does
 /// not allocate once the buffers have grown. One context per concurrent caller; not thread-safe.
 /// Size: 16 bytes per indexed triangle per worker thread (test stamps and cached screen
-/// rectangles), about 80 KB of tile scratch per worker thread (made on first use), on crowded
+/// rectangles), about 320 KB of tile scratch per worker thread (made on first use), on crowded
 /// indexes 12 bytes per 16 cell entries per worker thread (chunk rectangles), 2 bits per indexed
 /// triangle per worker thread and 1 bit per mesh triangle for the merge, 12 bytes per pixel, and
 /// 12 bytes per edge-band triangle selected beside a pixel's first hit (rare outside very narrow
@@ -530,7 +556,7 @@ class NormalClassIndex {
       std::atomic<std::size_t> next{0};
       auto work = [&](unsigned index) {
         auto& th = context.threads_[index];
-        // Per-tile ray scratch (about 80 KB), made once per worker slot of the context and reused
+        // Per-tile ray scratch (about 320 KB), made once per worker slot of the context and reused
         // across calls (not per tile, not on the stack); process_tile sets every field it reads.
         if (th.tile_rays.empty()) th.tile_rays.resize(1);
         TileRays& rays = th.tile_rays.front();
@@ -1251,6 +1277,7 @@ class NormalClassIndex {
 
   using TileRays = detail::NciTileRays;
   static constexpr int max_tile_ = TileRays::max_tile;
+  using Mask = TileRays::Mask;  // one bit per pixel of a tile row
 
   // Which pixels may see the triangle: an empty rectangle for a back face (or one seen exactly
   // edge-on: the eye in its plane is never a hit), `full` when the projection cannot be trusted.
@@ -1325,10 +1352,10 @@ class NormalClassIndex {
   // is one wide), so the beam narrows as rays finish; `box` records that rectangle.
   // The live pixels' bounding rectangle (x0, y0, x1, y1), widened to two pixels where it is one
   // wide; false when no pixel is live or the tile is narrower than two pixels.
-  static bool live_box(int tw, int th, const std::uint32_t* live, int box[4]) noexcept {
+  static bool live_box(int tw, int th, const Mask* live, int box[4]) noexcept {
     if (tw < 2 || th < 2) return false;
     int y0 = -1, y1 = -1;
-    std::uint32_t cols = 0;
+    Mask cols = 0;
     for (int y = 0; y < th; ++y) {
       if (!live[y]) continue;
       if (y0 < 0) y0 = y;
@@ -1336,7 +1363,7 @@ class NormalClassIndex {
       cols |= live[y];
     }
     if (y0 < 0) return false;
-    int x0 = __builtin_ctz(cols), x1 = 31 - __builtin_clz(cols);
+    int x0 = TileRays::low_bit(cols), x1 = TileRays::high_bit(cols);
     if (x0 == x1) x1 < tw - 1 ? ++x1 : --x0;
     if (y0 == y1) y1 < th - 1 ? ++y1 : --y0;
     box[0] = x0;
@@ -1346,12 +1373,13 @@ class NormalClassIndex {
     return true;
   }
 
-  static void make_beam(TileRays& r, int tw, int th, const std::uint32_t* live) noexcept {
+  static void make_beam(TileRays& r, int tw, int th, const Mask* live) noexcept {
+    const int stride = r.stride;  // the tile's row pitch (kept in a register)
     r.beam = false;
     int box[4];
     if (!live_box(tw, th, live, box)) return;
     for (int k = 0; k < 4; ++k) r.beam_box[k] = box[k];
-    const int corner[4] = {box[1] * max_tile_ + box[0], box[1] * max_tile_ + box[2], box[3] * max_tile_ + box[2], box[3] * max_tile_ + box[0]};
+    const int corner[4] = {box[1] * stride + box[0], box[1] * stride + box[2], box[3] * stride + box[2], box[3] * stride + box[0]};
     glm::dvec3 d[4], centre(0.0);
     for (int k = 0; k < 4; ++k) {
       d[k] = r.direction(corner[k]);
@@ -1368,7 +1396,7 @@ class NormalClassIndex {
     }
     double worst = 0.0;
     for (int y = 0; y < th; ++y) {
-      std::uint32_t bits = live[y];
+      Mask bits = live[y];
       if (!bits) continue;
 #ifdef CULLKIT_NCI_SSE2
       // Pre-test, 4 rays at a time in float: a ray with n.d > 5e-7 |d|_1 in float for all four
@@ -1376,11 +1404,11 @@ class NormalClassIndex {
       // so its double value below is not negative and cannot raise `worst`: only the other rays
       // are measured. The same `worst`, bit for bit.
       {
-        std::uint32_t maybe = 0;
+        Mask maybe = 0;
         const __m128 sign = _mm_set1_ps(-0.0f), lim = _mm_set1_ps(5e-7f);
-        for (int q = __builtin_ctz(bits) / 4, q_end = (31 - __builtin_clz(bits)) / 4; q <= q_end; ++q) {
+        for (int q = TileRays::low_bit(bits) / 4, q_end = TileRays::high_bit(bits) / 4; q <= q_end; ++q) {
           if (!((bits >> (4 * q)) & 15u)) continue;
-          const int i0 = y * max_tile_ + 4 * q;
+          const int i0 = y * stride + 4 * q;
           const __m128 vx = _mm_load_ps(&r.dx[i0]), vy = _mm_load_ps(&r.dy[i0]), vz = _mm_load_ps(&r.dz[i0]);
           const __m128 dl = _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, vx), _mm_andnot_ps(sign, vy)), _mm_andnot_ps(sign, vz));
           const __m128 bound = _mm_mul_ps(lim, dl);
@@ -1391,15 +1419,15 @@ class NormalClassIndex {
                                         _mm_mul_ps(_mm_set1_ps(r.beam_n[k][2]), vz));
             doubt = _mm_or_ps(doubt, _mm_cmple_ps(v, bound));
           }
-          maybe |= static_cast<std::uint32_t>(_mm_movemask_ps(doubt)) << (4 * q);
+          maybe |= static_cast<Mask>(_mm_movemask_ps(doubt)) << (4 * q);
         }
         bits &= maybe;
       }
 #endif
       while (bits) {
-        const int x = __builtin_ctz(bits);
+        const int x = TileRays::low_bit(bits);
         bits &= bits - 1;
-        const glm::dvec3 dir = r.direction(y * max_tile_ + x);
+        const glm::dvec3 dir = r.direction(y * stride + x);
         const double dl = std::fabs(dir.x) + std::fabs(dir.y) + std::fabs(dir.z);
         for (int k = 0; k < 4; ++k) {
           const double v = double(r.beam_n[k][0]) * dir.x + double(r.beam_n[k][1]) * dir.y + double(r.beam_n[k][2]) * dir.z;
@@ -1416,7 +1444,7 @@ class NormalClassIndex {
 
   // Re-makes the beam when the live pixels' rectangle has shrunk since it was made (a beam that
   // cannot be made for the smaller rectangle leaves the old one, which still holds every live ray).
-  static void narrow_beam(TileRays& r, int tw, int th, const std::uint32_t* live) noexcept {
+  static void narrow_beam(TileRays& r, int tw, int th, const Mask* live) noexcept {
     int box[4];
     if (!r.beam || !live_box(tw, th, live, box)) return;
     // Re-made only when the rectangle lost at least half its pixels (the re-make visits every
@@ -1442,7 +1470,7 @@ class NormalClassIndex {
   // (cached per frame and thread) covers no live pixel of the tile, or every live ray under it
   // already holds a hit strictly nearer than any t the ray test could give a point of the box.
   [[nodiscard]] bool chunk_hidden(const Frame& f, std::uint32_t j, int x0, int y0, int tw, int th,
-                                  const std::uint32_t* live, const TileRays& r, NciContext::Thread& thread) const noexcept {
+                                  const Mask* live, const TileRays& r, NciContext::Thread& thread) const noexcept {
     const float* box = &chunk_box_[6 * std::size_t{j}];
     auto& slot = thread.chunk[j];
     if (slot.epoch != thread.frame_epoch) {
@@ -1453,7 +1481,7 @@ class NormalClassIndex {
       slot.rect = project_rect(f, corner, 8);
     }
     int rx0, ry0, rx1, ry1;
-    std::uint32_t span;
+    Mask span;
     if (!live_under(slot.rect, x0, y0, tw, th, live, rx0, ry0, rx1, ry1, span)) return true;  // no live pixel
     const float qlo[3] = {box[0] - f.eye_f.x, box[1] - f.eye_f.y, box[2] - f.eye_f.z};
     const float qhi[3] = {box[3] - f.eye_f.x, box[4] - f.eye_f.y, box[5] - f.eye_f.z};
@@ -1464,8 +1492,8 @@ class NormalClassIndex {
   // rectangle rx0..rx1 x ry0..ry1 and its column mask `span`. False when the rectangle is empty, off
   // the tile, or covers no live pixel (`live`: one bit mask per tile row).
   [[nodiscard]] static bool live_under(const NciContext::Rect& rect, int x0, int y0, int tw, int th,
-                                       const std::uint32_t* live, int& rx0, int& ry0, int& rx1, int& ry1,
-                                       std::uint32_t& span) noexcept {
+                                       const Mask* live, int& rx0, int& ry0, int& rx1, int& ry1,
+                                       Mask& span) noexcept {
     if (rect.x0 > rect.x1) return false;
     rx0 = 0, ry0 = 0, rx1 = tw - 1, ry1 = th - 1;
     if (rect.x0 != NciContext::Rect::full) {
@@ -1476,8 +1504,8 @@ class NormalClassIndex {
       ry0 = std::max(0, ly0);
       ry1 = std::min(th - 1, ly1);
     }
-    span = (0xFFFFFFFFu >> (31 - (rx1 - rx0))) << rx0;  // 1..32 columns, no shift by 32
-    std::uint32_t under = 0;
+    span = TileRays::columns(rx0, rx1);
+    Mask under = 0;
     for (int y = ry0; y <= ry1; ++y) under |= live[y] & span;
     return under != 0;
   }
@@ -1540,7 +1568,8 @@ class NormalClassIndex {
   // `qlo` and `qhi` bound the corners' coordinates relative to the eye as the ray test computes
   // them (float differences; rounding is monotone, so the box of the float corners bounds them).
   [[nodiscard]] static bool behind_hits(const TileRays& r, const float qlo[3], const float qhi[3], int ry0, int ry1,
-                                        std::uint32_t span, const std::uint32_t* live) noexcept {
+                                        Mask span, const Mask* live) noexcept {
+    const int stride = r.stride;  // the tile's row pitch (kept in a register)
     double bound = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 3; ++k) {
       if (r.sz_lo[k] > r.sz_hi[k]) continue;
@@ -1550,11 +1579,11 @@ class NormalClassIndex {
     bound *= 1.0 - 1e-6;
     if (!(bound > 1e-30) || !std::isfinite(bound)) return false;
     for (int y = ry0; y <= ry1; ++y) {
-      std::uint32_t bits = live[y] & span;
+      Mask bits = live[y] & span;
       while (bits) {
-        const int x = __builtin_ctz(bits);
+        const int x = TileRays::low_bit(bits);
         bits &= bits - 1;
-        if (!(double(r.solid_t[y * max_tile_ + x]) < bound)) return false;
+        if (!(double(r.solid_t[y * stride + x]) < bound)) return false;
       }
     }
     return true;
@@ -1568,10 +1597,11 @@ class NormalClassIndex {
   // the margin covers the float rounding of the directions and of the ray test (about 1e-7).
   [[nodiscard]] static bool beside_rect(const TileRays& r, const float a[3], const float b[3], const float c[3], int rx0,
                                         int ry0, int rx1, int ry1) noexcept {
+    const int stride = r.stride;  // the tile's row pitch (kept in a register)
     const glm::dvec3 p[3] = {glm::dvec3(a[0], a[1], a[2]), glm::dvec3(b[0], b[1], b[2]), glm::dvec3(c[0], c[1], c[2])};
     for (const glm::dvec3& q : p)
       if (near_eye(q.x, q.y, q.z)) return false;
-    const int corner[4] = {ry0 * max_tile_ + rx0, ry0 * max_tile_ + rx1, ry1 * max_tile_ + rx1, ry1 * max_tile_ + rx0};
+    const int corner[4] = {ry0 * stride + rx0, ry0 * stride + rx1, ry1 * stride + rx1, ry1 * stride + rx0};
     for (int k = 0; k < 3; ++k) {
       const glm::dvec3 n = glm::cross(p[k], p[(k + 1) % 3]);
       const double side = glm::dot(n, p[(k + 2) % 3]);  // the inside holds the third corner
@@ -1592,7 +1622,7 @@ class NormalClassIndex {
   // ray was tested (a back face seen from the eye, or no live pixel under its rectangle).
   // Whether `tri` may be hit by an unfinished ray of the tile (beam, screen rectangle, live
   // pixels under it); when it may, `out` gets the pixels under its rectangle and its sort key.
-  bool admit_triangle(const Frame& f, std::uint32_t tri, int x0, int y0, int tw, int th, const std::uint32_t* live,
+  bool admit_triangle(const Frame& f, std::uint32_t tri, int x0, int y0, int tw, int th, const Mask* live,
                       const TileRays& r, NciContext::Thread& thread, NciContext::Thread::Cand& out) const {
     // The triangle's screen rectangle, computed once per frame and thread (cached: a triangle is
     // met by many tiles).
@@ -1608,7 +1638,7 @@ class NormalClassIndex {
     }
     // None (back face, edge-on from the eye, off screen) or no live pixel under it: not tested.
     int rx0, ry0, rx1, ry1;
-    std::uint32_t span;
+    Mask span;
     if (!live_under(slot.rect, x0, y0, tw, th, live, rx0, ry0, rx1, ry1, span)) return false;
     // The same beam test when the rectangle came from the cache, so what is tested does not depend
     // on which thread met the triangle first.
@@ -1648,7 +1678,7 @@ class NormalClassIndex {
   //  float ray sees that edge function negative and the watertight test rejects it.
   [[nodiscard]] static bool footprint_mask(const Frame& f, const glm::vec3& p0, const glm::vec3& p1,
                                            const glm::vec3& p2, int x0, int y0, int ry0, int ry1,
-                                           const std::uint32_t* bits, std::uint32_t* mask, int x_last) noexcept {
+                                           const Mask* bits, Mask* mask, int x_last) noexcept {
     double px[3], py[3];
     if (!project_point(f, p0, px[0], py[0]) || !project_point(f, p1, px[1], py[1]) ||
         !project_point(f, p2, px[2], py[2]))
@@ -1682,36 +1712,36 @@ class NormalClassIndex {
     const __m128d of0 = _mm_set1_pd(off[0]), of1 = _mm_set1_pd(off[1]), of2 = _mm_set1_pd(off[2]);
     const __m128d zero = _mm_setzero_pd();
     for (int y = ry0; y <= ry1; ++y) {
-      const std::uint32_t b = bits[y];
+      const Mask b = bits[y];
       if (!b) {
         mask[y] = 0;
         continue;
       }
       const double qy = y0 + y;
       const __m128d ey0 = _mm_set1_pd(ny[0] * qy), ey1 = _mm_set1_pd(ny[1] * qy), ey2 = _mm_set1_pd(ny[2] * qy);
-      std::uint32_t m = 0;
-      for (int x = __builtin_ctz(b), x_end = 31 - __builtin_clz(b); x <= x_end; x += 2) {
+      Mask m = 0;
+      for (int x = TileRays::low_bit(b), x_end = TileRays::high_bit(b); x <= x_end; x += 2) {
         const __m128d qx = _mm_set_pd(double(x0 + x + 1), double(x0 + x));
         const __m128d e0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(nx0, qx), ey0), of0);
         const __m128d e1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(nx1, qx), ey1), of1);
         const __m128d e2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(nx2, qx), ey2), of2);
         const __m128d in = _mm_and_pd(_mm_and_pd(_mm_cmpge_pd(e0, zero), _mm_cmpge_pd(e1, zero)), _mm_cmpge_pd(e2, zero));
-        m |= static_cast<std::uint32_t>(_mm_movemask_pd(in)) << x;
+        m |= static_cast<Mask>(_mm_movemask_pd(in)) << x;
       }
       mask[y] = m & b;
     }
 #else
     for (int y = ry0; y <= ry1; ++y) {
-      std::uint32_t b = bits[y];
-      std::uint32_t m = 0;
+      Mask b = bits[y];
+      Mask m = 0;
       const double qy = y0 + y;
       while (b) {
-        const int x = __builtin_ctz(b);
+        const int x = TileRays::low_bit(b);
         b &= b - 1;
         const double qx = x0 + x;
         if (nx[0] * qx + ny[0] * qy + off[0] >= 0.0 && nx[1] * qx + ny[1] * qy + off[1] >= 0.0 &&
             nx[2] * qx + ny[2] * qy + off[2] >= 0.0)
-          m |= 1u << x;
+          m |= TileRays::bit(x);
       }
       mask[y] = m;
     }
@@ -1721,11 +1751,12 @@ class NormalClassIndex {
 
   // Tests an admitted triangle against the unfinished rays under its rectangle; false when no ray
   // was tested (all of them already hold nearer hits, or the triangle passes beside them).
-  bool test_triangle(const Frame& f, int x0, int y0, const NciContext::Thread::Cand& cand, const std::uint32_t* live,
+  bool test_triangle(const Frame& f, int x0, int y0, const NciContext::Thread::Cand& cand, const Mask* live,
                      TileRays& r, NciContext::Thread& thread) const {
+    const int stride = r.stride;  // the tile's row pitch (kept in a register)
     const std::uint32_t tri = cand.tri;
     const int rx0 = cand.rx0, ry0 = cand.ry0, rx1 = cand.rx1, ry1 = cand.ry1;
-    const std::uint32_t span = (0xFFFFFFFFu >> (31 - (rx1 - rx0))) << rx0;  // 1..32 columns, no shift by 32
+    const Mask span = TileRays::columns(rx0, rx1);
     const glm::vec3& p0 = corner(tri, 0);
     const glm::vec3& p1 = corner(tri, 1);
     const glm::vec3& p2 = corner(tri, 2);
@@ -1740,23 +1771,23 @@ class NormalClassIndex {
     if (behind_hits(r, qlo, qhi, ry0, ry1, span, live)) return false;
     if (f.use_rect && f.affine_rays && (rx1 > rx0 || ry1 > ry0) && beside_rect(r, a, b, c, rx0, ry0, rx1, ry1)) return false;
     // Only the live rays whose pixel centres lie in the triangle's grown 2D footprint can hit it.
-    std::uint32_t rows[max_tile_];
+    Mask rows[max_tile_];
     for (int y = ry0; y <= ry1; ++y) rows[y] = live[y] & span;
     if (f.footprint) {
-      std::uint32_t inside[max_tile_];
+      Mask inside[max_tile_];
       if (footprint_mask(f, p0, p1, p2, x0, y0, ry0, ry1, rows, inside, params_.tile_size - 1)) {
-        std::uint32_t left = 0;
+        Mask left = 0;
         for (int y = ry0; y <= ry1; ++y) left |= (rows[y] &= inside[y]);
         if (!left) return false;  // no live pixel centre can see it: not tested
       }
     }
     bool any = false;
     for (int y = ry0; y <= ry1; ++y) {
-      std::uint32_t bits = rows[y];
+      Mask bits = rows[y];
       while (bits) {
-        const int x = __builtin_ctz(bits);
+        const int x = TileRays::low_bit(bits);
         bits &= bits - 1;
-        const int i = y * max_tile_ + x;
+        const int i = y * stride + x;
         // The depth reject of behind_hits for this ray alone (its own scale sz on its own dominant
         // axis, the same bound and margin): a ray that already holds a solid hit strictly nearer
         // than any t the test could return is not tested. Skipping it changes no answer.
@@ -1797,6 +1828,7 @@ class NormalClassIndex {
   void process_tile(const Frame& f, int x0, int y0, int x1, int y1, TileRays& r, NciContext::Thread& thread,
                     NciContext& context) const {
     const int tw = x1 - x0, th = y1 - y0;
+    const int stride = r.stride = (tw + 3) & ~3;
     {
       // A tile beside the scene box's screen rectangle: every pixel keeps its initial depth (no
       // triangle's rectangle reaches it, so no ray of it would be tested).
@@ -1805,7 +1837,7 @@ class NormalClassIndex {
         for (int y = 0; y < th; ++y) {
           const std::size_t row = static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(x0);
           for (int x = 0; x < tw; ++x) {
-            const int i = y * max_tile_ + x;
+            const int i = y * stride + x;
             r.best_t[i] = f.initial_depth ? f.initial_depth[row + static_cast<std::size_t>(x)] : std::numeric_limits<float>::infinity();
             r.best[i] = none_;
             r.solid_t[i] = f.initial_solid ? f.initial_solid[row + static_cast<std::size_t>(x)] : r.best_t[i];
@@ -1825,8 +1857,8 @@ class NormalClassIndex {
     r.lo_a = lo_[f.axis];
     r.inv_h = 1.0 / h_;
     const int a = f.axis, b = (a + 1) % 3, c = (a + 2) % 3;
-    std::uint32_t live[max_tile_] = {};  // unfinished rays, both walks
-    std::uint32_t walk_mask[2][max_tile_] = {};  // [0]: toward +axis (and flat), [1]: toward -axis
+    Mask live[max_tile_] = {};  // unfinished rays, both walks
+    Mask walk_mask[2][max_tile_] = {};  // [0]: toward +axis (and flat), [1]: toward -axis
     const glm::dvec3 blo = glm::dvec3(box_.min) - delta_, bhi = glm::dvec3(box_.max) + delta_;
     // The same per component in plain arrays (the per-ray loop below indexes them by a variable;
     // glm's component access is a switch), and the box relative to the eye.
@@ -1840,13 +1872,13 @@ class NormalClassIndex {
       r.sz_hi[k] = -std::numeric_limits<float>::infinity();
     }
     for (int y = 0; y < th; ++y) {
-      for (int x = tw, x_end = (tw + 3) & ~3; x < x_end; ++x) r.dx[y * max_tile_ + x] = r.dy[y * max_tile_ + x] = r.dz[y * max_tile_ + x] = 0.0f;
+      for (int x = tw, x_end = (tw + 3) & ~3; x < x_end; ++x) r.dx[y * stride + x] = r.dy[y * stride + x] = r.dz[y * stride + x] = 0.0f;
       const std::size_t row = static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(x0);
       const float* initial_depth = f.initial_depth ? f.initial_depth + row : nullptr;
       const float* initial_solid = f.initial_solid ? f.initial_solid + row : nullptr;
-      f.rays.directions(x0, y0 + y, tw, &r.dx[y * max_tile_], &r.dy[y * max_tile_], &r.dz[y * max_tile_]);
+      f.rays.directions(x0, y0 + y, tw, &r.dx[y * stride], &r.dy[y * stride], &r.dz[y * stride]);
       for (int x = 0; x < tw; ++x) {
-        const int i = y * max_tile_ + x;
+        const int i = y * stride + x;
         const glm::vec3 direction(r.dx[i], r.dy[i], r.dz[i]);
         const double d3[3] = {direction.x, direction.y, direction.z};
         r.dir_a[i] = static_cast<float>(d3[a]);
@@ -1898,11 +1930,11 @@ class NormalClassIndex {
         // double rounding of the quotient, far inside the float rounding the beam allows for.
         r.slope_b[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[b] * inv3[a]);
         r.slope_c[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[c] * inv3[a]);
-        live[y] |= 1u << x;
+        live[y] |= TileRays::bit(x);
         const detail::WatertightRay<float>& w = r.wray[i];
         r.sz_lo[w.kz] = std::min(r.sz_lo[w.kz], w.sz);
         r.sz_hi[w.kz] = std::max(r.sz_hi[w.kz], w.sz);
-        walk_mask[da >= 0.0 ? 0 : 1][y] |= 1u << x;
+        walk_mask[da >= 0.0 ? 0 : 1][y] |= TileRays::bit(x);
         cone_sum += glm::dvec3(d3[0], d3[1], d3[2]);
       }
     }
@@ -1929,7 +1961,7 @@ class NormalClassIndex {
         cos_psi = 1.0;
         for (int y = 0; y < th; ++y)
           for (int x = 0; x < tw; ++x)
-            if (live[y] & (1u << x)) cos_psi = std::min(cos_psi, glm::dot(axis, r.direction(y * max_tile_ + x)));
+            if (live[y] & (TileRays::bit(x))) cos_psi = std::min(cos_psi, glm::dot(axis, r.direction(y * stride + x)));
       }
       const double psi = std::acos(std::clamp(cos_psi, -1.0, 1.0)) + 2e-3;
       const bool can_skip = psi < 1.5707963267948966;
@@ -1958,7 +1990,7 @@ class NormalClassIndex {
     const int na = dims_[a], nb = dims_[b], nc = dims_[c];
 
     for (int walk = 0; walk < 2; ++walk) {
-      std::uint32_t* mask = walk_mask[walk];
+      Mask* mask = walk_mask[walk];
       const int step = walk == 0 ? 1 : -1;
       const int start = cell_of(ea, a);
       // The beam's slopes change only when rays finish; the finish test runs only when a ray's
@@ -1968,7 +2000,7 @@ class NormalClassIndex {
       bool slopes_stale = true, full = false;
       float smin_b = 0.0f, smax_b = 0.0f, smin_c = 0.0f, smax_c = 0.0f;
       for (int s = start; s >= 0 && s < na; s += step) {
-        std::uint32_t unfinished = 0;  // any ray of this walk still live
+        Mask unfinished = 0;  // any ray of this walk still live
         for (int y = 0; y < th; ++y) unfinished |= mask[y];
         if (!unfinished) break;
         ++thread.stats.slices_walked;
@@ -1987,11 +2019,11 @@ class NormalClassIndex {
             smin_c = smin_b;
             smax_c = -smin_b;
             for (int y = 0; y < th; ++y) {
-              std::uint32_t bits = mask[y];
+              Mask bits = mask[y];
               while (bits) {
-                const int x = __builtin_ctz(bits);
+                const int x = TileRays::low_bit(bits);
                 bits &= bits - 1;
-                const int i = y * max_tile_ + x;
+                const int i = y * stride + x;
                 if (r.flat[i]) full = true;
                 smin_b = std::min(smin_b, r.slope_b[i]);
                 smax_b = std::max(smax_b, r.slope_b[i]);
@@ -2110,19 +2142,19 @@ class NormalClassIndex {
         r.any_dirty = false;
         next_finish = walk == 0 ? na : -1;
         for (int y = 0; y < th; ++y) {
-          std::uint32_t bits = mask[y];
+          Mask bits = mask[y];
           while (bits) {
-            const int x = __builtin_ctz(bits);
+            const int x = TileRays::low_bit(bits);
             bits &= bits - 1;
-            const int i = y * max_tile_ + x;
+            const int i = y * stride + x;
             if (r.dirty[i]) {
               r.finish[i] = finish_slice(r, i, walk, s, ea, na);
               r.dirty[i] = false;
             }
             const bool done = walk == 0 ? s >= r.finish[i] : s <= r.finish[i];
             if (done) {
-              mask[y] &= ~(1u << x);
-              live[y] &= ~(1u << x);
+              mask[y] &= ~TileRays::bit(x);
+              live[y] &= ~TileRays::bit(x);
               slopes_stale = true;
             } else {
               next_finish = walk == 0 ? std::min(next_finish, r.finish[i]) : std::max(next_finish, r.finish[i]);
@@ -2139,8 +2171,8 @@ class NormalClassIndex {
     // Beside each pixel's first hit: the triangles within rounding of an edge in front of its
     // solid hit, and that solid hit itself.
     const auto global = [&](int i) {
-      return static_cast<std::uint32_t>(y0 + i / max_tile_) * static_cast<std::uint32_t>(f.width) +
-             static_cast<std::uint32_t>(x0 + i % max_tile_);
+      return static_cast<std::uint32_t>(y0 + i / stride) * static_cast<std::uint32_t>(f.width) +
+             static_cast<std::uint32_t>(x0 + i % stride);
     };
     const auto show = [&](std::uint32_t tri) { thread.shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64); };
     for (const auto& u : thread.unsure) {
@@ -2152,7 +2184,7 @@ class NormalClassIndex {
     thread.unsure.clear();
     for (int y = 0; y < th; ++y)
       for (int x = 0; x < tw; ++x) {
-        const int i = y * max_tile_ + x;
+        const int i = y * stride + x;
         if (r.solid[i] != none_ && r.solid[i] != r.best[i]) {
           thread.extra.push_back(NciContext::Extra{r.solid[i], r.solid_t[i], global(i)});
           show(r.solid[i]);
@@ -2205,14 +2237,15 @@ class NormalClassIndex {
 
   static void write_tile(const Frame& f, const TileRays& r, int x0, int y0, int tw, int th, NciContext& context,
                          NciContext::Thread& thread) {
+    const int stride = r.stride;  // the tile's row pitch (kept in a register)
     const std::size_t width = static_cast<std::size_t>(f.width);
     for (int y = 0; y < th; ++y) {
       for (int x = 0; x < tw; ++x) {
         const std::size_t p = static_cast<std::size_t>(y0 + y) * width + static_cast<std::size_t>(x0 + x);
-        context.pixel_tri_[p] = r.best[y * max_tile_ + x];
-        context.pixel_t_[p] = r.best_t[y * max_tile_ + x];
-        context.pixel_solid_t_[p] = r.solid_t[y * max_tile_ + x];
-        const std::uint32_t tri = r.best[y * max_tile_ + x];
+        context.pixel_tri_[p] = r.best[y * stride + x];
+        context.pixel_t_[p] = r.best_t[y * stride + x];
+        context.pixel_solid_t_[p] = r.solid_t[y * stride + x];
+        const std::uint32_t tri = r.best[y * stride + x];
         if (tri != none_) thread.shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
       }
     }

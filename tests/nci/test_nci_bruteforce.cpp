@@ -112,6 +112,15 @@ int main() {
     compare("office/t16", office, p, cams, 102);
     p.tile_size = 29;  // rows not a multiple of 4 wide, partial tiles on both edges
     compare("office/t29", office, p, cams, 102);
+    p.tile_size = 64;  // the largest tile: one partial tile covers the screen
+    compare("office/t64", office, p, cams, 102);
+    // Wider screen: full 64-pixel rows (the row mask's top bit) beside partial tiles, and a tile
+    // above 32 pixels that is not a multiple of 4 (45).
+    const auto wide = nci_test::cameras_for(office.bounds, 4, 136, 70, 103);
+    p.tile_size = 64;
+    compare("office/wide/t64", office, p, wide, 103);
+    p.tile_size = 45;
+    compare("office/wide/t45", office, p, wide, 103);
   }
   {
     const Scene soup = random_soup(14, 400, 1e-4f);
