@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
   }
   std::uint32_t most = 1;
   for (auto n : ctx.tile_tested) most = std::max(most, n);
-  const int tile = index.params().tile_size;
+  const int tile = ctx.tile_size;
   for (std::size_t t = 0; t < ctx.tile_tested.size(); ++t) {
     const int tx = static_cast<int>(t % static_cast<std::size_t>(ctx.tiles_x)), ty = static_cast<int>(t / static_cast<std::size_t>(ctx.tiles_x));
     heat.fill_rect(tx * tile, ty * tile, std::min(w, (tx + 1) * tile) - 1, std::min(h, (ty + 1) * tile) - 1,

@@ -48,7 +48,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   cullkit::NciParams params;
   params.classes = 1 + in.byte() % 40;
   params.grid = 1 + in.byte() % 70;
-  params.tile_size = 2 + in.byte() % 63;  // 2..64
+  const int tile = in.byte() % 64;
+  params.tile_size = tile == 0 ? 0 : 1 + tile;  // 0 (automatic) or 2..64
   params.threads = 1 + in.byte() % 3;
   params.build_threads = 1;
   const cullkit::NormalClassIndex<glm::vec3> index(cullkit::MeshView<glm::vec3>{v.data(), v.size(), idx.data(), idx.size()},

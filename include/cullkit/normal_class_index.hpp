@@ -99,7 +99,8 @@ struct NciParams {
   unsigned threads = 0;
   /// Worker threads for the build (per class); 0: all hardware threads. Never changes the index.
   unsigned build_threads = 0;
-  /// Screen tile edge in pixels, clamped to [2, 64]. Each tile walks the slices on its own and
+  /// Screen tile edge in pixels, clamped to [2, 64]; 0 (the default): 64 for screens of at least
+  /// 1024x768 pixels, 32 below (the measurements below). Each tile walks the slices on its own and
   /// pays the per-triangle work (cell entry visits, screen-rectangle tests) once, so bigger tiles
   /// amortize it over more pixels; the answer (per-pixel triangle and depth, selected set) does not
   /// depend on it. Default 32: single-thread ms per 640x480 frame, min of 5 alternating runs, tile
@@ -113,7 +114,7 @@ struct NciParams {
   /// (stanford-bunny outside 0.80); 2 threads 640x480 0.99 / 0.97, 1024x768 0.94 / 0.91 (on a
   /// shared 2-core machine). No clear gain at 640x480, so 32 stays; 64 pays from about 1024x768
   /// up. Ray-tested triangles rise by 1-6 % at 64 (13 % on the 10M-triangle city).
-  int tile_size = 32;
+  int tile_size = 0;
   /// Seed of the k-means (sampling and re-seeding of empty classes). Same seed, same index.
   std::uint64_t seed = 0x6e63692d6b6dULL;
   /// Optional build progress report, called from the building thread with a fraction in [0, 1]
@@ -265,10 +266,11 @@ class NciContext;
 class NciContext {
  public:
   NciSelectStats stats;  ///< statistics of the last call that used this context
-  /// Triangles ray-tested per screen tile in the last call (row-major tiles of
-  /// NciParams::tile_size pixels; `tiles_x` tiles per row): the heat map of the method's work.
+  /// Triangles ray-tested per screen tile in the last call (row-major tiles of `tile_size`
+  /// pixels; `tiles_x` tiles per row): the heat map of the method's work.
   std::vector<std::uint32_t> tile_tested;
   int tiles_x = 0;  ///< tiles per row of `tile_tested`
+  int tile_size = 0;  ///< edge in pixels of the tiles of `tile_tested` (NciParams::tile_size, or its automatic choice)
 
  private:
   template <class, class, class>
@@ -370,7 +372,7 @@ class NormalClassIndex {
     CULLKIT_ASSERT(mesh.indices != nullptr || mesh.index_count == 0, "indices present when index_count > 0");
     params_.classes = std::clamp(params_.classes, 1, 4096);
     params_.grid = std::clamp(params_.grid, 1, 4096);
-    params_.tile_size = std::clamp(params_.tile_size, 2, max_tile_);
+    if (params_.tile_size != 0) params_.tile_size = std::clamp(params_.tile_size, 2, max_tile_);
     const auto t0 = std::chrono::steady_clock::now();
     build(mesh);
     stats_.build_seconds =
@@ -522,8 +524,9 @@ class NormalClassIndex {
       }
       frame.initial_depth = initial_depth;
       frame.initial_solid = initial_solid;
+      frame.tile = tile_edge(width, height);
       context.stats.axis = frame.axis;
-      const int tile = params_.tile_size;
+      const int tile = tile_edge(width, height);
       const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
       const std::size_t tile_count = static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y);
       unsigned thread_count = params_.threads ? params_.threads : std::thread::hardware_concurrency();
@@ -553,6 +556,7 @@ class NormalClassIndex {
       }
       context.tile_tested.assign(tile_count, 0u);
       context.tiles_x = tiles_x;
+      context.tile_size = tile;
       std::atomic<std::size_t> next{0};
       auto work = [&](unsigned index) {
         auto& th = context.threads_[index];
@@ -1192,6 +1196,7 @@ class NormalClassIndex {
     // The pixels whose centres may see the (inflated) scene box: project_rect of its corners, so it
     // holds every triangle's rectangle. A tile wholly outside it has no ray to set up.
     NciContext::Rect box_rect{NciContext::Rect::full, 0, 0, 0};
+    int tile = 32;  // the tile edge of this call
   };
 
   [[nodiscard]] Frame make_frame(const Camera& camera) const {
@@ -1286,6 +1291,13 @@ class NormalClassIndex {
     if (!detail::faces_eye(p0, p1, p2, f.eye)) return NciContext::Rect{0, 0, -1, -1};
     const glm::vec3 p[3] = {p0, p1, p2};
     return project_rect(f, p, 3);
+  }
+
+  // The tile edge for a screen: NciParams::tile_size, or when it is 0, 64 from 1024x768 pixels up
+  // and 32 below (bigger tiles pay only on bigger screens; see NciParams::tile_size).
+  [[nodiscard]] int tile_edge(int width, int height) const noexcept {
+    if (params_.tile_size != 0) return params_.tile_size;
+    return static_cast<long long>(width) * height >= 1024LL * 768LL ? max_tile_ : 32;
   }
 
   // Whether a corner lies (nearly) at the eye: its offsets from the eye, as the float ray test takes
@@ -1775,7 +1787,7 @@ class NormalClassIndex {
     for (int y = ry0; y <= ry1; ++y) rows[y] = live[y] & span;
     if (f.footprint) {
       Mask inside[max_tile_];
-      if (footprint_mask(f, p0, p1, p2, x0, y0, ry0, ry1, rows, inside, params_.tile_size - 1)) {
+      if (footprint_mask(f, p0, p1, p2, x0, y0, ry0, ry1, rows, inside, f.tile - 1)) {
         Mask left = 0;
         for (int y = ry0; y <= ry1; ++y) left |= (rows[y] &= inside[y]);
         if (!left) return false;  // no live pixel centre can see it: not tested

@@ -201,7 +201,32 @@ void test_eye_at_corner() {
   CHECK(hits > 1000);
 }
 
+// NciParams::tile_size 0 (the default) picks 64-pixel tiles from 1024x768 pixels up and 32 below;
+// the answer does not depend on it.
+void test_automatic_tile() {
+  const support::Scene city = support::make_city(5, 2);
+  const NormalClassIndex<glm::vec3> automatic(city.mesh());
+  NciParams p32;
+  p32.tile_size = 32;
+  const NormalClassIndex<glm::vec3> fixed(city.mesh(), p32);
+  CHECK(automatic.params().tile_size == 0);
+  const glm::vec3 c = city.bounds.center(), e = city.bounds.extent();
+  for (const auto& [w, h, expect] : {std::array<int, 3>{640, 480, 32}, std::array<int, 3>{1024, 768, 64},
+                                      std::array<int, 3>{1024, 767, 32}, std::array<int, 3>{2000, 400, 64}}) {
+    const Camera cam = support::make_camera(c + e * glm::vec3(0.7f, 0.6f, 0.8f), c, 60, w, h, 0.1f, 0.0f);
+    NciContext ca, cf;
+    VisibleSet sa, sf;
+    NciPixels pa, pf;
+    automatic.select_visible(cam, ca, sa, &pa);
+    fixed.select_visible(cam, cf, sf, &pf);
+    CHECK_MSG(ca.tile_size == expect && cf.tile_size == 32, "%dx%d: automatic tile %d, expected %d", w, h, ca.tile_size, expect);
+    CHECK(ca.tiles_x == (w + expect - 1) / expect);
+    CHECK(sa.triangles == sf.triangles && pa.triangle == pf.triangle && pa.depth == pf.depth);
+  }
+}
+
 int main() {
+  test_automatic_tile();
   test_eye_at_corner();
   test_empty();
   test_bad_triangles();
