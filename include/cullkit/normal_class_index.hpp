@@ -103,8 +103,8 @@ struct NciParams {
   /// 1024x768 pixels, 32 below (the measurements below). Each tile walks the slices on its own and
   /// pays the per-triangle work (cell entry visits, screen-rectangle tests) once, so bigger tiles
   /// amortize it over more pixels; the answer (per-pixel triangle and depth, selected set) does not
-  /// depend on it. Default 32: single-thread ms per 640x480 frame, min of 5 alternating runs, tile
-  /// 16 -> 32: city 20.6 -> 18.8 outside, 20.6 -> 17.6 inside; stanford-bunny 26.4 -> 23.5,
+  /// depend on it. 32 (the automatic choice below 1024x768): single-thread ms per 640x480 frame, min
+  /// of 5 alternating runs, tile 16 -> 32: city 20.6 -> 18.8 outside, 20.6 -> 17.6 inside; stanford-bunny 26.4 -> 23.5,
   /// 23.0 -> 20.5; sportsCar 34.6 -> 30.5, 21.1 -> 19.0; lasdunasarena 19.4 -> 17.2, 37.2 -> 32.4;
   /// oacmpdm9 16.9 -> 15.3, 20.1 -> 19.2; fzk_haus 18.1 -> 16.5, 19.1 -> 17.7 (4.5-15 % faster; 24
   /// lies between). Ray-tested triangles rise by 0-2 % on these scenes, 7 % on a 10M-triangle city.
@@ -112,8 +112,9 @@ struct NciParams {
   /// ratio to 32; 640x480 has 300 / 140 / 80 tiles of 32 / 48 / 64, 1024x768 768 / 352 / 192):
   /// single-thread 640x480 48: 0.99, 64: 1.00 (per scene 0.93-1.06); 1024x768 48: 0.97, 64: 0.96
   /// (stanford-bunny outside 0.80); 2 threads 640x480 0.99 / 0.97, 1024x768 0.94 / 0.91 (on a
-  /// shared 2-core machine). No clear gain at 640x480, so 32 stays; 64 pays from about 1024x768
-  /// up. Ray-tested triangles rise by 1-6 % at 64 (13 % on the 10M-triangle city).
+  /// shared 2-core machine). No clear gain at 640x480, so 32 stays there; 64 pays from about
+  /// 1024x768 up (bench_nci at 1024x768, 2 threads: 3-18 % less time than 32 on the six scenes).
+  /// Ray-tested triangles rise by 1-6 % at 64 (13 % on the 10M-triangle city).
   int tile_size = 0;
   /// Seed of the k-means (sampling and re-seeding of empty classes). Same seed, same index.
   std::uint64_t seed = 0x6e63692d6b6dULL;
