@@ -525,9 +525,8 @@ class NormalClassIndex {
       }
       frame.initial_depth = initial_depth;
       frame.initial_solid = initial_solid;
-      frame.tile = tile_edge(width, height);
+      const int tile = frame.tile = tile_edge(width, height);
       context.stats.axis = frame.axis;
-      const int tile = tile_edge(width, height);
       const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
       const std::size_t tile_count = static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y);
       unsigned thread_count = params_.threads ? params_.threads : std::thread::hardware_concurrency();
@@ -1847,17 +1846,16 @@ class NormalClassIndex {
       // triangle's rectangle reaches it, so no ray of it would be tested).
       const NciContext::Rect& b = f.box_rect;
       if (b.x0 > b.x1 || (b.x0 != NciContext::Rect::full && (b.x1 < x0 || b.x0 > x1 - 1 || b.y1 < y0 || b.y0 > y1 - 1))) {
+        // Written straight to the frame's buffers (no pixel state, no winner to mark).
         for (int y = 0; y < th; ++y) {
           const std::size_t row = static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(x0);
-          for (int x = 0; x < tw; ++x) {
-            const int i = y * stride + x;
-            r.best_t[i] = f.initial_depth ? f.initial_depth[row + static_cast<std::size_t>(x)] : std::numeric_limits<float>::infinity();
-            r.best[i] = none_;
-            r.solid_t[i] = f.initial_solid ? f.initial_solid[row + static_cast<std::size_t>(x)] : r.best_t[i];
-            r.solid[i] = none_;
+          for (std::size_t p = row; p < row + static_cast<std::size_t>(tw); ++p) {
+            const float t = f.initial_depth ? f.initial_depth[p] : std::numeric_limits<float>::infinity();
+            context.pixel_tri_[p] = none_;
+            context.pixel_t_[p] = t;
+            context.pixel_solid_t_[p] = f.initial_solid ? f.initial_solid[p] : t;
           }
         }
-        write_tile(f, r, x0, y0, tw, th, context, thread);
         return;
       }
     }

@@ -189,21 +189,21 @@ int main() {
                 hits.distance[p] = lh.distance[p];
               }
           }
+          // Whether an oracle triangle (world numbering) is reported: a static one in `set`, an object's
+          // as (object id, triangle) in `objs`.
+          const auto reported = [&](std::uint32_t tri) {
+            const int who = owner(tri);
+            if (who == 0) return std::binary_search(set.triangles.begin(), set.triangles.end(), tri);
+            const Placed& pl = placed[static_cast<std::size_t>(who - 1)];
+            return std::binary_search(objs.begin(), objs.end(), NciObjectTriangle{pl.id, tri - pl.first});
+          };
           // The world scene's answer, counted only (see the header comment).
           for (std::size_t p = 0; p < world_hits.triangle.size(); ++p) {
             const std::uint32_t w = world_hits.triangle[p];
             if (w == oracle::HitBuffer::miss) continue;
             ++tot.world_pixels;
             tot.world_differs += w != hits.triangle[p];
-            const int wo = owner(w);
-            bool found;
-            if (wo == 0) {
-              found = std::binary_search(set.triangles.begin(), set.triangles.end(), w);
-            } else {
-              const Placed& pl = placed[wo - 1];
-              found = std::binary_search(objs.begin(), objs.end(), NciObjectTriangle{pl.id, w - pl.first});
-            }
-            if (!found && !(std::fabs(px.depth[p] - world_hits.distance[p]) <= 1e-5f * std::max(1.0f, world_hits.distance[p]))) {
+            if (!reported(w) && !(std::fabs(px.depth[p] - world_hits.distance[p]) <= 1e-5f * std::max(1.0f, world_hits.distance[p]))) {
               ++tot.world_unreported;
               tot.world_unreported_far += off > 2e4f;
             }
@@ -223,14 +223,7 @@ int main() {
               if (y > 0) silhouette |= owner(hits.triangle[p - W]) != who;
               if (y + 1 < H) silhouette |= owner(hits.triangle[p + W]) != who;
               tot.silhouette_pixels += silhouette;
-              bool found;
-              if (who == 0) {
-                found = std::binary_search(set.triangles.begin(), set.triangles.end(), want);
-              } else {
-                const Placed& pl = placed[who - 1];
-                found = std::binary_search(objs.begin(), objs.end(), NciObjectTriangle{pl.id, want - pl.first});
-              }
-              if (found) continue;
+              if (reported(want)) continue;
               // The tie: our first-hit depth at this pixel (static or object) equals Embree's.
               const float te = hits.distance[p];
               const bool ours_object = px.triangle[p] == NciPixels::miss;
