@@ -17,7 +17,7 @@
 // halved; or `--collect-atstart=no --toggle-collect='*process_tile*'` for the tiles alone):
 // one thread, select_visible only, at 640x480, FRAMES frames (default 1) of view VIEW (0: outside,
 // 1: inside) of SCENE ("city", "bigcity" (10.1M triangles) or a real scene's file name); prints the
-// tested count.
+// tested count and the call's NciSelectStats (triangles met and those with no pixel centre).
 // CULLKIT_BENCH_SMOKE=1: a tiny city at 64x48, one setting.
 #include <atomic>
 #include <chrono>
@@ -313,8 +313,11 @@ int profile(const std::string& name, int view, int frames) {
   NciContext ctx;
   VisibleSet out;
   for (int k = 0; k < frames; ++k) index.select_visible(cams[static_cast<std::size_t>(view) % 2], ctx, out, nullptr);
-  std::printf("profile,%s,view%d,frames=%d,selected=%zu,tested=%zu\n", name.c_str(), view, frames,
-              out.triangles.size(), out.triangles_tested);
+  const NciSelectStats& st = ctx.stats;
+  std::printf("profile,%s,view%d,frames=%d,selected=%zu,tested=%zu,ray_tests=%zu,cells=%zu,triangles_met=%zu,"
+              "triangles_no_pixel=%zu\n",
+              name.c_str(), view, frames, out.triangles.size(), out.triangles_tested, st.ray_tests, st.cells_visited,
+              st.triangles_met, st.triangles_no_pixel);
   return 0;
 }
 

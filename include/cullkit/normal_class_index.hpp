@@ -162,6 +162,16 @@ struct NciSelectStats {
   std::size_t ray_tests = 0;       ///< ray/triangle tests performed
   std::size_t cells_visited = 0;   ///< cells whose triangles were looked at
   std::size_t slices_walked = 0;   ///< (tile, slice) steps
+  /// (tile, triangle) pairs met: cell entries looked at by a tile, a triangle listed in several
+  /// cells counted once per tile.
+  std::size_t triangles_met = 0;
+  /// Of those, the triangles inside the tile's beam whose screen rectangle holds no pixel centre
+  /// at all: back faces, triangles seen edge-on, and small triangles lying between pixel centres.
+  /// They are never ray-tested, but each costs a projection. When this is most of
+  /// `triangles_met`, the view is sub-pixel dense (many triangles per pixel), where the method
+  /// meets every front-facing triangle near the visible surface and casting one ray per pixel
+  /// through a BVH does less work (README: "When not to use it").
+  std::size_t triangles_no_pixel = 0;
   int axis = 0;                    ///< grid axis walked
 };
 
@@ -594,6 +604,8 @@ class NormalClassIndex {
         context.stats.ray_tests += th.stats.ray_tests;
         context.stats.cells_visited += th.stats.cells_visited;
         context.stats.slices_walked += th.stats.slices_walked;
+        context.stats.triangles_met += th.stats.triangles_met;
+        context.stats.triangles_no_pixel += th.stats.triangles_no_pixel;
         for (const auto& e : th.extra) context.extras_.push_back(NciContext::Extra{original(e.tri), e.t, e.pixel});
       }
       auto& mesh_bits = context.shown_mesh_;
@@ -1651,7 +1663,11 @@ class NormalClassIndex {
     // None (back face, edge-on from the eye, off screen) or no live pixel under it: not tested.
     int rx0, ry0, rx1, ry1;
     Mask span;
-    if (!live_under(slot.rect, x0, y0, tw, th, live, rx0, ry0, rx1, ry1, span)) return false;
+    if (!live_under(slot.rect, x0, y0, tw, th, live, rx0, ry0, rx1, ry1, span)) {
+      // Counted only inside the beam, so the count does not depend on which thread met it first.
+      if (slot.rect.x0 > slot.rect.x1 && (in_beam || !outside_beam(r, tri, f))) ++thread.stats.triangles_no_pixel;
+      return false;
+    }
     // The same beam test when the rectangle came from the cache, so what is tested does not depend
     // on which thread met the triangle first.
     if (!in_beam && outside_beam(r, tri, f)) return false;
@@ -2108,6 +2124,7 @@ class NormalClassIndex {
                   auto visit = [&](std::uint32_t tri) {
                     if (thread.tri[tri].stamp == stamp) return;
                     thread.tri[tri].stamp = stamp;
+                    ++thread.stats.triangles_met;
                     NciContext::Thread::Cand cand;
                     if (admit_triangle(f, tri, x0, y0, tw, th, live, r, thread, cand)) thread.cand.push_back(cand);
                   };

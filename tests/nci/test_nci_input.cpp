@@ -148,6 +148,67 @@ void test_determinism_and_progress() {
   }
 }
 
+// NciSelectStats::triangles_met / triangles_no_pixel: the same with any thread count; a field of
+// specks far smaller than a pixel is met but almost never ray-tested (their rectangles hold no pixel
+// centre, except the about 1 % lying within the 0.05-pixel margin of one); one screen-filling quad
+// is met and both its triangles have pixels.
+void test_select_stats() {
+  const auto office = support::make_office(32, 2, 3);
+  NciParams one, two;
+  one.threads = 1;
+  two.threads = 2;
+  const NormalClassIndex<glm::vec3> i1(office.mesh(), one), i2(office.mesh(), two);
+  std::size_t met = 0;
+  for (const auto& cam : nci_test::cameras_for(office.bounds, 6, 64, 48, 303)) {
+    NciContext c1, c2;
+    VisibleSet s1, s2;
+    i1.select_visible(cam, c1, s1, nullptr);
+    i2.select_visible(cam, c2, s2, nullptr);
+    CHECK(c1.stats.triangles_met == c2.stats.triangles_met);
+    CHECK(c1.stats.triangles_no_pixel == c2.stats.triangles_no_pixel);
+    CHECK(c1.stats.ray_tests == c2.stats.ray_tests);
+    CHECK(c1.stats.triangles_no_pixel <= c1.stats.triangles_met);
+    CHECK(s1.triangles_tested <= c1.stats.triangles_met);
+    met += c1.stats.triangles_met;
+  }
+  CHECK(met > 0);
+
+  // Specks: 2000 triangles of 1e-4 (a pixel is about 0.18 here), facing the eye, on z = 0.
+  support::Rng rng(77);
+  std::vector<glm::vec3> v;
+  std::vector<std::uint32_t> idx;
+  for (std::uint32_t k = 0; k < 2000; ++k) {
+    const glm::vec3 c(rng.uniform(-4.0f, 4.0f), rng.uniform(-3.0f, 3.0f), 0.0f);
+    v.insert(v.end(), {c, c + glm::vec3(1e-4f, 0, 0), c + glm::vec3(0, 1e-4f, 0)});
+    idx.insert(idx.end(), {3 * k, 3 * k + 1, 3 * k + 2});
+  }
+  support::Scene field;
+  field.add_mesh(v, idx, "specks");
+  const NormalClassIndex<glm::vec3> specks(field.mesh());
+  const Camera cam = front_camera(64, 48);
+  NciContext ctx;
+  VisibleSet out;
+  NciPixels px;
+  specks.select_visible(cam, ctx, out, &px);
+  const nci_test::BruteHits brute = nci_test::brute_force<float>(field, cam);
+  CHECK(px.triangle == brute.tri);
+  // Met also counts triangles of the tile's cells outside its beam (not in triangles_no_pixel).
+  std::printf("specks: met %zu, no pixel %zu, tested %zu\n", ctx.stats.triangles_met, ctx.stats.triangles_no_pixel,
+              out.triangles_tested);
+  CHECK(ctx.stats.triangles_met >= 1000 && ctx.stats.triangles_no_pixel * 10 >= ctx.stats.triangles_met * 7);
+  CHECK(out.triangles_tested * 20 <= ctx.stats.triangles_no_pixel);
+
+  // One quad over the whole screen: every met triangle covers pixel centres.
+  const std::vector<glm::vec3> qv = {{-50, -50, 0}, {50, -50, 0}, {50, 50, 0}, {-50, 50, 0}};
+  const std::vector<std::uint32_t> qi = {0, 1, 2, 0, 2, 3};
+  const NormalClassIndex<glm::vec3> quad(MeshView<glm::vec3>{qv.data(), qv.size(), qi.data(), qi.size()});
+  NciContext qc;
+  VisibleSet qs;
+  quad.select_visible(cam, qc, qs, nullptr);
+  CHECK(qc.stats.triangles_met >= 2 && qc.stats.triangles_no_pixel == 0);
+  CHECK(qs.triangles.size() == 2);
+}
+
 }  // namespace
 
 // The eye on (or a subnormal distance from) a triangle's corner: the corner's offsets from the eye
@@ -226,6 +287,7 @@ void test_automatic_tile() {
 }
 
 int main() {
+  test_select_stats();
   test_automatic_tile();
   test_eye_at_corner();
   test_empty();
