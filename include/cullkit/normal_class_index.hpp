@@ -2016,6 +2016,7 @@ class NormalClassIndex {
     const double ea = f.eye[a], eb = f.eye[b], ec = f.eye[c];
     const int na = dims_[a], nb = dims_[b], nc = dims_[c];
 
+    std::size_t met = 0;  // NciSelectStats::triangles_met of this tile (a local: the visit loop is hot)
     for (int walk = 0; walk < 2; ++walk) {
       Mask* mask = walk_mask[walk];
       const int step = walk == 0 ? 1 : -1;
@@ -2124,7 +2125,7 @@ class NormalClassIndex {
                   auto visit = [&](std::uint32_t tri) {
                     if (thread.tri[tri].stamp == stamp) return;
                     thread.tri[tri].stamp = stamp;
-                    ++thread.stats.triangles_met;
+                    ++met;
                     NciContext::Thread::Cand cand;
                     if (admit_triangle(f, tri, x0, y0, tw, th, live, r, thread, cand)) thread.cand.push_back(cand);
                   };
@@ -2196,6 +2197,7 @@ class NormalClassIndex {
         mask[y] = 0;
       }
     }
+    thread.stats.triangles_met += met;
     // Beside each pixel's first hit: the triangles within rounding of an edge in front of its
     // solid hit, and that solid hit itself.
     const auto global = [&](int i) {
