@@ -17,8 +17,11 @@
 // halved; or `--collect-atstart=no --toggle-collect='*process_tile*'` for the tiles alone):
 // one thread, select_visible only, at 640x480, FRAMES frames (default 1) of view VIEW (0: outside,
 // 1: inside) of SCENE ("city", "bigcity" (10.1M triangles) or a real scene's file name); prints the
-// tested count and the call's NciSelectStats (triangles met and those with no pixel centre).
+// tested count, the call's NciSelectStats (triangles met and those with no pixel centre) and the mean
+// wall time per frame (the first frame included); env CULLKIT_NCI_GRID / CULLKIT_NCI_TILE set
+// NciParams::grid / tile_size.
 // CULLKIT_BENCH_SMOKE=1: a tiny city at 64x48, one setting.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -308,16 +311,21 @@ int profile(const std::string& name, int view, int frames) {
   NciParams p;
   p.threads = 1;
   p.build_threads = 1;
+  if (const char* g = std::getenv("CULLKIT_NCI_GRID")) p.grid = std::atoi(g);
+  if (const char* t = std::getenv("CULLKIT_NCI_TILE")) p.tile_size = std::atoi(t);
   const NormalClassIndex<glm::vec3> index(s->mesh(), p);
   const auto cams = views(*s, 640, 480);
   NciContext ctx;
   VisibleSet out;
+  const auto t0 = std::chrono::steady_clock::now();
   for (int k = 0; k < frames; ++k) index.select_visible(cams[static_cast<std::size_t>(view) % 2], ctx, out, nullptr);
+  const double ms = frames > 0 ? seconds_since(t0) * 1e3 / frames : 0.0;
   const NciSelectStats& st = ctx.stats;
-  std::printf("profile,%s,view%d,frames=%d,selected=%zu,tested=%zu,ray_tests=%zu,cells=%zu,triangles_met=%zu,"
-              "triangles_no_pixel=%zu\n",
-              name.c_str(), view, frames, out.triangles.size(), out.triangles_tested, st.ray_tests, st.cells_visited,
-              st.triangles_met, st.triangles_no_pixel);
+  std::printf("profile,%s,view%d,grid=%d,frames=%d,ms_per_frame=%.2f,selected=%zu,tested=%zu,ray_tests=%zu,cells=%zu,"
+              "triangles_met=%zu,triangles_no_pixel=%zu,bytes_per_triangle=%.1f\n",
+              name.c_str(), view, index.params().grid, frames, ms, out.triangles.size(), out.triangles_tested,
+              st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel,
+              double(index.memory_bytes()) / double(std::max<std::size_t>(1, s->triangle_count())));
   return 0;
 }
 
