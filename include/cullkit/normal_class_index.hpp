@@ -92,9 +92,14 @@ struct NciParams {
   /// skipped per tile, but more grids to search. The seed measures 32, 128 and 512. Clamped to
   /// [1, 4096]; classes that end up empty are dropped.
   int classes = 32;
-  /// Cells along the scene box's longest axis (cubic cells). Finer: fewer triangles tested per
-  /// pixel, more memory and more slices to walk. Clamped to [1, 4096].
-  int grid = 64;
+  /// Cells along the scene box's longest axis (cubic cells). Finer: fewer triangles met per tile
+  /// (not fewer tested: the screen rectangles already keep the tests down), more memory, and more
+  /// cells and slices to walk. Clamped to [1, 4096]. 32 (the default since session 5; 64 before):
+  /// against 64, bench_nci at 2 threads on six scenes x two views x 640x480 and 1024x768, minimum of
+  /// three alternating runs, the time ratio is 0.96 in geometric mean (0.85-1.07; sportsCar from
+  /// outside at 640x480 is the one loss above 3 %), with 1-37 % less memory and the same precision
+  /// within 0.06 (README, NormalClassIndex, round 7).
+  int grid = 32;
   /// Worker threads for select_visible; 0: all hardware threads. Never changes the result.
   unsigned threads = 0;
   /// Worker threads for the build (per class); 0: all hardware threads. Never changes the index.
