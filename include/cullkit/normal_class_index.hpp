@@ -105,21 +105,17 @@ struct NciParams {
   /// Worker threads for the build (per class); 0: all hardware threads. Never changes the index.
   unsigned build_threads = 0;
   /// Screen tile edge in pixels, clamped to [2, 64]; 0 (the default): 64 for screens of at least
-  /// 1024x768 pixels, 32 below (the measurements below). Each tile walks the slices on its own and
-  /// pays the per-triangle work (cell entry visits, screen-rectangle tests) once, so bigger tiles
-  /// amortize it over more pixels; the answer (per-pixel triangle and depth, selected set) does not
-  /// depend on it. 32 (the automatic choice below 1024x768): single-thread ms per 640x480 frame, min
-  /// of 5 alternating runs, tile 16 -> 32: city 20.6 -> 18.8 outside, 20.6 -> 17.6 inside; stanford-bunny 26.4 -> 23.5,
-  /// 23.0 -> 20.5; sportsCar 34.6 -> 30.5, 21.1 -> 19.0; lasdunasarena 19.4 -> 17.2, 37.2 -> 32.4;
-  /// oacmpdm9 16.9 -> 15.3, 20.1 -> 19.2; fzk_haus 18.1 -> 16.5, 19.1 -> 17.7 (4.5-15 % faster; 24
-  /// lies between). Ray-tested triangles rise by 0-2 % on these scenes, 7 % on a 10M-triangle city.
-  /// Tiles of 48 and 64 (same scenes and views, min of 5 alternating runs, geometric mean of the
-  /// ratio to 32; 640x480 has 300 / 140 / 80 tiles of 32 / 48 / 64, 1024x768 768 / 352 / 192):
-  /// single-thread 640x480 48: 0.99, 64: 1.00 (per scene 0.93-1.06); 1024x768 48: 0.97, 64: 0.96
-  /// (stanford-bunny outside 0.80); 2 threads 640x480 0.99 / 0.97, 1024x768 0.94 / 0.91 (on a
-  /// shared 2-core machine). No clear gain at 640x480, so 32 stays there; 64 pays from about
-  /// 1024x768 up (bench_nci at 1024x768, 2 threads: 3-18 % less time than 32 on the six scenes).
-  /// Ray-tested triangles rise by 1-6 % at 64 (13 % on the 10M-triangle city).
+  /// 640x480 pixels, 32 below. Each tile walks the slices on its own and pays the per-triangle work
+  /// (cell entry visits, screen-rectangle tests) once, so bigger tiles amortize it over more pixels;
+  /// the answer (per-pixel triangle and depth, selected set) does not depend on it, the count of
+  /// ray-tested triangles does (bigger tiles test a few more). Measured on six scenes, both views,
+  /// 2 threads, 2-core machine (README, NormalClassIndex, rounds 6 and 7):
+  ///  * with the old grid of 64 cells, 32 against 16 was 4.5-15 % faster on one thread at 640x480;
+  ///    64 against 32 was 0.97 (geometric mean of the time ratio) at 640x480 and 0.91 at 1024x768;
+  ///  * with the grid of 32 cells, 64 against 32 at 640x480 is 0.95 (48: 0.955), one loss (fzk_haus
+  ///    from outside, +8 %), and tests 0-12 % more triangles (fzk_haus 2.49 -> 2.78 tested per
+  ///    visible triangle). Below 640x480 nothing was measured, so 32 stays there (more tiles to share
+  ///    between threads). Many threads on a small screen may prefer smaller tiles than the default.
   int tile_size = 0;
   /// Seed of the k-means (sampling and re-seeding of empty classes). Same seed, same index.
   std::uint64_t seed = 0x6e63692d6b6dULL;
@@ -1310,11 +1306,11 @@ class NormalClassIndex {
     return project_rect(f, p, 3);
   }
 
-  // The tile edge for a screen: NciParams::tile_size, or when it is 0, 64 from 1024x768 pixels up
-  // and 32 below (bigger tiles pay only on bigger screens; see NciParams::tile_size).
+  // The tile edge for a screen: NciParams::tile_size, or when it is 0, 64 from 640x480 pixels up
+  // and 32 below (bigger tiles pay from there on; see NciParams::tile_size).
   [[nodiscard]] int tile_edge(int width, int height) const noexcept {
     if (params_.tile_size != 0) return params_.tile_size;
-    return static_cast<long long>(width) * height >= 1024LL * 768LL ? max_tile_ : 32;
+    return static_cast<long long>(width) * height >= 640LL * 480LL ? max_tile_ : 32;
   }
 
   // Whether a corner lies (nearly) at the eye: its offsets from the eye, as the float ray test takes

@@ -262,7 +262,7 @@ void test_eye_at_corner() {
   CHECK(hits > 1000);
 }
 
-// NciParams::tile_size 0 (the default) picks 64-pixel tiles from 1024x768 pixels up and 32 below;
+// NciParams::tile_size 0 (the default) picks 64-pixel tiles from 640x480 pixels up and 32 below;
 // the answer does not depend on it.
 void test_automatic_tile() {
   const support::Scene city = support::make_city(5, 2);
@@ -272,8 +272,9 @@ void test_automatic_tile() {
   const NormalClassIndex<glm::vec3> fixed(city.mesh(), p32);
   CHECK(automatic.params().tile_size == 0);
   const glm::vec3 c = city.bounds.center(), e = city.bounds.extent();
-  for (const auto& [w, h, expect] : {std::array<int, 3>{640, 480, 32}, std::array<int, 3>{1024, 768, 64},
-                                      std::array<int, 3>{1024, 767, 32}, std::array<int, 3>{2000, 400, 64}}) {
+  for (const auto& [w, h, expect] : {std::array<int, 3>{640, 480, 64}, std::array<int, 3>{1024, 768, 64},
+                                      std::array<int, 3>{640, 479, 32}, std::array<int, 3>{2000, 154, 64},
+                                      std::array<int, 3>{320, 240, 32}}) {
     const Camera cam = support::make_camera(c + e * glm::vec3(0.7f, 0.6f, 0.8f), c, 60, w, h, 0.1f, 0.0f);
     NciContext ca, cf;
     VisibleSet sa, sf;
