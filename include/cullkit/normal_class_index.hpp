@@ -171,7 +171,7 @@ struct NciSelectStats {
   /// They are never ray-tested, but each costs a projection. When this is most of
   /// `triangles_met`, the view is sub-pixel dense (many triangles per pixel), where the method
   /// meets every front-facing triangle near the visible surface and casting one ray per pixel
-  /// through a BVH does less work (README: "When not to use it").
+  /// through a BVH does less work (README, NormalClassIndex: "When it pays and when it does not").
   std::size_t triangles_no_pixel = 0;
   int axis = 0;                    ///< grid axis walked
 };
