@@ -270,8 +270,8 @@ void test_eye_at_corner() {
 // only where its exact rejections allow them. Checked: the index reports only float hits, at their
 // depth (so where it differs from the float brute force it reports a farther hit or none); it
 // differs only at pixels where the brute force's answer is a touching triangle (a hit of such a
-// triangle that the exact geometry rules out); one and two threads agree. Two big triangles 40 units before and behind the
-// eye give the rays something else to hit.
+// triangle that the exact geometry rules out); one and two threads agree. Two big triangles 40
+// units before and behind the eye give the rays something else to hit.
 void test_eye_touching_triangle() {
   support::Rng rng(20261122);
   int touching = 0, apart = 0, differing = 0, pixels_differing = 0, touched_hits = 0;

@@ -169,9 +169,9 @@ template <class Real>
 /// NormalClassIndex keeps such a float hit only where its exact geometric rejections (class cones,
 /// beams, screen rectangles, edge planes) allow it, so its answer there may differ from a plain
 /// float ray caster's and may depend on the grid and tile size (never on the thread count).
-/// Measured with 9,000 random cameras near a segment of a triangle's edge whose far end is 1e3 to
-/// 1e35 away (cameras as in test_nci_input's test_eye_touching_triangle): the index disagreed with
-/// the float test only with the eye within 7.7e-11 of that distance, four orders below 2^-20.
+/// Measured with 9,000 random cameras 1e-13 to 10 units off a segment of a triangle's edge whose far
+/// end is 1e3 to 1e35 away: the index disagreed with the float test only where the eye's distance
+/// from the plane was at most 7.7e-11 of the farthest corner's, four orders below 2^-20.
 /// True for a degenerate triangle (no plane); false when a coordinate is NaN.
 [[nodiscard]] inline bool touches_eye(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
                                       const glm::dvec3& eye) noexcept {
