@@ -4,7 +4,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 
 PACKAGES=(cmake ninja-build g++ clang libclang-rt-14-dev libglm-dev libembree-dev libbullet-dev
-          libbenchmark-dev libtinyobjloader-dev libstb-dev)
+          libbenchmark-dev libtinyobjloader-dev libstb-dev libosmesa6-dev)
 JOBS=${JOBS:-$(nproc 2>/dev/null || echo 2)}
 
 say() { printf '\033[1m==> %s\033[0m\n' "$*"; }
@@ -95,6 +95,7 @@ cmd_fuzz() {
 }
 
 cmd_asan() { deps; run_tests asan "$@"; }
+cmd_deps() { deps; }
 cmd_clean() { rm -rf build out; }
 
 cmd_help() {

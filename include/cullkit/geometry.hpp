@@ -4,6 +4,7 @@
 #include "geometry/aabb.hpp"
 #include "geometry/camera.hpp"
 #include "geometry/convex_polygon.hpp"
+#include "geometry/convex_volume.hpp"
 #include "geometry/frustum.hpp"
 #include "geometry/plane.hpp"
 #include "geometry/sphere.hpp"

@@ -3,6 +3,7 @@ cullkit_add_test(test_aabb_plane_sphere SOURCES ${_geo}/test_aabb_plane_sphere.c
 cullkit_add_test(test_convex_polygon SOURCES ${_geo}/test_convex_polygon.cpp)
 cullkit_add_test(test_camera SOURCES ${_geo}/test_camera.cpp)
 cullkit_add_test(test_traits SOURCES ${_geo}/test_traits.cpp)
+cullkit_add_test(test_convex_volume SOURCES ${_geo}/test_convex_volume.cpp)
 # The same frustum test compiled with GLM's clip-control macros off and on. Separate programs:
 # GLM's own inline functions change meaning with these macros, so they may not share one program.
 cullkit_add_test(test_frustum SOURCES ${_geo}/test_frustum.cpp)
