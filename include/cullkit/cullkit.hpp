@@ -10,3 +10,4 @@
 #include "occlusion_culling.hpp"
 #include "normal_class_index.hpp"
 #include "depth_sort.hpp"
+#include "bsp_tree.hpp"
