@@ -148,6 +148,12 @@ void test_bad_input() {
   const Tree one(cullkit::MeshView<glm::vec3>{v.data(), v.size(), idx.data(), 3});
   one.back_to_front(glm::vec3(5, 5, 5), out);
   CHECK(out.size() == 1 && one.nodes().size() == 1);
+  // A sliver thinner than the tolerance (1e-6 of the largest coordinate) has no trustworthy plane:
+  // dropped as degenerate, beside a normal triangle that is kept.
+  const std::vector<glm::vec3> sv = {{0, 0, 0}, {1e6f, 0, 0}, {5e5f, 1e-2f, 0}, {0, 1e5f, 0}};
+  const std::vector<std::uint32_t> si3 = {0, 1, 2, 0, 1, 3};
+  const Tree sliver(cullkit::MeshView<glm::vec3>{sv.data(), sv.size(), si3.data(), si3.size()});
+  CHECK(sliver.stats().dropped_degenerate == 1 && sliver.fragments().size() == 1 && sliver.validate());
   // Signed 16-bit indices and a vertex type read through custom traits.
   struct MyVertex {
     float xyz[3];

@@ -68,7 +68,7 @@ struct BspStats {
   std::size_t triangles = 0;            ///< triangles in the mesh (index_count / 3)
   std::size_t dropped_bad_index = 0;    ///< a corner index out of range (or negative)
   std::size_t dropped_non_finite = 0;   ///< a NaN or infinite corner coordinate
-  std::size_t dropped_degenerate = 0;   ///< zero area (collinear or repeated corners)
+  std::size_t dropped_degenerate = 0;   ///< zero area, or thinner than `epsilon` (no usable plane)
   std::size_t cuts = 0;                 ///< polygons cut in two by a splitting plane
   std::size_t fragments = 0;            ///< fragments stored (kept triangles + cuts)
   std::size_t nodes = 0;
@@ -305,14 +305,35 @@ Item gather(std::size_t triangle_count, const Positions& triangle_corners, const
   for (std::size_t i = 0; i < triangle_count; ++i) {
     if (!usable[i] || !triangle_corners(i, t)) continue;
     const glm::dvec3 a(t[0]), b(t[1]), c(t[2]);
-    const glm::dvec3 n = glm::cross(b - a, c - a);
+    const glm::dvec3 p[3] = {a, b, c};
+    // The normal from the two shorter edges (the better-conditioned cross product), then a check
+    // that every corner lies within a fraction of the tolerance of the plane: a sliver thinner than
+    // the tolerance has no trustworthy plane and is dropped with the zero-area triangles.
+    int apex = 0;  // the corner opposite the longest edge
+    double longest = -1;
+    for (int k = 0; k < 3; ++k) {
+      const double l = glm::length(p[(k + 2) % 3] - p[(k + 1) % 3]);
+      if (l > longest) {
+        longest = l;
+        apex = k;
+      }
+    }
+    const glm::dvec3 n = glm::cross(p[(apex + 1) % 3] - p[apex], p[(apex + 2) % 3] - p[apex]);
     const double len = glm::length(n);
-    if (!(len > 0.0) || !std::isfinite(len)) {
+    const double height = len / longest;  // of the apex above the longest edge
+    if (!(len > 0.0) || !std::isfinite(len) || !(height > stats.epsilon)) {
       ++stats.dropped_degenerate;
       continue;
     }
     const glm::dvec3 unit = n / len;
-    planes[i] = DPlane{unit, -glm::dot(unit, (a + b + c) / 3.0)};
+    const DPlane plane{unit, -glm::dot(unit, (a + b + c) / 3.0)};
+    bool flat = true;
+    for (int k = 0; k < 3; ++k) flat = flat && std::fabs(glm::dot(unit, p[k]) + plane.d) <= 0.125 * stats.epsilon;
+    if (!flat) {
+      ++stats.dropped_degenerate;
+      continue;
+    }
+    planes[i] = plane;
     const Corner corners[3] = {{a, glm::dvec2(0, 0)}, {b, glm::dvec2(1, 0)}, {c, glm::dvec2(0, 1)}};
     append_poly(item, static_cast<std::uint32_t>(i), corners, 3);
   }
