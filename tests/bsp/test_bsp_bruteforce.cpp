@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <thread>
 #include <vector>
 
 #include <cullkit/bsp_tree.hpp>
@@ -230,6 +231,18 @@ void test_threads_and_progress() {
     same = a.nodes()[i].front == b.nodes()[i].front && a.nodes()[i].back == b.nodes()[i].back &&
            a.nodes()[i].normal == b.nodes()[i].normal;
   CHECK(same);
+  // One thread with a callback: it still reports on the way, from the calling thread only.
+  BspParams single;
+  single.threads = 1;
+  std::size_t single_calls = 0;
+  const auto caller = std::this_thread::get_id();
+  bool same_thread = true;
+  single.progress = [&](const cullkit::BspProgress&) {
+    ++single_calls;
+    same_thread = same_thread && std::this_thread::get_id() == caller;
+  };
+  const Tree c(soup.mesh(), single);
+  CHECK(single_calls > 1 && same_thread && c.fragments().size() == a.fragments().size());
   std::printf("soup of %zu triangles: %zu fragments, %zu nodes, depth %zu\n", soup.triangle_count(),
               a.fragments().size(), a.nodes().size(), a.stats().depth);
 }

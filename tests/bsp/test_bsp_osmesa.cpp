@@ -269,6 +269,7 @@ View make_view(const glm::vec3& eye, const glm::vec3& target, float near_plane, 
 void check_scene(const std::string& name, const Scene& scene, const std::vector<View>& views,
                  const std::vector<std::uint8_t>& buf, Totals& totals) {
   const Tree tree(scene.mesh());
+  CHECK_MSG(tree.validate(), "%s: validate", name.c_str());
   std::vector<std::uint32_t> order;
   for (std::size_t vi = 0; vi < views.size(); ++vi) {
     const View& v = views[vi];

@@ -264,14 +264,15 @@ inline void process(Item& item, Output& out, std::vector<Item>& stack, Context& 
 }
 
 /// Builds the whole subtree of `root` depth first into `out` (the item's node is out's node 0 if
-/// `out` was empty).
-inline void build_subtree(Item root, Output& out, Context& ctx) {
+/// `out` was empty). With `report`, calls the progress callback every 1024 nodes.
+inline void build_subtree(Item root, Output& out, Context& ctx, bool report) {
   std::vector<Item> stack;
   stack.push_back(std::move(root));
-  while (!stack.empty()) {
+  for (std::size_t made = 1; !stack.empty(); ++made) {
     Item item = std::move(stack.back());
     stack.pop_back();
     process(item, out, stack, ctx);
+    if (report && made % 1024 == 0) ctx.params->progress(BspProgress{ctx.placed.load(), ctx.pending.load()});
   }
 }
 
@@ -407,25 +408,25 @@ inline void canonical_order(Data& data) {
 inline std::vector<Output> build_parallel(std::vector<Item>& items, unsigned threads, Context& ctx) {
   std::vector<Output> outs(items.size());
   std::atomic<std::size_t> next{0}, done{0};
-  auto work = [&] {
+  auto work = [&](bool report_here) {
     for (std::size_t i = next.fetch_add(1); i < items.size(); i = next.fetch_add(1)) {
-      build_subtree(std::move(items[i]), outs[i], ctx);
+      build_subtree(std::move(items[i]), outs[i], ctx, report_here);
       done.fetch_add(1);
     }
   };
   // With a progress callback the caller only reports (sleeping between reports) and `threads`
   // workers build; without, the caller is one of the `threads`.
-  const bool report = static_cast<bool>(ctx.params->progress);
+  const bool report = static_cast<bool>(ctx.params->progress) && threads > 1;
   const std::size_t workers = std::min<std::size_t>(report ? threads : threads - 1, items.size());
   std::vector<std::thread> pool;
-  for (std::size_t t = 0; t < workers; ++t) pool.emplace_back(work);
+  for (std::size_t t = 0; t < workers; ++t) pool.emplace_back(work, false);
   if (report && !pool.empty()) {
     while (done.load() < items.size()) {
       ctx.params->progress(BspProgress{ctx.placed.load(), ctx.pending.load()});
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   } else {
-    work();
+    work(static_cast<bool>(ctx.params->progress));  // on the calling thread: it may report
   }
   for (auto& t : pool) t.join();
   return outs;
