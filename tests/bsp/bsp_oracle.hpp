@@ -25,34 +25,50 @@ struct OrderCheck {
   std::size_t violations = 0;     // a nearer hit painted before a farther one
 };
 
+// A fragment's plane and size, computed once per check.
+struct FragmentGeometry {
+  glm::dvec3 normal;  // unit, Newell's
+  double size;        // largest distance from its first corner
+  bool usable;
+};
+
+template <class Tree>
+std::vector<FragmentGeometry> fragment_geometry(const Tree& tree) {
+  std::vector<FragmentGeometry> out;
+  for (const auto& frag : tree.fragments()) {
+    const glm::vec3* c = tree.corners().data() + frag.first_corner;
+    glm::dvec3 n(0.0);
+    double size = 0;
+    for (std::uint32_t i = 0; i < frag.corner_count; ++i) {
+      n += glm::cross(glm::dvec3(c[i]), glm::dvec3(c[(i + 1) % frag.corner_count]));
+      size = std::max(size, glm::length(glm::dvec3(c[i]) - glm::dvec3(c[0])));
+    }
+    const double len = glm::length(n);
+    out.push_back({len > 0 ? n / len : n, size, len > 0});
+  }
+  return out;
+}
+
 // Distance along `dir` from `eye` to fragment f, or -1 when the ray misses it (or only grazes an
 // edge: within `margin` relative to the fragment's size).
 template <class Tree>
-double ray_hit(const Tree& tree, std::uint32_t f, const glm::dvec3& eye, const glm::dvec3& dir, double margin) {
+double ray_hit(const Tree& tree, const FragmentGeometry& g, std::uint32_t f, const glm::dvec3& eye,
+               const glm::dvec3& dir, double margin) {
+  if (!g.usable) return -1;
   const auto& frag = tree.fragments()[f];
   const glm::vec3* c = tree.corners().data() + frag.first_corner;
-  glm::dvec3 n(0.0);
-  for (std::uint32_t i = 0; i < frag.corner_count; ++i) {  // Newell normal
-    const glm::dvec3 a(c[i]), b(c[(i + 1) % frag.corner_count]);
-    n += glm::cross(a, b);
-  }
-  const double len = glm::length(n);
-  if (!(len > 0)) return -1;
-  n /= len;
-  const double denom = glm::dot(n, dir);
+  const double denom = glm::dot(g.normal, dir);
   if (std::fabs(denom) < 1e-12) return -1;
-  const double t = glm::dot(n, glm::dvec3(c[0]) - eye) / denom;
+  const double t = glm::dot(g.normal, glm::dvec3(c[0]) - eye) / denom;
   if (!(t > 0)) return -1;
   const glm::dvec3 p = eye + dir * t;
-  double size = 0;
-  for (std::uint32_t i = 0; i < frag.corner_count; ++i) size = std::max(size, glm::length(glm::dvec3(c[i]) - glm::dvec3(c[0])));
   for (std::uint32_t i = 0; i < frag.corner_count; ++i) {
     const glm::dvec3 a(c[i]), b(c[(i + 1) % frag.corner_count]);
     const glm::dvec3 e = b - a;
     const double el = glm::length(e);
     if (!(el > 0)) continue;
-    const double inside = glm::dot(glm::cross(e, p - a), n) / el;  // distance inside this edge
-    if (inside < margin * size) return -1;
+    const double inside = glm::dot(glm::cross(e, p - a), g.normal) / el;  // distance inside this edge
+    if (inside < margin * g.size) return -1;
   }
   return t;
 }
@@ -69,6 +85,7 @@ OrderCheck check_order(const Tree& tree, const glm::vec3& eye_f, const std::vect
   cullkit::support::Rng rng(seed);
   const glm::dvec3 eye(eye_f);
   std::vector<std::pair<double, std::uint32_t>> hits;
+  const auto geometry = fragment_geometry(tree);
   for (std::size_t r = 0; r < rays; ++r) {
     const auto f = static_cast<std::uint32_t>(rng.next() % nf);
     const auto& frag = tree.fragments()[f];
@@ -85,7 +102,7 @@ OrderCheck check_order(const Tree& tree, const glm::vec3& eye_f, const std::vect
     const glm::dvec3 d = glm::normalize(dir);
     hits.clear();
     for (std::uint32_t g = 0; g < nf; ++g) {
-      const double t = ray_hit(tree, g, eye, d, margin);
+      const double t = ray_hit(tree, geometry[g], g, eye, d, margin);
       if (t > 0) hits.push_back({t, g});
     }
     std::sort(hits.begin(), hits.end());
