@@ -9,3 +9,5 @@
 #include "occlusion_tree.hpp"
 #include "occlusion_culling.hpp"
 #include "normal_class_index.hpp"
+#include "depth_sort.hpp"
+#include "bsp_tree.hpp"

@@ -1,0 +1,501 @@
+// cullkit/detail/bsp/build.hpp: the BSP builder behind BspTree. Not templated on the user's types:
+// BspTree reads the triangles through its traits and hands plain corner arrays to `build`.
+//
+// Steps: triangle planes (double) and dropping of unusable triangles; then work items (a node to
+// make and the convex polygons it receives, each item owning its polygons) processed depth first:
+// choose a splitter plane, keep polygons in that plane at the node, send the others to the front or
+// back item, cutting those that straddle it. Large inputs are cut on the calling thread until there
+// are enough independent subtrees, which worker threads then build; the result is laid out in one
+// canonical order afterwards, so it does not depend on the thread count.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <thread>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "../../config.hpp"
+
+namespace cullkit {
+
+/// What a BSP build has done so far, for `BspParams::progress`.
+struct BspProgress {
+  std::size_t fragments_placed = 0;   ///< polygons already stored at a node (final fragments)
+  std::size_t fragments_pending = 0;  ///< polygons still waiting in unbuilt subtrees
+};
+
+/// Options of `BspTree`. Every field has a default that suits scenes from a few triangles to
+/// millions; the trade-offs are measured in docs/bsp.md.
+struct BspParams {
+  /// On-plane tolerance, relative to the input's largest coordinate magnitude (the absolute
+  /// tolerance is epsilon * max(1, max |coordinate|)). A corner within it of a splitting plane is on
+  /// the plane: polygons are never cut for corners that are only on the plane, and a polygon with
+  /// every corner on it is stored at that node. Larger merges more near-coplanar surfaces (fewer
+  /// cuts) at the price of ordering errors of that size; default 1e-6, about 16 float ulps.
+  float epsilon = 1e-6f;
+  /// Splitter candidates scored per node (spread evenly over the node's polygons). 1 takes the
+  /// first polygon's plane (fastest build, most fragments). Default 16.
+  unsigned candidates = 16;
+  /// Polygons each candidate is scored against (spread evenly); bounds the cost of scoring at
+  /// large nodes. Default 256.
+  unsigned sample = 256;
+  /// Candidate score, lowest wins: split_weight x polygons cut + balance_weight x |front - back|
+  /// - coplanar_weight x polygons in the plane (counted over the sample). Defaults 8, 1, 1.
+  float split_weight = 8.0f;
+  float balance_weight = 1.0f;
+  float coplanar_weight = 1.0f;
+  /// Worker threads for the build: 0 uses all hardware threads, 1 builds on the calling thread
+  /// only. The tree does not depend on it.
+  unsigned threads = 0;
+  /// Inputs with fewer triangles are built on the calling thread only. Default 8192.
+  std::size_t parallel_min_triangles = 8192;
+  /// Called on the calling thread now and then during the build (at least once at the end, with
+  /// nothing pending) when set. Must not throw.
+  std::function<void(const BspProgress&)> progress;
+};
+
+/// What a build kept and dropped.
+struct BspStats {
+  std::size_t triangles = 0;            ///< triangles in the mesh (index_count / 3)
+  std::size_t dropped_bad_index = 0;    ///< a corner index out of range (or negative)
+  std::size_t dropped_non_finite = 0;   ///< a NaN or infinite corner coordinate
+  std::size_t dropped_degenerate = 0;   ///< zero area, or thinner than `epsilon` (no usable plane)
+  std::size_t cuts = 0;                 ///< polygons cut in two by a splitting plane
+  std::size_t fragments = 0;            ///< fragments stored (kept triangles + cuts)
+  std::size_t nodes = 0;
+  std::size_t depth = 0;                ///< nodes on the longest root-to-leaf path
+  double epsilon = 0;                   ///< the absolute on-plane tolerance used
+  double seconds = 0;                   ///< wall time of the build
+};
+
+/// A convex, planar piece of one input triangle (see BspTree::fragments()).
+struct BspFragment {
+  std::uint32_t triangle;      ///< the input triangle it is part of
+  std::uint32_t first_corner;  ///< its corners: corners()[first_corner, first_corner + corner_count)
+  std::uint32_t corner_count;  ///< 3 or more, counter-clockwise like its triangle
+};
+
+/// A node of the tree, for custom traversals. Its plane is dot(normal, p) + d = 0 (unit normal, in
+/// double); the fragments lying in that plane (either facing) are
+/// fragments()[first_fragment, first_fragment + fragment_count); `front` is the subtree on the side
+/// the normal points to, `back` the other; kBspNone marks a missing child or the root's parent.
+struct BspNode {
+  glm::dvec3 normal;
+  double d;
+  std::uint32_t front, back, parent;
+  std::uint32_t first_fragment, fragment_count;
+};
+inline constexpr std::uint32_t kBspNone = 0xFFFFFFFFu;
+
+namespace detail::bsp {
+
+struct DPlane {
+  glm::dvec3 normal;
+  double d;
+};
+struct Corner {
+  glm::dvec3 p;
+  glm::dvec2 uv;  // barycentric (u, v) in the source triangle
+};
+struct Poly {
+  std::uint32_t triangle, first, count;
+};
+
+/// A node to build and the polygons it receives (owned: items are independent of each other).
+struct Item {
+  std::uint32_t parent = kBspNone;
+  bool front_side = false;  // which child of `parent` it becomes
+  std::uint32_t depth = 1;
+  std::vector<Corner> corners;
+  std::vector<Poly> polys;
+};
+
+/// Nodes and fragments made by one builder (the calling thread or one worker), numbered locally.
+struct Output {
+  std::vector<BspNode> nodes;
+  std::vector<BspFragment> fragments;
+  std::vector<glm::vec3> corners;
+  std::vector<glm::vec2> barycentrics;
+  std::size_t cuts = 0, depth = 0;
+};
+
+/// The whole tree, in canonical order (nodes in preorder, front child first; fragments by node).
+struct Data {
+  std::vector<BspNode> nodes;
+  std::vector<BspFragment> fragments;
+  std::vector<glm::vec3> corners;
+  std::vector<glm::vec2> barycentrics;
+  BspStats stats;
+};
+
+struct Context {
+  const std::vector<DPlane>* planes;  // per input triangle
+  double eps;
+  const BspParams* params;
+  std::atomic<std::size_t> placed{0}, pending{0};
+};
+
+enum class Side { front, back, on, straddle };
+
+inline Side classify(const Corner* c, std::uint32_t count, const DPlane& plane, double eps) {
+  bool f = false, b = false;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const double s = glm::dot(plane.normal, c[i].p) + plane.d;
+    f |= s > eps;
+    b |= s < -eps;
+  }
+  return f ? (b ? Side::straddle : Side::front) : (b ? Side::back : Side::on);
+}
+
+inline void append_poly(Item& to, std::uint32_t triangle, const Corner* c, std::uint32_t count) {
+  to.polys.push_back(Poly{triangle, static_cast<std::uint32_t>(to.corners.size()), count});
+  to.corners.insert(to.corners.end(), c, c + count);
+}
+
+/// Cuts a straddling polygon: corners within eps of the plane go to both pieces, clear crossings
+/// get a new corner (position and barycentrics interpolated alike) on both.
+inline void cut(const Poly& poly, const Corner* c, const DPlane& plane, double eps, Item& front, Item& back) {
+  const std::uint32_t f0 = static_cast<std::uint32_t>(front.corners.size());
+  const std::uint32_t b0 = static_cast<std::uint32_t>(back.corners.size());
+  for (std::uint32_t i = 0; i < poly.count; ++i) {
+    const std::uint32_t j = i + 1 == poly.count ? 0 : i + 1;
+    const double di = glm::dot(plane.normal, c[i].p) + plane.d;
+    const double dj = glm::dot(plane.normal, c[j].p) + plane.d;
+    const int si = di > eps ? 1 : (di < -eps ? -1 : 0);
+    const int sj = dj > eps ? 1 : (dj < -eps ? -1 : 0);
+    if (si >= 0) front.corners.push_back(c[i]);
+    if (si <= 0) back.corners.push_back(c[i]);
+    if (si * sj < 0) {
+      const double t = di / (di - dj);
+      const Corner x{c[i].p + (c[j].p - c[i].p) * t, c[i].uv + (c[j].uv - c[i].uv) * t};
+      front.corners.push_back(x);
+      back.corners.push_back(x);
+    }
+  }
+  front.polys.push_back(Poly{poly.triangle, f0, static_cast<std::uint32_t>(front.corners.size()) - f0});
+  back.polys.push_back(Poly{poly.triangle, b0, static_cast<std::uint32_t>(back.corners.size()) - b0});
+}
+
+/// The polygon whose plane splits `item` best (lowest score over a sample of its polygons).
+inline std::size_t choose_splitter(const Item& item, const Context& ctx) {
+  const std::size_t n = item.polys.size();
+  const BspParams& prm = *ctx.params;
+  const std::size_t cand = std::max<std::size_t>(1, std::min<std::size_t>(prm.candidates, n));
+  if (cand == 1) return 0;
+  const std::size_t sample = std::max<std::size_t>(1, std::min<std::size_t>(prm.sample, n));
+  std::size_t best = 0;
+  double best_score = 0;
+  for (std::size_t k = 0; k < cand; ++k) {
+    const std::size_t pi = k * n / cand;
+    const DPlane& plane = (*ctx.planes)[item.polys[pi].triangle];
+    std::size_t front = 0, back = 0, on = 0, cuts = 0;
+    for (std::size_t s = 0; s < sample; ++s) {
+      const Poly& q = item.polys[s * n / sample];
+      switch (classify(item.corners.data() + q.first, q.count, plane, ctx.eps)) {
+        case Side::front: ++front; break;
+        case Side::back: ++back; break;
+        case Side::on: ++on; break;
+        case Side::straddle: ++cuts; break;
+      }
+    }
+    const double balance = front > back ? double(front - back) : double(back - front);
+    const double score = prm.split_weight * double(cuts) + prm.balance_weight * balance -
+                         prm.coplanar_weight * double(on);
+    if (k == 0 || score < best_score) {
+      best = pi;
+      best_score = score;
+    }
+  }
+  return best;
+}
+
+/// Makes the node of `item` in `out` and pushes its non-empty children onto `stack`.
+inline void process(Item& item, Output& out, std::vector<Item>& stack, Context& ctx) {
+  const std::uint32_t splitter_triangle = item.polys[choose_splitter(item, ctx)].triangle;
+  const DPlane& plane = (*ctx.planes)[splitter_triangle];
+  const std::uint32_t node = static_cast<std::uint32_t>(out.nodes.size());
+  out.nodes.push_back(BspNode{plane.normal, plane.d, kBspNone, kBspNone, item.parent,
+                              static_cast<std::uint32_t>(out.fragments.size()), 0});
+  if (item.parent != kBspNone) (item.front_side ? out.nodes[item.parent].front : out.nodes[item.parent].back) = node;
+  out.depth = std::max<std::size_t>(out.depth, item.depth);
+  Item front, back;
+  front.parent = back.parent = node;
+  front.front_side = true;
+  front.depth = back.depth = item.depth + 1;
+  std::size_t placed = 0, cuts = 0;
+  for (const Poly& poly : item.polys) {
+    const Corner* c = item.corners.data() + poly.first;
+    // Pieces of the splitter's own triangle lie in its plane by construction; saying so explicitly
+    // guarantees progress whatever the tolerance.
+    const Side side = poly.triangle == splitter_triangle ? Side::on : classify(c, poly.count, plane, ctx.eps);
+    if (side == Side::on) {
+      out.fragments.push_back(BspFragment{poly.triangle, static_cast<std::uint32_t>(out.corners.size()), poly.count});
+      for (std::uint32_t i = 0; i < poly.count; ++i) {
+        out.corners.push_back(glm::vec3(c[i].p));
+        out.barycentrics.push_back(glm::vec2(c[i].uv));
+      }
+      ++placed;
+    } else if (side == Side::front) {
+      append_poly(front, poly.triangle, c, poly.count);
+    } else if (side == Side::back) {
+      append_poly(back, poly.triangle, c, poly.count);
+    } else {
+      cut(poly, c, plane, ctx.eps, front, back);
+      ++cuts;
+    }
+  }
+  out.nodes[node].fragment_count = static_cast<std::uint32_t>(placed);
+  out.cuts += cuts;
+  ctx.placed.fetch_add(placed, std::memory_order_relaxed);
+  ctx.pending.fetch_add(cuts, std::memory_order_relaxed);
+  ctx.pending.fetch_sub(placed, std::memory_order_relaxed);
+  item = Item();  // free the parent's polygons before the children are built
+  if (!back.polys.empty()) stack.push_back(std::move(back));
+  if (!front.polys.empty()) stack.push_back(std::move(front));
+}
+
+/// Builds the whole subtree of `root` depth first into `out` (the item's node is out's node 0 if
+/// `out` was empty). With `report`, calls the progress callback every 1024 nodes.
+inline void build_subtree(Item root, Output& out, Context& ctx, bool report) {
+  std::vector<Item> stack;
+  stack.push_back(std::move(root));
+  for (std::size_t made = 1; !stack.empty(); ++made) {
+    Item item = std::move(stack.back());
+    stack.pop_back();
+    process(item, out, stack, ctx);
+    if (report && made % 1024 == 0) ctx.params->progress(BspProgress{ctx.placed.load(), ctx.pending.load()});
+  }
+}
+
+/// Triangle planes in double, and the first work item holding every usable triangle.
+template <class Positions>
+Item gather(std::size_t triangle_count, const Positions& triangle_corners, const BspParams& params,
+            std::vector<DPlane>& planes, BspStats& stats) {
+  // The tolerance scales with the largest coordinate: float input is only that exact.
+  double magnitude = 1.0;
+  glm::vec3 t[3];
+  std::vector<std::uint8_t> usable(triangle_count, 0);
+  for (std::size_t i = 0; i < triangle_count; ++i) {
+    if (!triangle_corners(i, t)) {
+      ++stats.dropped_bad_index;
+      continue;
+    }
+    bool finite = true;
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 3; ++a) finite = finite && std::isfinite(t[k][a]);
+    if (!finite) {
+      ++stats.dropped_non_finite;
+      continue;
+    }
+    usable[i] = 1;
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 3; ++a) magnitude = std::max(magnitude, double(std::fabs(t[k][a])));
+  }
+  stats.epsilon = double(params.epsilon) * magnitude;
+  planes.assign(triangle_count, DPlane{glm::dvec3(0.0), 0.0});
+  Item item;
+  for (std::size_t i = 0; i < triangle_count; ++i) {
+    if (!usable[i] || !triangle_corners(i, t)) continue;
+    const glm::dvec3 a(t[0]), b(t[1]), c(t[2]);
+    const glm::dvec3 p[3] = {a, b, c};
+    // The normal from the two shorter edges (the better-conditioned cross product), then a check
+    // that every corner lies within a fraction of the tolerance of the plane: a sliver thinner than
+    // the tolerance has no trustworthy plane and is dropped with the zero-area triangles.
+    int apex = 0;  // the corner opposite the longest edge
+    double longest = -1;
+    for (int k = 0; k < 3; ++k) {
+      const double l = glm::length(p[(k + 2) % 3] - p[(k + 1) % 3]);
+      if (l > longest) {
+        longest = l;
+        apex = k;
+      }
+    }
+    const glm::dvec3 n = glm::cross(p[(apex + 1) % 3] - p[apex], p[(apex + 2) % 3] - p[apex]);
+    const double len = glm::length(n);
+    const double height = len / longest;  // of the apex above the longest edge
+    if (!(len > 0.0) || !std::isfinite(len) || !(height > stats.epsilon)) {
+      ++stats.dropped_degenerate;
+      continue;
+    }
+    const glm::dvec3 unit = n / len;
+    const DPlane plane{unit, -glm::dot(unit, (a + b + c) / 3.0)};
+    bool flat = true;
+    for (int k = 0; k < 3; ++k) flat = flat && std::fabs(glm::dot(unit, p[k]) + plane.d) <= 0.125 * stats.epsilon;
+    if (!flat) {
+      ++stats.dropped_degenerate;
+      continue;
+    }
+    planes[i] = plane;
+    const Corner corners[3] = {{a, glm::dvec2(0, 0)}, {b, glm::dvec2(1, 0)}, {c, glm::dvec2(0, 1)}};
+    append_poly(item, static_cast<std::uint32_t>(i), corners, 3);
+  }
+  return item;
+}
+
+/// Appends `part` to `data`, shifting its node, fragment and corner numbers; returns its node offset.
+inline std::uint32_t append_output(Data& data, const Output& part) {
+  const auto node0 = static_cast<std::uint32_t>(data.nodes.size());
+  const auto frag0 = static_cast<std::uint32_t>(data.fragments.size());
+  const auto corner0 = static_cast<std::uint32_t>(data.corners.size());
+  for (BspNode n : part.nodes) {
+    if (n.front != kBspNone) n.front += node0;
+    if (n.back != kBspNone) n.back += node0;
+    if (n.parent != kBspNone) n.parent += node0;
+    n.first_fragment += frag0;
+    data.nodes.push_back(n);
+  }
+  for (BspFragment f : part.fragments) {
+    f.first_corner += corner0;
+    data.fragments.push_back(f);
+  }
+  data.corners.insert(data.corners.end(), part.corners.begin(), part.corners.end());
+  data.barycentrics.insert(data.barycentrics.end(), part.barycentrics.begin(), part.barycentrics.end());
+  return node0;
+}
+
+/// Renumbers nodes in preorder (front child first) and fragments and corners by node, so that the
+/// arrays do not depend on which thread built which subtree.
+inline void canonical_order(Data& data) {
+  if (data.nodes.empty()) return;
+  Data out;
+  out.stats = data.stats;
+  out.nodes.reserve(data.nodes.size());
+  out.fragments.reserve(data.fragments.size());
+  out.corners.reserve(data.corners.size());
+  out.barycentrics.reserve(data.barycentrics.size());
+  std::vector<std::uint32_t> new_id(data.nodes.size(), kBspNone);
+  std::vector<std::uint32_t> stack;
+  stack.push_back(0);
+  while (!stack.empty()) {
+    const std::uint32_t old = stack.back();
+    stack.pop_back();
+    BspNode n = data.nodes[old];
+    new_id[old] = static_cast<std::uint32_t>(out.nodes.size());
+    if (n.parent != kBspNone) n.parent = new_id[n.parent];
+    const std::uint32_t f0 = n.first_fragment;
+    n.first_fragment = static_cast<std::uint32_t>(out.fragments.size());
+    for (std::uint32_t f = f0; f < f0 + n.fragment_count; ++f) {
+      BspFragment frag = data.fragments[f];
+      const std::uint32_t c0 = frag.first_corner;
+      frag.first_corner = static_cast<std::uint32_t>(out.corners.size());
+      out.corners.insert(out.corners.end(), data.corners.begin() + c0, data.corners.begin() + c0 + frag.corner_count);
+      out.barycentrics.insert(out.barycentrics.end(), data.barycentrics.begin() + c0,
+                              data.barycentrics.begin() + c0 + frag.corner_count);
+      out.fragments.push_back(frag);
+    }
+    out.nodes.push_back(n);
+    if (n.back != kBspNone) stack.push_back(n.back);
+    if (n.front != kBspNone) stack.push_back(n.front);
+  }
+  for (BspNode& n : out.nodes) {  // children were numbered after their parents: fix them now
+    if (n.front != kBspNone) n.front = new_id[n.front];
+    if (n.back != kBspNone) n.back = new_id[n.back];
+  }
+  data = std::move(out);
+}
+
+/// Runs `items` on up to `threads` threads (the caller included), each into its own Output,
+/// reporting progress from the calling thread; returns the outputs in item order.
+inline std::vector<Output> build_parallel(std::vector<Item>& items, unsigned threads, Context& ctx) {
+  std::vector<Output> outs(items.size());
+  std::atomic<std::size_t> next{0}, done{0};
+  auto work = [&](bool report_here) {
+    for (std::size_t i = next.fetch_add(1); i < items.size(); i = next.fetch_add(1)) {
+      build_subtree(std::move(items[i]), outs[i], ctx, report_here);
+      done.fetch_add(1);
+    }
+  };
+  // With a progress callback the caller only reports (sleeping between reports) and `threads`
+  // workers build; without, the caller is one of the `threads`.
+  const bool report = static_cast<bool>(ctx.params->progress) && threads > 1;
+  const std::size_t workers = std::min<std::size_t>(report ? threads : threads - 1, items.size());
+  std::vector<std::thread> pool;
+  for (std::size_t t = 0; t < workers; ++t) pool.emplace_back(work, false);
+  if (report && !pool.empty()) {
+    while (done.load() < items.size()) {
+      ctx.params->progress(BspProgress{ctx.placed.load(), ctx.pending.load()});
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  } else {
+    work(static_cast<bool>(ctx.params->progress));  // on the calling thread: it may report
+  }
+  for (auto& t : pool) t.join();
+  return outs;
+}
+
+/// The whole build. `triangle_corners(i, out3)` reads triangle i (false: bad index).
+template <class Positions>
+void build(std::size_t triangle_count, const Positions& triangle_corners, const BspParams& params, Data& data) {
+  const auto t0 = std::chrono::steady_clock::now();
+  data = Data();
+  data.stats.triangles = triangle_count;
+  std::vector<DPlane> planes;
+  Item root = gather(triangle_count, triangle_corners, params, planes, data.stats);
+  Context ctx;
+  ctx.planes = &planes;
+  ctx.eps = data.stats.epsilon;
+  ctx.params = &params;
+  ctx.pending = root.polys.size();
+  unsigned threads = params.threads ? params.threads : std::max(1u, std::thread::hardware_concurrency());
+  if (root.polys.size() < params.parallel_min_triangles) threads = 1;
+  std::size_t cuts = 0, depth = 0;
+  if (!root.polys.empty()) {
+    // Cut on this thread, biggest item first, until there are enough subtrees to share out.
+    Output top;
+    std::vector<Item> items;
+    items.push_back(std::move(root));
+    const std::size_t want = threads > 1 ? std::size_t(threads) * 8 : 1;
+    const std::size_t small = std::max<std::size_t>(64, params.parallel_min_triangles / 16);
+    while (items.size() < want) {
+      auto biggest = std::max_element(items.begin(), items.end(),
+                                      [](const Item& a, const Item& b) { return a.polys.size() < b.polys.size(); });
+      if (biggest == items.end() || biggest->polys.size() < small) break;
+      Item item = std::move(*biggest);
+      items.erase(biggest);
+      process(item, top, items, ctx);
+      if (params.progress) params.progress(BspProgress{ctx.placed.load(), ctx.pending.load()});
+    }
+    // Subtree roots hang below nodes of `top`: their links are made after the merge.
+    std::vector<std::uint32_t> link_parent(items.size());
+    std::vector<bool> link_front(items.size());
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      link_parent[i] = items[i].parent;
+      link_front[i] = items[i].front_side;
+      items[i].parent = kBspNone;
+    }
+    std::vector<Output> outs = build_parallel(items, threads, ctx);
+    append_output(data, top);
+    cuts += top.cuts;
+    depth = top.depth;
+    for (std::size_t i = 0; i < outs.size(); ++i) {
+      const std::uint32_t offset = append_output(data, outs[i]);
+      // Each subtree's root is its output's first node; `top` sits at offset 0.
+      if (link_parent[i] != kBspNone) {
+        data.nodes[offset].parent = link_parent[i];
+        BspNode& parent = data.nodes[link_parent[i]];
+        (link_front[i] ? parent.front : parent.back) = offset;
+      }
+      cuts += outs[i].cuts;
+      depth = std::max(depth, outs[i].depth);
+    }
+    canonical_order(data);
+  }
+  data.stats.cuts = cuts;
+  data.stats.depth = depth;
+  data.stats.fragments = data.fragments.size();
+  data.stats.nodes = data.nodes.size();
+  if (params.progress) params.progress(BspProgress{ctx.placed.load(), 0});
+  data.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace detail::bsp
+}  // namespace cullkit
