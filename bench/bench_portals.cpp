@@ -28,6 +28,8 @@
 // Usage: bench_portals [cameras=100] [width=320] [height=240]
 // CULLKIT_BENCH_SMOKE=1: the 10x10 office only, 4 cameras, 80x60.
 #include <algorithm>
+#include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -174,6 +176,289 @@ Row run(const std::string& name, std::uint32_t seed, int rx, int rz, int ncam, i
   return row;
 }
 
+
+// ---- OpenArena "The Sanctuary" (oacmpdm9): leaves as cells, the compiled PVS as the reference ----
+
+// A minimal JSON reader for the scene sidecar (objects, numbers, strings, arrays; no escapes
+// beyond \" \\ \n \t).
+struct Json {
+  enum Kind { null, number, string, array, object } kind = null;
+  double num = 0;
+  std::string str;
+  std::vector<Json> items;
+  std::vector<std::pair<std::string, Json>> fields;
+  const Json* get(const std::string& key) const {
+    for (const auto& [k, v] : fields)
+      if (k == key) return &v;
+    return nullptr;
+  }
+};
+
+struct JsonReader {
+  const std::string& s;
+  std::size_t i = 0;
+  void ws() { while (i < s.size() && std::isspace(static_cast<unsigned char>(s[i]))) ++i; }
+  std::string text() {
+    std::string out;
+    ++i;  // opening quote
+    while (i < s.size() && s[i] != '"') {
+      if (s[i] == '\\' && i + 1 < s.size()) {
+        ++i;
+        out += s[i] == 'n' ? '\n' : (s[i] == 't' ? '\t' : s[i]);
+      } else {
+        out += s[i];
+      }
+      ++i;
+    }
+    ++i;
+    return out;
+  }
+  Json value() {
+    ws();
+    Json v;
+    if (i >= s.size()) return v;
+    const char c = s[i];
+    if (c == '{') {
+      v.kind = Json::object;
+      ++i;
+      for (ws(); i < s.size() && s[i] != '}'; ws()) {
+        if (s[i] == ',') { ++i; continue; }
+        std::string key = text();
+        ws();
+        ++i;  // colon
+        v.fields.emplace_back(std::move(key), value());
+      }
+      ++i;
+    } else if (c == '[') {
+      v.kind = Json::array;
+      ++i;
+      for (ws(); i < s.size() && s[i] != ']'; ws()) {
+        if (s[i] == ',') { ++i; continue; }
+        v.items.push_back(value());
+      }
+      ++i;
+    } else if (c == '"') {
+      v.kind = Json::string;
+      v.str = text();
+    } else if (c == 'n' || c == 't' || c == 'f') {
+      while (i < s.size() && std::isalpha(static_cast<unsigned char>(s[i]))) ++i;
+    } else {
+      v.kind = Json::number;
+      char* end = nullptr;
+      v.num = std::strtod(s.c_str() + i, &end);
+      i = static_cast<std::size_t>(end - s.c_str());
+    }
+    return v;
+  }
+};
+
+glm::vec3 vec3_of(const Json* a) {
+  return a && a->items.size() == 3 ? glm::vec3(float(a->items[0].num), float(a->items[1].num), float(a->items[2].num))
+                                   : glm::vec3(0.0f);
+}
+
+std::vector<std::uint8_t> base64(const std::string& in) {
+  std::vector<std::uint8_t> out;
+  unsigned acc = 0;
+  int bits = 0;
+  for (char ch : in) {
+    int v;
+    if (ch >= 'A' && ch <= 'Z') v = ch - 'A';
+    else if (ch >= 'a' && ch <= 'z') v = ch - 'a' + 26;
+    else if (ch >= '0' && ch <= '9') v = ch - '0' + 52;
+    else if (ch == '+') v = 62;
+    else if (ch == '/') v = 63;
+    else continue;
+    acc = (acc << 6) | static_cast<unsigned>(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(static_cast<std::uint8_t>((acc >> bits) & 0xFFu));
+    }
+  }
+  return out;
+}
+
+struct OaRow {
+  std::size_t cameras = 0, leaves = 0, portals = 0, open_portals = 0;
+  double frustum = 0, pvs = 0, portals_kept = 0, seen = 0, views = 0;  // objects per camera
+  long false_pvs = 0, false_portals = 0, cameras_false_portals = 0;
+  double ns_frustum = 0, ns_portals = 0;
+};
+
+// Cells: the map's empty leaves (cluster >= 0), as their stored integer boxes. Portals: where two
+// leaf boxes touch on a face (their overlap is flat on one axis), the rectangle of that overlap;
+// where two boxes overlap with volume (a slanted split plane), the six faces of the overlap box
+// (see below); boxes meeting only along an edge or at a corner get none. Eye cells: every leaf whose box holds
+// the eye (boxes of slanted leaves overlap), the union of their answers.
+bool run_openarena(int width, int height, OaRow& row) {
+  const std::string dir = support::scenes_dir();
+  if (dir.empty()) return false;
+  std::FILE* fj = std::fopen((dir + "/oacmpdm9.json").c_str(), "rb");
+  if (!fj) return false;
+  std::string text;
+  char buf[1 << 16];
+  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, fj)) > 0;) text.append(buf, n);
+  std::fclose(fj);
+  const auto scene = support::load_obj(dir + "/oacmpdm9.obj");
+  if (!scene) return false;
+  JsonReader reader{text};
+  const Json doc = reader.value();
+  const Json* leafs = doc.get("leafs");
+  const Json* pvs = doc.get("pvs");
+  const Json* ents = doc.get("entities");
+  if (!leafs || !pvs || !ents) return false;
+  const int n_clusters = static_cast<int>(pvs->get("n_clusters")->num);
+  const int row_bytes = static_cast<int>(pvs->get("bytes_per_cluster")->num);
+  const std::vector<std::uint8_t> bits = base64(pvs->get("bits_base64")->str);
+
+  PortalGraph graph;
+  std::vector<Aabb> leaf_box;
+  std::vector<int> leaf_cluster;
+  for (const Json& l : leafs->items) {
+    const int cluster = static_cast<int>(l.get("cluster")->num);
+    const Aabb b{vec3_of(l.get("bbox_min")), vec3_of(l.get("bbox_max"))};
+    if (cluster < 0 || !(volume(b) > 0.0f)) continue;
+    graph.set_cell_bounds(graph.add_cell(), b);
+    leaf_box.push_back(b);
+    leaf_cluster.push_back(cluster);
+  }
+  for (std::uint32_t a = 0; a < leaf_box.size(); ++a)
+    for (std::uint32_t b = a + 1; b < leaf_box.size(); ++b) {
+      const Aabb i = intersection(leaf_box[a], leaf_box[b]);
+      const glm::vec3 e = i.max - i.min;
+      if (e.x < 0 || e.y < 0 || e.z < 0) continue;
+      const int flat = (e.x == 0) + (e.y == 0) + (e.z == 0);
+      if (flat > 1) continue;
+      // The shared face lies in the overlap box; a ray from one leaf into the other enters that box
+      // through one of its faces (or starts inside it: then the eye is in both leaves' boxes), and
+      // what it reaches lies beyond that face. So each face of the overlap is a portal (one face
+      // when the overlap is flat).
+      for (int axis = 0; axis < 3; ++axis) {
+        if (flat == 1 && e[axis] != 0) continue;
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        for (int side = 0; side < (flat == 1 ? 1 : 2); ++side) {
+          glm::vec3 q[4];
+          const float uv[4][2] = {{i.min[u], i.min[v]}, {i.max[u], i.min[v]}, {i.max[u], i.max[v]}, {i.min[u], i.max[v]}};
+          for (int k = 0; k < 4; ++k) {
+            q[k][axis] = side ? i.max[axis] : i.min[axis];
+            q[k][u] = uv[k][0];
+            q[k][v] = uv[k][1];
+          }
+          graph.add_portal(a, b, q, 4);
+        }
+      }
+    }
+  row.leaves = leaf_box.size();
+  row.portals = graph.stats().portals;
+  row.open_portals = graph.stats().open_portals;
+  const std::vector<Aabb> bounds = scene->object_bounds();
+  const CellObjects cells(graph, bounds.data(), bounds.size());
+  std::vector<std::uint32_t> object_of_triangle(scene->triangle_count());
+  for (std::uint32_t k = 0; k < scene->objects.size(); ++k)
+    for (std::uint32_t t = 0; t < scene->objects[k].triangle_count; ++t)
+      object_of_triangle[scene->objects[k].first_triangle + t] = k;
+  // Cameras: every deathmatch spawn, eye 26 units above its origin (Quake 3's view height), six
+  // headings 60 degrees apart, level; 90 degree horizontal field of view, near 4 units.
+  std::vector<Camera> cams;
+  const std::string& e = ents->str;
+  for (std::size_t pos = 0; (pos = e.find("info_player_deathmatch", pos)) != std::string::npos; ++pos) {
+    const std::size_t o = e.find("\"origin\"", pos), close = e.find('}', pos);
+    if (o == std::string::npos || o > close) continue;
+    float x, y, z;
+    if (std::sscanf(e.c_str() + o, "\"origin\" \"%f %f %f\"", &x, &y, &z) != 3) continue;
+    const glm::vec3 eye(x, z + 26.0f, -y);
+    for (int h = 0; h < 6; ++h) {
+      const float yaw = 1.0471976f * static_cast<float>(h);
+      const float fov_y = 2.0f * std::atan(std::tan(0.7853982f) * float(height) / float(width)) * 57.29578f;
+      cams.push_back(support::make_camera(eye, eye + glm::vec3(std::cos(yaw), 0.0f, std::sin(yaw)), fov_y, width, height,
+                                          4.0f, 20000.0f));
+    }
+  }
+  if (cullkit_bench::smoke() && cams.size() > 6) cams.resize(6);
+  row.cameras = cams.size();
+  oracle::EmbreeScene embree;
+  embree.add_mesh(scene->positions.data(), scene->positions.size(), scene->indices.data(), scene->indices.size());
+  embree.commit();
+  const AdaptiveBinaryTree<Aabb> abt(bounds.data(), bounds.size());
+  PortalScratch scratch;
+  std::vector<PortalView> views, all_views;
+  std::vector<std::uint32_t> frustum_set, portal_set;
+  auto portal_cull = [&](const Camera& cam, const Frustum& f) {
+    all_views.clear();
+    for (std::uint32_t c = 0; c < graph.cell_count(); ++c) {
+      if (!contains(graph.cell_bounds(c), cam.eye)) continue;
+      graph.visible_cells(c, cam.eye, f, views, scratch);
+      all_views.insert(all_views.end(), views.begin(), views.end());
+    }
+    if (all_views.empty()) graph.visible_cells(PortalGraph::no_cell, cam.eye, f, all_views, scratch);
+    cells.cull(f, all_views, portal_set, scratch);
+  };
+  std::vector<Frustum> frusta;
+  for (const Camera& cam : cams) frusta.push_back(Frustum::from_matrix(cam.view_proj));
+  for (std::size_t ci = 0; ci < cams.size(); ++ci) {
+    const Camera& cam = cams[ci];
+    const Frustum& f = frusta[ci];
+    abt.cull(f, frustum_set);
+    portal_cull(cam, f);
+    row.views += static_cast<double>(all_views.size());
+    // PVS row of every cluster whose leaf holds the eye; objects meeting a leaf of a visible
+    // cluster, then the frustum.
+    std::vector<char> cluster_seen(static_cast<std::size_t>(n_clusters), 0);
+    for (std::uint32_t c = 0; c < leaf_box.size(); ++c) {
+      if (!contains(leaf_box[c], cam.eye)) continue;
+      const int from = leaf_cluster[c];
+      for (int to = 0; to < n_clusters; ++to) {
+        const std::size_t byte = static_cast<std::size_t>(from) * row_bytes + (to >> 3);
+        if (byte < bits.size() && ((bits[byte] >> (to & 7)) & 1u)) cluster_seen[static_cast<std::size_t>(to)] = 1;
+      }
+    }
+    std::vector<char> in_pvs(bounds.size(), 0), in_portals(bounds.size(), 0), seen(bounds.size(), 0);
+    for (std::uint32_t c = 0; c < leaf_box.size(); ++c) {
+      if (!cluster_seen[static_cast<std::size_t>(leaf_cluster[c])]) continue;
+      for (const std::uint32_t* it = cells.cell_begin(c); it != cells.cell_end(c); ++it) in_pvs[*it] = 1;
+    }
+    for (std::uint32_t k : cells.loose_objects()) in_pvs[k] = 1;
+    std::size_t pvs_count = 0;
+    for (std::uint32_t k : frustum_set) pvs_count += in_pvs[k];
+    for (std::uint32_t k : portal_set) in_portals[k] = 1;
+    const oracle::HitBuffer hits = embree.render(cam, 1);
+    const PixelRays rays(cam);
+    for (int y = 0; y < hits.height; ++y)
+      for (int x = 0; x < hits.width; ++x) {
+        const std::uint32_t tri = hits.at(x, y);
+        if (tri == oracle::HitBuffer::miss) continue;
+        const Ray r = rays.ray(x, y);
+        const glm::vec3 p = r.origin + r.direction * hits.distance[static_cast<std::size_t>(y) * hits.width + x];
+        if (signed_distance(f.plane(Frustum::near_plane), p) < 0.0f) continue;
+        seen[object_of_triangle[tri]] = 1;
+      }
+    long cam_false = 0;
+    std::size_t seen_count = 0;
+    for (std::size_t k = 0; k < bounds.size(); ++k) {
+      if (!seen[k]) continue;
+      ++seen_count;
+      row.false_pvs += !in_pvs[k];
+      cam_false += !in_portals[k];
+    }
+    row.false_portals += cam_false;
+    row.cameras_false_portals += cam_false > 0;
+    row.frustum += static_cast<double>(frustum_set.size());
+    row.pvs += static_cast<double>(pvs_count);
+    row.portals_kept += static_cast<double>(portal_set.size());
+    row.seen += static_cast<double>(seen_count);
+  }
+  const double n = static_cast<double>(std::max<std::size_t>(cams.size(), 1));
+  for (double* v : {&row.frustum, &row.pvs, &row.portals_kept, &row.seen, &row.views}) *v /= n;
+  const auto res = cullkit_bench::race(
+      "oacmpdm9", {{"frustum_abt", [&] { for (std::size_t i = 0; i < cams.size(); ++i) { abt.cull(frusta[i], frustum_set); cullkit_bench::keep(frustum_set); } }},
+                   {"portals", [&] { for (std::size_t i = 0; i < cams.size(); ++i) { portal_cull(cams[i], frusta[i]); cullkit_bench::keep(portal_set); } }}},
+      11);
+  row.ns_frustum = res[0].median_ns / n;
+  row.ns_portals = res[1].median_ns / n;
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -204,6 +489,17 @@ int main(int argc, char** argv) {
                 r.false_portals + r.false_portals_occ, r.ns_frustum / 1e3, r.ns_portals / 1e3, r.ns_portals_occ / 1e3,
                 r.ns_frustum_occ / 1e3, r.ns_portals / r.ns_frustum);
     false_total += r.false_portals + r.false_portals_occ;
+  }
+  OaRow oa;
+  if (run_openarena(width, height, oa)) {
+    std::printf("\n| scene | leaves (cells) | portals (open) | cameras | objects: frustum | PVS row + frustum | portals | "
+                "seen | views | false culls: PVS | portals (cameras) | frustum us | portals us |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::printf("| oacmpdm9 | %zu | %zu (%zu) | %zu | %.0f | %.0f | %.0f | %.0f | %.1f | %ld | %ld (%ld) | %.1f | %.1f |\n",
+                oa.leaves, oa.portals, oa.open_portals, oa.cameras, oa.frustum, oa.pvs, oa.portals_kept, oa.seen, oa.views,
+                oa.false_pvs, oa.false_portals, oa.cameras_false_portals, oa.ns_frustum / 1e3, oa.ns_portals / 1e3);
+  } else {
+    std::printf("\n(oacmpdm9 not found: OpenArena row skipped)\n");
   }
   return false_total == 0 ? 0 : 1;
 }

@@ -31,9 +31,11 @@ struct PortalView {
 /// Limits of one traversal. A cell reached along many paths is listed once per path, up to these
 /// budgets; past them the answer widens (a cell is never dropped for a budget).
 struct PortalParams {
-  /// Entries one cell may get from narrowed paths. A path that would add one more lists the cell
-  /// again with the frustum's whole volume and continues from there (later paths into that cell
-  /// stop: the wide entry covers them). Lower: faster in graphs with many loops, coarser volumes.
+  /// Entries one cell may get from paths. A path that would add one more, entering through portal
+  /// p, lists the cell once more with the volume of p alone (the frustum narrowed by p as if p were
+  /// in the eye's cell) and continues from there; later paths entering through p stop, covered by
+  /// that entry. Each side of each portal widens at most once, so the work stays bounded in graphs
+  /// with many loops. Lower: faster, coarser volumes.
   std::uint32_t max_views_per_cell = 8;
   /// Entries in one answer. Past it the traversal stops, and every cell the graph joins to the eye's
   /// cell that has no wide entry yet gets one with the frustum's volume.
@@ -54,7 +56,7 @@ struct PortalGraphStats {
 /// What one traversal did.
 struct PortalTraversalStats {
   std::size_t portals_tested = 0;  ///< portal polygons clipped
-  std::size_t widened_cells = 0;   ///< cells that ran out of `max_views_per_cell`
+  std::size_t widened_arrivals = 0;  ///< (portal, side) entries widened by `max_views_per_cell`
   bool budget_exhausted = false;   ///< `max_views` was reached (the wide fallback was taken)
   bool eye_outside = false;        ///< no usable eye cell or eye: every cell was listed
 };
@@ -90,7 +92,8 @@ class PortalScratch {
   std::vector<detail::PortalFrame> stack_;
   std::vector<detail::PortalChainNode> chain_;
   std::vector<std::uint32_t> views_per_cell_;
-  std::vector<std::uint8_t> wide_;
+  std::vector<std::uint8_t> wide_;          // per cell: listed with the frustum's whole volume
+  std::vector<std::uint8_t> wide_arrival_;  // per portal side: listed with the portal's own volume
   std::vector<std::uint32_t> queue_;
   std::vector<std::uint32_t> stamp_;
   std::uint32_t stamp_value_ = 0;
@@ -251,8 +254,9 @@ class PortalGraph {
   ///   portal; what lies before it is clipped out of the cells' volumes instead);
   /// - the eye on a portal's plane (standing in a doorway) passes that portal without narrowing;
   /// - a portal behind the eye, or outside the current volume, is not followed;
-  /// - loops end: a path never crosses one portal twice (a straight ray cannot), and the budgets of
-  ///   `PortalParams` bound the work, widening the answer past them, never dropping a cell;
+  /// - loops end: a path never crosses one portal twice (a straight ray cannot), a path back into the
+  ///   eye's cell stops (the first entry covers it), and the budgets of `PortalParams` bound the
+  ///   work, widening the answer past them, never dropping a cell;
   /// - `eye_cell` not a cell (`no_cell` when `locate_cell` found none), or a non-finite eye: there is
   ///   no cell to start from, so every cell is listed with the frustum's volume (all visible).
   /// The eye cell may appear again, with narrower volumes, when a loop of portals leads back to it.
@@ -272,6 +276,7 @@ class PortalGraph {
     }
     s.views_per_cell_.assign(cell_count(), 0u);
     s.wide_.assign(cell_count(), 0u);
+    s.wide_arrival_.assign(2u * portals_.size(), 0u);
     s.stack_.clear();
     s.chain_.clear();
     const glm::dvec3 e(eye);
@@ -287,7 +292,8 @@ class PortalGraph {
         const std::uint32_t p = links_[l].portal;
         const detail::PortalRecord& r = portals_[p];
         const std::uint32_t next = r.cells[0] == f.cell ? r.cells[1] : r.cells[0];
-        if (next == f.cell || s.wide_[next] || on_chain(s, f.chain, p)) continue;
+        const std::size_t arrival = 2u * p + (next == r.cells[1] ? 1u : 0u);
+        if (next == f.cell || s.wide_[next] || s.wide_arrival_[arrival] || on_chain(s, f.chain, p)) continue;
         ++s.stats_.portals_tested;
         ConvexVolume narrowed;
         VolumeMask crossed = 0;
@@ -297,12 +303,21 @@ class PortalGraph {
           break;
         }
         if (s.views_per_cell_[next] >= params_.max_views_per_cell) {
-          // Too many paths: list the cell with the widest volume and start over from it; every
-          // later path into it is covered, being narrower and crossing a subset of the portals.
-          s.wide_[next] = 1;
-          ++s.stats_.widened_cells;
-          out.push_back(PortalView{next, full});
-          s.stack_.push_back(detail::PortalFrame{next, detail::no_chain, 0, full});
+          // Too many paths: list the cell once more with the volume through this portal alone (as
+          // if seen straight from the eye's cell) and go on from there. Every path that enters the
+          // cell through this portal is narrower and crosses fewer portals after it, so later ones
+          // stop here.
+          s.wide_arrival_[arrival] = 1;
+          ++s.stats_.widened_arrivals;
+          const detail::PortalFrame from_eye{f.cell, detail::no_chain, 0, full};
+          if (!pass_portal(r, e, from_eye, full, poly, narrowed, crossed)) {
+            narrowed = full;  // rounding only: never narrower than the path that got here
+            crossed = 0;
+          }
+          s.chain_.push_back(detail::PortalChainNode{p, detail::no_chain});
+          out.push_back(PortalView{next, narrowed});
+          s.stack_.push_back(
+              detail::PortalFrame{next, static_cast<std::uint32_t>(s.chain_.size() - 1), crossed, narrowed});
           continue;
         }
         ++s.views_per_cell_[next];

@@ -105,7 +105,7 @@ inline std::vector<OfficeCamera> office_cameras(const OfficePortals& o, std::uin
       const glm::vec3 eye = c + n * (side * off) - along * (dir_sign * back) + glm::vec3(0, rng.uniform(-0.3f, 0.6f), 0);
       const float ang = rng.uniform(3.0f, 15.0f) * 0.017453293f;
       const glm::vec3 dir = along * (dir_sign * std::cos(ang)) - n * (side * std::sin(ang));
-      if (!near_any(o.bounds, eye, 0.05f))
+      if (!near_any(o.bounds, eye, 0.05f) && o.graph.locate_cell(eye) != PortalGraph::no_cell)
         cams.push_back({"grazing", support::make_camera(eye, eye + dir, rng.uniform(50.0f, 80.0f), width, height, 0.1f, diag)});
     }
   }

@@ -125,7 +125,7 @@ int main() {
   oracle::EmbreeScene embree;
   embree.add_mesh(o.scene.positions.data(), o.scene.positions.size(), o.scene.indices.data(), o.scene.indices.size());
   embree.commit();
-  const auto cams = office_cameras(o, 0x0FF1CE, 25, 200, 150, true);
+  const auto cams = office_cameras(o, 0x0FF1CE, 16, 160, 120, true);
   std::map<std::string, Tally> by_kind;
   PortalScratch scratch;
   std::vector<PortalView> views, dropped;
