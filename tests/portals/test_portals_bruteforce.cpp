@@ -248,7 +248,7 @@ void test_loops(Totals& t) {
       check_camera(w, room, cam, views, rng, t, true);
     }
   }
-  std::printf("loops: %d traversals widened a cell, %d hit the total budget\n", widened, exhausted);
+  std::printf("loops: %d traversals widened a portal side, %d hit the total budget\n", widened, exhausted);
   CHECK(widened > 0);
   CHECK(exhausted > 0);
 }
