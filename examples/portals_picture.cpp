@@ -40,7 +40,7 @@ Camera pick_view(const Office& o, PortalScratch& scratch, std::vector<PortalView
   std::size_t best_rooms = 0;
   for (int k = 0; k < 300; ++k) {
     const Aabb room = o.cells.rooms[rng.next() % o.cells.rooms.size()];
-    const glm::vec3 eye(rng.uniform(room.min.x + 0.5f, room.max.x - 0.5f), 1.6f, rng.uniform(room.min.z + 0.5f, room.max.z - 0.5f));
+    const glm::vec3 eye{rng.uniform(room.min.x + 0.5f, room.max.x - 0.5f), 1.6f, rng.uniform(room.min.z + 0.5f, room.max.z - 0.5f)};
     const float yaw = rng.uniform(0.0f, 6.2831853f);
     const Camera cam = support::make_camera(eye, eye + glm::vec3(std::cos(yaw), -0.05f, std::sin(yaw)), 70.0f, 640, 480, 0.1f, 100.0f);
     o.graph.visible_cells(o.graph.locate_cell(eye), eye, Frustum::from_matrix(cam.view_proj), views, scratch);

@@ -120,8 +120,8 @@ inline BoxWorld make_world(support::Rng& rng, int nx, int ny, int nz, float p_po
             if (u == 1) poly = rect_portal(axis, box.max[axis], box.min.y, box.min.y + 2.1f, at, at + wdt);
             else poly = rect_portal(axis, box.max[axis], at, at + wdt, box.min.y, box.min.y + 2.1f);
           } else {
-            poly = random_portal(rng, axis, box.max[axis], box.min[u], box.max[u], box.min[v], box.max[v],
-                                 rng.range(3, 16));
+            const int corners = rng.range(3, 16);  // one draw per statement: the same world on every compiler
+            poly = random_portal(rng, axis, box.max[axis], box.min[u], box.max[u], box.min[v], box.max[v], corners);
           }
           add_portal(w, a, b, axis, std::move(poly));
         }

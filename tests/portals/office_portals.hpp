@@ -70,11 +70,13 @@ inline std::vector<OfficeCamera> office_cameras(const OfficePortals& o, std::uin
   const float diag = glm::length(o.scene.bounds.max - o.scene.bounds.min);
   for (int made = 0, tries = 0; made < per_kind * (hard ? 2 : 1) && tries < 10000; ++tries) {
     const Aabb room = o.cells.rooms[rng.next() % o.cells.rooms.size()];
-    const glm::vec3 eye(rng.uniform(room.min.x + 0.3f, room.max.x - 0.3f), rng.uniform(1.0f, 1.8f),
-                        rng.uniform(room.min.z + 0.3f, room.max.z - 0.3f));
+    // Braces and one draw per statement elsewhere: the same cameras on every compiler.
+    const glm::vec3 eye{rng.uniform(room.min.x + 0.3f, room.max.x - 0.3f), rng.uniform(1.0f, 1.8f),
+                        rng.uniform(room.min.z + 0.3f, room.max.z - 0.3f)};
     if (near_any(o.bounds, eye, 0.2f)) continue;
-    cams.push_back({"random", support::make_camera(eye, eye + heading(rng, -20.0f, 10.0f), rng.uniform(60.0f, 90.0f),
-                                                  width, height, 0.1f, diag)});
+    const glm::vec3 look = heading(rng, -20.0f, 10.0f);
+    const float fov = rng.uniform(60.0f, 90.0f);
+    cams.push_back({"random", support::make_camera(eye, eye + look, fov, width, height, 0.1f, diag)});
     ++made;
   }
   if (!hard) return cams;
@@ -88,32 +90,37 @@ inline std::vector<OfficeCamera> office_cameras(const OfficePortals& o, std::uin
     const glm::vec3 along = glm::normalize(glm::vec3(gap.max.x - gap.min.x, 0.0f, gap.max.z - gap.min.z));
     {  // near: in front of the door, nearer than the near plane
       const float gap = rng.uniform(0.11f, 0.3f);
-      const glm::vec3 eye = c + n * (side * gap) + along * rng.uniform(-0.3f, 0.3f) + glm::vec3(0, rng.uniform(-0.3f, 0.5f), 0);
-      const glm::vec3 dir = -side * n + along * rng.uniform(-0.8f, 0.8f) + glm::vec3(0, rng.uniform(-0.3f, 0.2f), 0);
-      cams.push_back({"near", support::make_camera(eye, eye + dir, rng.uniform(60.0f, 90.0f), width, height,
-                                                  gap + rng.uniform(0.05f, 1.0f), diag)});
+      const float sideways = rng.uniform(-0.3f, 0.3f), up = rng.uniform(-0.3f, 0.5f);
+      const float turn = rng.uniform(-0.8f, 0.8f), tilt = rng.uniform(-0.3f, 0.2f);
+      const float fov = rng.uniform(60.0f, 90.0f), near_plane = gap + rng.uniform(0.05f, 1.0f);
+      const glm::vec3 eye = c + n * (side * gap) + along * sideways + glm::vec3(0, up, 0);
+      const glm::vec3 dir = -side * n + along * turn + glm::vec3(0, tilt, 0);
+      cams.push_back({"near", support::make_camera(eye, eye + dir, fov, width, height, near_plane, diag)});
     }
     {  // doorway: on the door's plane, inside the opening
-      const glm::vec3 eye = glm::vec3(gap.min.x, 0.0f, gap.min.z) + along * rng.uniform(0.05f, 0.95f) +
-                            glm::vec3(0, rng.uniform(0.8f, 1.9f), 0);
-      cams.push_back({"doorway", support::make_camera(eye, eye + heading(rng, -20.0f, 10.0f), rng.uniform(60.0f, 90.0f),
-                                                     width, height, rng.uniform() < 0.5f ? 0.05f : 0.5f, diag)});
+      const float across = rng.uniform(0.05f, 0.95f), up = rng.uniform(0.8f, 1.9f);
+      const glm::vec3 eye = glm::vec3(gap.min.x, 0.0f, gap.min.z) + along * across + glm::vec3(0, up, 0);
+      const glm::vec3 look = heading(rng, -20.0f, 10.0f);
+      const float fov = rng.uniform(60.0f, 90.0f), near_plane = rng.uniform() < 0.5f ? 0.05f : 0.5f;
+      cams.push_back({"doorway", support::make_camera(eye, eye + look, fov, width, height, near_plane, diag)});
     }
     {  // grazing: along the wall, past the door
       const float off = rng.uniform(0.2f, 0.5f), back = rng.uniform(1.0f, 2.5f);
       const float dir_sign = rng.uniform() < 0.5f ? 1.0f : -1.0f;
-      const glm::vec3 eye = c + n * (side * off) - along * (dir_sign * back) + glm::vec3(0, rng.uniform(-0.3f, 0.6f), 0);
+      const float up = rng.uniform(-0.3f, 0.6f);
+      const glm::vec3 eye = c + n * (side * off) - along * (dir_sign * back) + glm::vec3(0, up, 0);
       const float ang = rng.uniform(3.0f, 15.0f) * 0.017453293f;
       const glm::vec3 dir = along * (dir_sign * std::cos(ang)) - n * (side * std::sin(ang));
+      const float fov = rng.uniform(50.0f, 80.0f);
       if (!near_any(o.bounds, eye, 0.05f) && o.graph.locate_cell(eye) != PortalGraph::no_cell)
-        cams.push_back({"grazing", support::make_camera(eye, eye + dir, rng.uniform(50.0f, 80.0f), width, height, 0.1f, diag)});
+        cams.push_back({"grazing", support::make_camera(eye, eye + dir, fov, width, height, 0.1f, diag)});
     }
   }
   for (int k = 0; k < 3; ++k) {
-    const glm::vec3 eye(rng.uniform(o.scene.bounds.min.x, o.scene.bounds.max.x), 12.0f,
-                        rng.uniform(o.scene.bounds.min.z, o.scene.bounds.max.z));
-    cams.push_back({"outside", support::make_camera(eye, eye + glm::vec3(rng.uniform(-1.0f, 1.0f), -2.0f, rng.uniform(-1.0f, 1.0f)),
-                                                   70.0f, width, height, 0.1f, diag)});
+    const glm::vec3 eye{rng.uniform(o.scene.bounds.min.x, o.scene.bounds.max.x), 12.0f,
+                        rng.uniform(o.scene.bounds.min.z, o.scene.bounds.max.z)};
+    const glm::vec3 look{rng.uniform(-1.0f, 1.0f), -2.0f, rng.uniform(-1.0f, 1.0f)};
+    cams.push_back({"outside", support::make_camera(eye, eye + look, 70.0f, width, height, 0.1f, diag)});
   }
   return cams;
 }

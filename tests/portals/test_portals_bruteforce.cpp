@@ -65,8 +65,10 @@ void check_camera(const BoxWorld& w, std::uint32_t eye_cell, const Camera& cam, 
   const Frustum f = Frustum::from_matrix(cam.view_proj);
   const glm::dvec3 eye(cam.eye);
   for (int r = 0; r < screen_rays; ++r)
-    check_ray(w, eye_cell, cam, f, unproject(cam, rng.uniform(-1.0f, 1.0f), rng.uniform(-1.0f, 1.0f)) - eye, views, rng,
-              t, report);
+  {
+    const float sx = rng.uniform(-1.0f, 1.0f), sy = rng.uniform(-1.0f, 1.0f);
+    check_ray(w, eye_cell, cam, f, unproject(cam, sx, sy) - eye, views, rng, t, report);
+  }
   for (int r = 0; r < edge_rays && !w.portals.empty(); ++r) {
     const WorldPortal& p = w.portals[rng.next() % w.portals.size()];
     const std::size_t i = rng.next() % p.corners.size();
@@ -86,15 +88,16 @@ void count_culling(const BoxWorld& w, const std::vector<PortalView>& views, supp
     }
     const Aabb b = w.box(r);
     for (int k = 0; k < 4; ++k) {
-      const glm::vec3 p(rng.uniform(b.min.x, b.max.x), rng.uniform(b.min.y, b.max.y), rng.uniform(b.min.z, b.max.z));
+      const glm::vec3 p{rng.uniform(b.min.x, b.max.x), rng.uniform(b.min.y, b.max.y), rng.uniform(b.min.z, b.max.z)};
       if (!covered(views, r, p)) ++t.culled_space;
     }
   }
 }
 
 glm::vec3 random_in(support::Rng& rng, const Aabb& b, float inset) {
-  return glm::vec3(rng.uniform(b.min.x + inset, b.max.x - inset), rng.uniform(b.min.y + inset, b.max.y - inset),
-                   rng.uniform(b.min.z + inset, b.max.z - inset));
+  // Braces: the three draws happen left to right on every compiler.
+  return glm::vec3{rng.uniform(b.min.x + inset, b.max.x - inset), rng.uniform(b.min.y + inset, b.max.y - inset),
+                   rng.uniform(b.min.z + inset, b.max.z - inset)};
 }
 
 Camera random_camera(support::Rng& rng, const glm::vec3& eye, const glm::vec3& target) {
@@ -110,12 +113,14 @@ void test_random_worlds(Totals& t) {
   PortalScratch scratch;
   std::vector<PortalView> views;
   for (int world = 0; world < 30; ++world) {
-    const BoxWorld w = make_world(rng, rng.range(2, 5), rng.range(1, 2), rng.range(2, 5), 0.6f);
+    const int nx = rng.range(2, 5), ny = rng.range(1, 2), nz = rng.range(2, 5);
+    const BoxWorld w = make_world(rng, nx, ny, nz, 0.6f);
     for (int c = 0; c < 20; ++c) {
       const std::uint32_t room = static_cast<std::uint32_t>(rng.next() % w.rooms());
       const glm::vec3 eye = random_in(rng, w.box(room), 0.05f);
       const Aabb all{glm::vec3(w.xs.front(), w.ys.front(), w.zs.front()), glm::vec3(w.xs.back(), w.ys.back(), w.zs.back())};
-      const Camera cam = random_camera(rng, eye, random_in(rng, all, 0.0f));
+      const glm::vec3 target = random_in(rng, all, 0.0f);
+      const Camera cam = random_camera(rng, eye, target);
       CHECK(w.graph.locate_cell(eye) == room);
       w.graph.visible_cells(room, eye, Frustum::from_matrix(cam.view_proj), views, scratch);
       CHECK(!views.empty() && views[0].cell == room);
@@ -142,8 +147,9 @@ void test_eye_nearer_than_near_plane(Totals& t) {
       normal[p.axis] = from_a ? 1.0f : -1.0f;  // from the eye's room into the other
       const float gap = rng.uniform(0.002f, 0.3f);
       const glm::vec3 eye = centre - normal * gap;
-      const Camera cam = support::make_camera(eye, eye + normal + glm::vec3(rng.uniform(-0.3f, 0.3f), 0.0f, 0.1f), 70.0f,
-                                              64, 48, gap + rng.uniform(0.05f, 2.0f), 60.0f);
+      const float sway = rng.uniform(-0.3f, 0.3f), near_plane = gap + rng.uniform(0.05f, 2.0f);
+      const Camera cam = support::make_camera(eye, eye + normal + glm::vec3(sway, 0.0f, 0.1f), 70.0f, 64, 48, near_plane,
+                                              60.0f);
       const std::uint32_t room = from_a ? p.a : p.b, other = from_a ? p.b : p.a;
       const Frustum f = Frustum::from_matrix(cam.view_proj);
       // A traversal that clipped portals by the near plane would lose the room behind this one.
@@ -179,7 +185,8 @@ void test_eye_in_doorway(Totals& t) {
       CHECK(loc == p.a || loc == p.b);
       const std::uint32_t room = rng.uniform() < 0.5f ? p.a : p.b;
       const Aabb all{glm::vec3(w.xs.front(), w.ys.front(), w.zs.front()), glm::vec3(w.xs.back(), w.ys.back(), w.zs.back())};
-      const Camera cam = random_camera(rng, eye, random_in(rng, all, 0.0f));
+      const glm::vec3 target = random_in(rng, all, 0.0f);
+      const Camera cam = random_camera(rng, eye, target);
       w.graph.visible_cells(room, eye, Frustum::from_matrix(cam.view_proj), views, scratch);
       ++cases;
       check_camera(w, room, cam, views, rng, t, true, 100, 50);
@@ -205,7 +212,7 @@ void test_aligned_chain(Totals& t) {
   support::Rng rng(0xA119);
   std::vector<PortalView> views;
   for (int c = 0; c < 40; ++c) {
-    const glm::vec3 eye(rng.uniform(1.6f, 2.4f), rng.uniform(0.5f, 2.0f), rng.uniform(0.1f, 4.9f));
+    const glm::vec3 eye{rng.uniform(1.6f, 2.4f), rng.uniform(0.5f, 2.0f), rng.uniform(0.1f, 4.9f)};
     const glm::vec3 target(2.0f + rng.uniform(-0.4f, 0.4f), 1.0f, 200.0f);
     const Camera cam = support::make_camera(eye, target, 60.0f, 64, 48, 0.1f, 0.0f);
     w.graph.visible_cells(0, eye, Frustum::from_matrix(cam.view_proj), views);
@@ -240,7 +247,8 @@ void test_loops(Totals& t) {
       const std::uint32_t room = static_cast<std::uint32_t>(rng.next() % w.rooms());
       const glm::vec3 eye = random_in(rng, w.box(room), 0.05f);
       const Aabb all{glm::vec3(w.xs.front(), w.ys.front(), w.zs.front()), glm::vec3(w.xs.back(), w.ys.back(), w.zs.back())};
-      const Camera cam = random_camera(rng, eye, random_in(rng, all, 0.0f));
+      const glm::vec3 target = random_in(rng, all, 0.0f);
+      const Camera cam = random_camera(rng, eye, target);
       w.graph.visible_cells(room, eye, Frustum::from_matrix(cam.view_proj), views, scratch);
       widened += scratch.stats().widened_arrivals > 0;
       exhausted += scratch.stats().budget_exhausted;
@@ -282,7 +290,8 @@ void test_straddling_objects() {
       const std::uint32_t room = static_cast<std::uint32_t>(rng.next() % w.rooms());
       const glm::vec3 eye = random_in(rng, w.box(room), 0.05f);
       const Aabb all{glm::vec3(w.xs.front(), w.ys.front(), w.zs.front()), glm::vec3(w.xs.back(), w.ys.back(), w.zs.back())};
-      const Camera cam = random_camera(rng, eye, random_in(rng, all, 0.0f));
+      const glm::vec3 target = random_in(rng, all, 0.0f);
+      const Camera cam = random_camera(rng, eye, target);
       const Frustum f = Frustum::from_matrix(cam.view_proj);
       w.graph.visible_cells(room, eye, f, views, scratch);
       cells.cull(f, views, kept, scratch);
@@ -292,7 +301,8 @@ void test_straddling_objects() {
         in[o] = 1;
       }
       for (int r = 0; r < 1000; ++r) {
-        const glm::dvec3 d = unproject(cam, rng.uniform(-1.0f, 1.0f), rng.uniform(-1.0f, 1.0f)) - glm::dvec3(eye);
+        const float sx = rng.uniform(-1.0f, 1.0f), sy = rng.uniform(-1.0f, 1.0f);
+        const glm::dvec3 d = unproject(cam, sx, sy) - glm::dvec3(eye);
         const glm::dvec3 dn = d / glm::length(d);
         for (const Segment& s : trace(w, room, glm::dvec3(eye), dn)) {
           const glm::dvec3 p = glm::dvec3(eye) + dn * (s.t0 + (s.t1 - s.t0) * rng.uniform());
@@ -378,7 +388,8 @@ void test_bad_portals(Totals& t) {
   std::vector<PortalView> views;
   for (int c = 0; c < 20; ++c) {
     const glm::vec3 eye = random_in(rng, w.box(0), 0.1f);
-    const Camera cam = random_camera(rng, eye, glm::vec3(15.0f, rng.uniform(0.0f, 3.0f), rng.uniform(0.0f, 5.0f)));
+    const glm::vec3 target{15.0f, rng.uniform(0.0f, 3.0f), rng.uniform(0.0f, 5.0f)};
+    const Camera cam = random_camera(rng, eye, target);
     w.graph.visible_cells(0, eye, Frustum::from_matrix(cam.view_proj), views);
     CHECK(std::any_of(views.begin(), views.end(), [](const PortalView& v) { return v.cell == 2; }));
     check_camera(w, 0, cam, views, rng, t, true, 100, 50);
@@ -398,7 +409,8 @@ void test_mutants() {
       const std::uint32_t room = static_cast<std::uint32_t>(rng.next() % w.rooms());
       const glm::vec3 eye = random_in(rng, w.box(room), 0.05f);
       const Aabb all{glm::vec3(w.xs.front(), w.ys.front(), w.zs.front()), glm::vec3(w.xs.back(), w.ys.back(), w.zs.back())};
-      const Camera cam = random_camera(rng, eye, random_in(rng, all, 0.0f));
+      const glm::vec3 target = random_in(rng, all, 0.0f);
+      const Camera cam = random_camera(rng, eye, target);
       const Frustum f = Frustum::from_matrix(cam.view_proj);
       w.graph.visible_cells(room, eye, f, views, scratch);
       const std::size_t frustum_planes = ConvexVolume(f).plane_count();
