@@ -11,3 +11,4 @@
 #include "normal_class_index.hpp"
 #include "depth_sort.hpp"
 #include "bsp_tree.hpp"
+#include "portal_graph.hpp"

@@ -48,8 +48,11 @@ void wall(Scene& scene, int axis, float at, float from, float to, float door, bo
 
 }  // namespace
 
-Scene make_office(std::uint32_t seed, int rooms_x, int rooms_z) {
+Scene make_office(std::uint32_t seed, int rooms_x, int rooms_z) { return make_office(seed, rooms_x, rooms_z, nullptr); }
+
+Scene make_office(std::uint32_t seed, int rooms_x, int rooms_z, OfficeCells* cells) {
   Scene scene;
+  if (cells) *cells = OfficeCells{};
   rooms_x = std::max(rooms_x, 0);
   rooms_z = std::max(rooms_z, 0);
   scene.name = "office_" + std::to_string(seed) + "_" + std::to_string(rooms_x) + "x" + std::to_string(rooms_z);
@@ -65,8 +68,21 @@ Scene make_office(std::uint32_t seed, int rooms_x, int rooms_z) {
       // Floor, facing up.
       scene.add_mesh({{x0, 0, z0}, {x0, 0, z1}, {x1, 0, z1}, {x1, 0, z0}}, {0, 1, 2, 0, 2, 3}, "floor_" + tag);
       // Walls: -Z side (door unless outer), -X side (door unless outer); then outer +X / +Z.
-      wall(scene, 0, z0, x0, x1, x0 + rng.uniform(0.6f, kRoomW - kDoorW - 0.6f), j > 0, "wall_z_" + tag);
-      wall(scene, 2, x0, z0, z1, z0 + rng.uniform(0.6f, kRoomD - kDoorW - 0.6f), i > 0, "wall_x_" + tag);
+      // One draw per wall, in this order, door or not (the scene's bytes depend on it).
+      const float door_z = x0 + rng.uniform(0.6f, kRoomW - kDoorW - 0.6f);
+      wall(scene, 0, z0, x0, x1, door_z, j > 0, "wall_z_" + tag);
+      const float door_x = z0 + rng.uniform(0.6f, kRoomD - kDoorW - 0.6f);
+      wall(scene, 2, x0, z0, z1, door_x, i > 0, "wall_x_" + tag);
+      if (cells) {
+        const auto room = static_cast<std::uint32_t>(j * rooms_x + i);
+        cells->rooms.push_back(Aabb{{x0, 0.0f, z0}, {x1, kWallH, z1}});
+        if (j > 0)  // wall at z = z0 between room (i, j - 1) and this one; normal +Z
+          cells->doors.push_back({room - static_cast<std::uint32_t>(rooms_x), room,
+                                  {{door_z, 0, z0}, {door_z + kDoorW, 0, z0}, {door_z + kDoorW, kDoorH, z0}, {door_z, kDoorH, z0}}});
+        if (i > 0)  // wall at x = x0 between room (i - 1, j) and this one; normal +X
+          cells->doors.push_back({room - 1u, room,
+                                  {{x0, 0, door_x}, {x0, kDoorH, door_x}, {x0, kDoorH, door_x + kDoorW}, {x0, 0, door_x + kDoorW}}});
+      }
       if (i == rooms_x - 1) wall(scene, 2, total_x, z0, z1, 0.0f, false, "wall_x_" + std::to_string(i + 1) + "_" + std::to_string(j));
       if (j == rooms_z - 1) wall(scene, 0, total_z, x0, x1, 0.0f, false, "wall_z_" + std::to_string(i) + "_" + std::to_string(j + 1));
 

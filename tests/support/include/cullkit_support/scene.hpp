@@ -66,6 +66,23 @@ extern const std::uint32_t kBoxTriangleCorners[36];
 /// 31,528 (the seed's office: 30,343). Rooms are 6 x 5 m, walls 3 m high and 0.2 m thick; every wall
 /// between two rooms has one door (pieces "_left", "_right", "_lintel"), outer walls have none.
 [[nodiscard]] Scene make_office(std::uint32_t seed, int rooms_x, int rooms_z);
+/// The rooms and door openings of an office, known by construction (for cells and portals).
+struct OfficeCells {
+  /// Room (i, j) is `rooms[j * rooms_x + i]`: from the floor (y = 0) to the top of the walls
+  /// (y = 3), out to the centre lines of its walls, so neighbouring rooms share a face and a wall
+  /// between two rooms meets both.
+  std::vector<Aabb> rooms;
+  /// A door gap between two rooms: the 1 x 2.1 m opening on the centre plane of its wall. `room_a`
+  /// is on the lower side along the wall's normal; the corners' right-hand normal points into `room_b`.
+  struct Door {
+    std::uint32_t room_a = 0, room_b = 0;
+    glm::vec3 corners[4];
+  };
+  std::vector<Door> doors;
+};
+/// As `make_office(seed, rooms_x, rooms_z)` (the same scene, byte for byte), and writes its rooms and
+/// doors to `cells` when it is not null.
+[[nodiscard]] Scene make_office(std::uint32_t seed, int rooms_x, int rooms_z, OfficeCells* cells);
 /// A forest: a terrain height field of `terrain_cells` x `terrain_cells` quads and `trees` trees
 /// (trunk box + crown cone), seeded placement. Cells are 4 m; one terrain object per 8 x 8 cells;
 /// each tree is a trunk box (sunk 0.5 m into the surface) and a closed 8-sided cone crown.
