@@ -55,6 +55,7 @@
 #include "config.hpp"
 #include "detail/occlusion_geometry.hpp"
 #include "detail/occlusion_query.hpp"
+#include "detail/occlusion_seams.hpp"
 #include "geometry/aabb.hpp"
 #include "geometry/convex_polygon.hpp"
 #include "geometry/plane.hpp"
@@ -106,6 +107,11 @@ struct OcclusionNode {
   std::uint32_t outside;   ///< child on the negative side: node index, or a leaf code
   std::uint32_t depth;     ///< root = 0
   OcclusionNodeKind kind;
+  /// For an edge plane, its seam: `2 * id + 1` if this plane's normal is the seam's canonical
+  /// normal, `2 * id` if it is the opposite. Edge planes with one id lie on one true plane (through
+  /// the eye and one edge, given bit for bit, or an axis plane through the eye), which a query may
+  /// classify once for all of them; see the file comment. `OcclusionTree::no_seam` for other nodes.
+  std::uint32_t seam = 0xFFFFFFFFu;
 };
 
 /// Statistics since construction or the last `reset`.
@@ -149,6 +155,8 @@ class OcclusionTree {
   static constexpr std::uint32_t whole_tree = 0xFFFFFFFFu;
   /// Pending fragments a query can hold; beyond that the query answers "visible".
   static constexpr int query_stack_size = 48;
+  /// `OcclusionNode::seam` of a node that lies on no shared edge.
+  static constexpr std::uint32_t no_seam = 0xFFFFFFFFu;
 
   /// An empty tree for `eye` (hides nothing) with default parameters.
   explicit OcclusionTree(const glm::vec3& eye) : OcclusionTree(eye, OcclusionParams{}) {}
@@ -168,6 +176,8 @@ class OcclusionTree {
     eye_ok_ = detail::finite3(eye);
     eye_scale_ = eye_ok_ ? detail::norm1(eye) : 0.0f;
     nodes_.clear();
+    seams_.clear();
+    occluder_serial_ = 0;
     stats_ = OcclusionStats{};
     root_ = visible_leaf;
     if (eye_ok_) build_top_level();
@@ -352,8 +362,15 @@ class OcclusionTree {
       const OcclusionNode& node = nodes_[ref];
       const float m = params_.margin * (scale + std::fabs(node.plane.d));
       float dmin = 0.0f;
-      const FrontSide side = front_side(node.plane, m, front, dmin);
+      FrontSide side = front_side(node.plane, m, front, dmin);
       if (side == FrontSide::unknown) return result;  // NaN: visible
+      // On a shared seam, a front within the margin band of the plane must meet the seam rule
+      // (walk_fragments), not slip to the outside where the other occluder's chain may not be.
+      if (side == FrontSide::outside && is_shared_seam(node)) {
+        float flipped_min = 0.0f;
+        const Plane flipped{-node.plane.normal, -node.plane.d};
+        if (front_side(flipped, m, front, flipped_min) != FrontSide::inside) side = FrontSide::straddles;
+      }
       if (side == FrontSide::straddles && splits++ == 0) {
         first_split = ref;
         clear_split = dmin <= -m;
@@ -374,6 +391,7 @@ class OcclusionTree {
       for (std::uint32_t i = 0; i < corners; ++i) stack[0].v[i] = outline[i] - eye_;
       stack[0].size = corners;
       stack[0].ref = first_split;
+      stack[0].assumed_count = 0;
       result.answer = walk_fragments(stack, 1, scale, want_clear, &front);
       if (result.answer != undecided_answer) return result;
     }
@@ -396,6 +414,7 @@ class OcclusionTree {
     Fragment& local = stack[0];
     float scale = 0.0f;
     local.size = static_cast<std::uint32_t>(polygon.size());
+    local.assumed_count = 0;
     for (std::size_t i = 0; i < polygon.size(); ++i) {
       if (!detail::finite3(polygon[i])) return result;
       local.v[i] = polygon[i] - eye_;
@@ -415,6 +434,7 @@ class OcclusionTree {
       }
       if (!detail::finite_distance(dmin) || !detail::finite_distance(dmax)) return result;  // overflow, NaN: visible
       if (!(dmin >= m) && !(dmax <= m)) break;  // straddles: split from here
+      if (!(dmin >= m) && !(dmax <= -m) && is_shared_seam(node)) break;  // in a seam's band: the seam rule
       result.together = ref;
       ref = dmin >= m ? node.inside : node.outside;
     }
@@ -429,6 +449,7 @@ class OcclusionTree {
   // What the occluder being inserted closes its chain with.
   struct Current {
     Plane edges[ConvexPolygon::capacity] = {};  // the whole occluder's beam planes
+    std::uint32_t edge_seams[ConvexPolygon::capacity] = {};  // OcclusionNode::seam of each
     std::size_t edge_count = 0;
     bool is_box = false;
     Plane closing[3] = {};
@@ -452,19 +473,37 @@ class OcclusionTree {
   // (The chain's region does not depend on the order.)
   std::size_t beam_edges(const ConvexPolygon& outline) {
     float angles[ConvexPolygon::capacity];  // 1 - cos of each edge's angle: same order as the angle
-    const std::size_t n = detail::beam_planes(outline, params_.min_angle, current_.edges, angles);
+    glm::vec3 corners[ConvexPolygon::capacity];
+    const std::size_t n = detail::beam_planes(outline, params_.min_angle, current_.edges, angles, corners);
+    ++occluder_serial_;
+    for (std::size_t i = 0; i < n; ++i)
+      current_.edge_seams[i] = edge_seam(current_.edges[i], corners[i], corners[(i + 1) % n]);
     for (std::size_t i = 1; i < n; ++i) {
       const Plane plane = current_.edges[i];
+      const std::uint32_t seam = current_.edge_seams[i];
       const float angle = angles[i];
       std::size_t j = i;
       for (; j > 0 && angles[j - 1] < angle; --j) {
         current_.edges[j] = current_.edges[j - 1];
+        current_.edge_seams[j] = current_.edge_seams[j - 1];
         angles[j] = angles[j - 1];
       }
       current_.edges[j] = plane;
+      current_.edge_seams[j] = seam;
       angles[j] = angle;
     }
     return n;
+  }
+
+  // The seam code (OcclusionNode::seam) of the edge plane through the eye and a-b.
+  std::uint32_t edge_seam(const Plane& plane, const glm::vec3& a, const glm::vec3& b) {
+    bool forward = false;  // cross(a, b) is the seam's canonical normal
+    const detail::SeamKey key = detail::seam_key(a, b, forward);
+    const std::uint32_t id = seams_.use(key, occluder_serial_);
+    if (id >= no_seam / 2) return no_seam;
+    const glm::dvec3 ab = glm::cross(glm::dvec3(a), glm::dvec3(b));
+    const bool along_ab = glm::dot(glm::dvec3(plane.normal), ab) > 0.0;
+    return 2 * id + (along_ab == forward ? 1u : 0u);
   }
 
   [[nodiscard]] std::uint32_t slot_value(std::uint32_t parent, bool inside) const {
@@ -480,9 +519,10 @@ class OcclusionTree {
     return parent == whole_tree ? 0u : nodes_[parent].depth + 1u;
   }
 
-  std::uint32_t add_node(const Plane& plane, OcclusionNodeKind kind, std::uint32_t depth) {
+  std::uint32_t add_node(const Plane& plane, OcclusionNodeKind kind, std::uint32_t depth,
+                         std::uint32_t seam = no_seam) {
     const auto index = static_cast<std::uint32_t>(nodes_.size());
-    nodes_.push_back(OcclusionNode{plane, visible_leaf, visible_leaf, depth, kind});
+    nodes_.push_back(OcclusionNode{plane, visible_leaf, visible_leaf, depth, kind, seam});
     stats_.depth = std::max(stats_.depth, depth);
     return index;
   }
@@ -496,6 +536,7 @@ class OcclusionTree {
     {
       Fragment& f = work_[top].fragment;
       f.size = static_cast<std::uint32_t>(first.size());
+      f.assumed_count = 0;
       for (std::size_t i = 0; i < first.size(); ++i) f.v[i] = first[i];
       f.ref = whole_tree;
       work_[top].inside = false;
@@ -548,6 +589,8 @@ class OcclusionTree {
             break;
           }
           in_piece.ref = ref;
+          in_piece.assumed_count = 0;
+          alt->assumed_count = 0;
           work_[top].inside = true;
           ++top;
           alt->ref = ref;
@@ -579,7 +622,8 @@ class OcclusionTree {
       if (previous != whole_tree) nodes_[previous].inside = node;
       previous = node;
     };
-    for (std::size_t i = 0; i < n; ++i) link(add_node(edges[i], OcclusionNodeKind::edge, depth++));
+    for (std::size_t i = 0; i < n; ++i)
+      link(add_node(edges[i], OcclusionNodeKind::edge, depth++, current_.edge_seams[i]));
     const OcclusionNodeKind closing_kind = current_.is_box ? OcclusionNodeKind::box_face : OcclusionNodeKind::polygon;
     for (int f = 0; f < current_.closing_count; ++f) link(add_node(current_.closing[f], closing_kind, depth++));
     nodes_[previous].inside = hidden_leaf;
@@ -635,6 +679,73 @@ class OcclusionTree {
     return result;
   }
 
+  [[nodiscard]] bool is_shared_seam(const OcclusionNode& node) const noexcept {
+    return node.seam != no_seam && seams_.shared(node.seam >> 1);
+  }
+
+  enum class SeamStep : std::uint8_t {
+    moved,      // `cur` went on to one child (its ref is updated)
+    copies,     // `cur` became two copies: one pushed on the stack, the other written to `alt`
+    ordinary,   // no room for another assumption: treat the node as an ordinary plane
+    visible,    // cannot be decided (NaN, too many corners): the query answers visible
+  };
+
+  // One step at a node on a seam shared by several occluders (see occlusion_seams.hpp). A fragment
+  // that already assumed a side of this seam follows that side: every point it stands for is there.
+  // Otherwise a fragment clearly on one side (by the margin) goes there; one within the margin band
+  // becomes two overlapping copies, the part at distance >= -m going inside and the part at distance
+  // <= m going outside, each assuming its side. Each point then has a copy on its true side, and a
+  // copy meeting the other occluder's plane of the same seam no longer loses the band to "visible".
+  [[nodiscard]] SeamStep seam_step(const OcclusionNode& node, float m, Fragment& cur, Fragment* stack, int& top,
+                                   Fragment& alt) const {
+    const std::uint32_t id = node.seam >> 1;
+    const std::uint32_t node_side = node.seam & 1u;  // the canonical side this node's inside is
+    for (std::uint32_t k = 0; k < cur.assumed_count; ++k) {
+      if ((cur.assumed[k] >> 1) != id) continue;
+      cur.ref = (cur.assumed[k] & 1u) == node_side ? node.inside : node.outside;
+      return SeamStep::moved;
+    }
+    const Plane inner{node.plane.normal, node.plane.d - m};  // inside it: distance >= m
+    const Plane outer{node.plane.normal, node.plane.d + m};  // outside it: distance <= -m
+    const detail::FragmentSide in_side = detail::classify_fragment(cur, inner, 0.0f);
+    const detail::FragmentSide out_side = detail::classify_fragment(cur, outer, 0.0f);
+    if (in_side == detail::FragmentSide::undecided || out_side == detail::FragmentSide::undecided)
+      return SeamStep::visible;
+    if (in_side == detail::FragmentSide::inside) {
+      cur.ref = node.inside;
+      return SeamStep::moved;
+    }
+    if (out_side == detail::FragmentSide::outside || out_side == detail::FragmentSide::on) {
+      cur.ref = node.outside;
+      return SeamStep::moved;
+    }
+    if (cur.assumed_count >= detail::max_seam_assumptions || top >= query_stack_size) return SeamStep::ordinary;
+    Fragment scratch;
+    Fragment& in_copy = stack[top];
+    // The inside copy: the part at distance >= -m (all of it unless the fragment crosses `outer`).
+    if (out_side == detail::FragmentSide::split) {
+      if (detail::split_fragment(cur, outer, 0.0f, in_copy, scratch) != detail::FragmentSide::split)
+        return SeamStep::visible;
+    } else {
+      detail::copy_fragment(cur, in_copy);
+    }
+    // The outside copy: the part at distance <= m.
+    if (in_side == detail::FragmentSide::split) {
+      if (detail::split_fragment(cur, inner, 0.0f, scratch, alt) != detail::FragmentSide::split)
+        return SeamStep::visible;
+    } else {
+      detail::copy_fragment(cur, alt);
+    }
+    detail::copy_assumptions(cur, in_copy);
+    detail::copy_assumptions(cur, alt);
+    in_copy.assumed[in_copy.assumed_count++] = 2 * id + node_side;
+    alt.assumed[alt.assumed_count++] = 2 * id + (1u - node_side);
+    in_copy.ref = node.inside;
+    alt.ref = node.outside;
+    ++top;
+    return SeamStep::copies;
+  }
+
   // The exact walk: the fragments stack[0..count) are pushed down the tree from their `ref`, split
   // where they straddle a plane shifted inward by the margin. Depth first, outside pieces first, so
   // a query that reaches a visible leaf stops early (unless `want_clear`); hidden only if every
@@ -675,6 +786,15 @@ class OcclusionTree {
           else return undecided_answer;  // the front straddles (or NaN): walk the faces instead
           continue;
         }
+        if (is_shared_seam(node)) {
+          const SeamStep step = seam_step(node, m, *cur, stack, top, *alt);
+          if (step == SeamStep::visible) {
+            any_visible = true;
+            break;
+          }
+          if (step == SeamStep::copies) std::swap(cur, alt);
+          if (step != SeamStep::ordinary) continue;
+        }
         const Plane shifted{node.plane.normal, node.plane.d - m};
         // With the stack full, the inside piece has nowhere to go: a split then answers visible.
         Fragment& in_piece = top < query_stack_size ? stack[top] : *alt;
@@ -686,8 +806,10 @@ class OcclusionTree {
           cur->ref = node.outside;
         } else if (side == detail::FragmentSide::split && top < query_stack_size) {
           in_piece.ref = node.inside;
+          detail::copy_assumptions(*cur, in_piece);
           ++top;
           alt->ref = node.outside;
+          detail::copy_assumptions(*cur, *alt);
           std::swap(cur, alt);
         } else {
           any_visible = true;  // NaN, too many corners or a full stack: cannot be decided, visible
@@ -776,6 +898,8 @@ class OcclusionTree {
   std::vector<SortKey> order_;  // insert_box_occluders' scratch
   OcclusionStats stats_;
   Current current_;
+  detail::SeamTable seams_;
+  std::uint32_t occluder_serial_ = 0;  // numbers the occluders since `reset` (seam owners)
   glm::dvec3 up_ = glm::dvec3(0, 1, 0), fwd_ = glm::dvec3(0, 0, -1), right_ = glm::dvec3(1, 0, 0);
 };
 

@@ -17,6 +17,7 @@
 #include "../geometry/convex_polygon.hpp"
 #include "../geometry/plane.hpp"
 #include "occlusion_query.hpp"
+#include "occlusion_seams.hpp"
 
 namespace cullkit::detail {
 
@@ -45,11 +46,15 @@ namespace cullkit::detail {
 /// polygon) and returns how many, or 0 when fewer than 3 corners survive or the polygon has no area
 /// as seen from the eye (then the fragment must be dropped, which is also safe).
 /// With `angles`, also writes for each edge 1 - cos of the angle it subtends at the eye (which grows
-/// with the angle, so it orders edges by angular length without an atan2).
-/// pre: `out` (and `angles`, if given) has room for `poly.size()` entries.
+/// with the angle, so it orders edges by angular length without an atan2). With `corners`, writes
+/// the kept corners: edge i runs from corners[i] to corners[(i + 1) % n].
+/// Each normal is computed from the edge's corners in their canonical order (`corner_before`), so two
+/// occluders sharing an edge get planes that are exact negations of each other.
+/// pre: `out` (and `angles`, `corners`, if given) has room for `poly.size()` entries.
 template <std::size_t Capacity>
 [[nodiscard]] inline std::size_t beam_planes(const BasicConvexPolygon<Capacity>& poly, float min_angle,
-                                             Plane* out, float* angles = nullptr) noexcept {
+                                             Plane* out, float* angles = nullptr,
+                                             glm::vec3* corners = nullptr) noexcept {
   glm::dvec3 kept[Capacity];
   std::size_t n = 0;
   const double min_sin = static_cast<double>(min_angle);
@@ -85,12 +90,14 @@ template <std::size_t Capacity>
   if (!(std::fabs(facing) > min_sin * scale)) return 0;  // seen edge-on: no area from the eye
   const double sign = facing < 0.0 ? -1.0 : 1.0;
   for (std::size_t i = 0; i < n; ++i) {
-    const glm::dvec3 cross = glm::cross(kept[i], kept[(i + 1) % n]);
+    const glm::dvec3& a = kept[i];
+    const glm::dvec3& b = kept[(i + 1) % n];
+    // kept[] holds floats exactly, so the float round trip is exact.
+    const glm::dvec3 cross = corner_before(glm::vec3(b), glm::vec3(a)) ? -glm::cross(b, a) : glm::cross(a, b);
     out[i] = eye_plane_from_normal(sign * cross);
+    if (corners) corners[i] = glm::vec3(a);
     if (!is_valid(out[i])) return 0;
     if (angles) {
-      const glm::dvec3& a = kept[i];
-      const glm::dvec3& b = kept[(i + 1) % n];
       angles[i] = static_cast<float>(1.0 - glm::dot(a, b) / (glm::length(a) * glm::length(b)));
     }
   }
