@@ -3,7 +3,8 @@
 // boxes side by side; small cubes behind every seam, seen from many eyes. Every cube whose
 // margin-grown copy is blocked at every sample (double-precision brute force) must be hidden, cubes
 // peeking past the wall's outer edges must stay visible, and every hidden answer is checked against
-// the brute force (no false culls).
+// the brute force (no false culls). Then random triangulated surfaces and rows of boxes, every hidden
+// answer checked against the brute force.
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -178,6 +179,81 @@ void run(WallKind kind, Tally& tally) {
   }
 }
 
+
+// Conservativeness of fused occluders: random triangulated surfaces (terrain height fields, curved
+// walls on a cylinder, rows of touching boxes), every shared edge a seam, random query boxes around
+// and behind them. Every hidden answer is checked with the double-precision brute force.
+struct RandomTally {
+  long queries = 0, hidden = 0, false_culls = 0;
+};
+
+void add_grid(Occluders& occ, OcclusionTree& tree, int n, int m, const std::vector<glm::vec3>& v) {
+  const auto at = [&](int i, int j) { return v[static_cast<std::size_t>(j * (n + 1) + i)]; };
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const glm::vec3 t1[3] = {at(i, j), at(i + 1, j), at(i + 1, j + 1)};
+      const glm::vec3 t2[3] = {at(i, j), at(i + 1, j + 1), at(i, j + 1)};
+      for (const glm::vec3* t : {t1, t2}) {
+        occ.polygons.push_back({t[0], t[1], t[2]});
+        tree.insert_occluder(t, 3);
+      }
+    }
+}
+
+void random_surfaces(RandomTally& tally) {
+  for (unsigned seed = 1; seed <= 60; ++seed) {
+    Rng rng(seed * 2654435761u);
+    const glm::vec3 eye(rng.uniform(-3, 3), rng.uniform(0.5f, 4.0f), rng.uniform(-3, 3));
+    OcclusionTree tree(eye);
+    Occluders occ;
+    const int kind = seed % 3;
+    if (kind == 0) {  // terrain: a height field under and around the eye
+      const int n = 10;
+      std::vector<glm::vec3> v;
+      for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i)
+          v.emplace_back(-10.0f + 2.0f * i, rng.uniform(-0.5f, 2.5f), -10.0f + 2.0f * j);
+      add_grid(occ, tree, n, n, v);
+    } else if (kind == 1) {  // a curved wall: a cylinder piece around the eye
+      const int n = 12, m = 3;
+      const float r = rng.uniform(3.0f, 6.0f), a0 = rng.uniform(0.0f, 6.28f);
+      std::vector<glm::vec3> v;
+      for (int j = 0; j <= m; ++j)
+        for (int i = 0; i <= n; ++i) {
+          const float a = a0 + 3.0f * float(i) / n;
+          const float rr = r + rng.uniform(-0.2f, 0.2f);
+          v.push_back(eye + glm::vec3(rr * std::cos(a), -2.0f + 5.0f * float(j) / m + rng.uniform(-0.1f, 0.1f),
+                                      rr * std::sin(a)));
+        }
+      add_grid(occ, tree, n, m, v);
+    } else {  // a row of touching boxes, sometimes with the eye in the plane of a shared face
+      const float z = eye.z + rng.uniform(2.0f, 5.0f);
+      float x = -8.0f;
+      for (int k = 0; k < 8; ++k) {
+        const float w = rng.uniform(0.5f, 2.5f);
+        const Aabb b{{x, 0.0f, z}, {x + w, rng.uniform(1.0f, 6.0f), z + rng.uniform(0.2f, 3.0f)}};
+        occ.boxes.push_back(b);
+        tree.insert_box_occluder(b);
+        x += w;
+      }
+    }
+    for (int k = 0; k < 150; ++k) {
+      const glm::vec3 dir = glm::normalize(glm::vec3(rng.uniform(-1, 1), rng.uniform(-1, 0.3f), rng.uniform(-1, 1)));
+      const glm::vec3 c = eye + dir * rng.uniform(2.0f, 25.0f);
+      const float h = rng.uniform() < 0.3f ? 0.02f : rng.uniform(0.05f, 1.0f);
+      const Aabb q{c - glm::vec3(h, h * rng.uniform(0.3f, 1.0f), h), c + glm::vec3(h)};
+      ++tally.queries;
+      if (!tree.is_occluded(q)) continue;
+      ++tally.hidden;
+      glm::dvec3 w;
+      const bool visible = occlusion_test::find_visible_sample(occ, eye, q, rng, 6, 24, &w);
+      tally.false_culls += visible ? 1 : 0;
+      CHECK_MSG(!visible, "random surface seed %u query %d: hidden but (%.9g %.9g %.9g) is visible", seed, k, w.x, w.y,
+                w.z);
+    }
+  }
+}
+
 }  // namespace
 
 int main() {
@@ -193,5 +269,10 @@ int main() {
     // triangle covering it never reached; 1,149 of 1,301 here (0 without seams).
     if (kind == WallKind::mesh) CHECK(t.hidden * 100 >= t.expected_hidden * 85);
   }
+  RandomTally random;
+  random_surfaces(random);
+  std::printf("random surfaces: %ld queries, %ld hidden, %ld false culls\n", random.queries, random.hidden,
+              random.false_culls);
+  CHECK(random.hidden >= random.queries / 10);  // the scenes must hide a good share
   return cullkit_test::report("test_occlusion_fusion");
 }
