@@ -49,6 +49,7 @@
 
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
+#include <glm/mat4x4.hpp>
 #include <glm/ext/vector_double3.hpp>
 
 #include "box_proxy.hpp"
@@ -201,56 +202,8 @@ class OcclusionTree {
   /// pre: `polygon` points to `count` corners (may be null when count is 0).
   /// Cost: O(fragments x depth) plane tests; allocates only while the node array grows.
   void insert_occluder(const glm::vec3* polygon, std::size_t count) {
-    if (!eye_ok_ || count < 3 || polygon == nullptr) return skip();
-    const std::size_t n = std::min<std::size_t>(count, ConvexPolygon::capacity);
-    glm::dvec3 a[ConvexPolygon::capacity];
-    const glm::dvec3 e(eye_);
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!detail::finite3(polygon[i])) return skip();
-      a[i] = glm::dvec3(polygon[i]) - e;
-    }
-    glm::dvec3 normal(0.0), center(0.0);
-    for (std::size_t i = 0; i < n; ++i) {
-      normal += glm::cross(a[i], a[(i + 1) % n]);
-      center += a[i];
-    }
-    center /= static_cast<double>(n);
-    const double len = glm::length(normal);
-    if (!(len > 0.0) || !std::isfinite(len)) return skip();
-    glm::dvec3 unit = normal / len;
-    double d = -glm::dot(unit, center);
-    double deviation = 0.0, diameter = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
-      deviation = std::max(deviation, std::fabs(glm::dot(unit, a[i]) + d));
-      diameter = std::max(diameter, glm::length(a[i] - a[0]));
-    }
-    if (!(deviation <= double(params_.planarity) * diameter)) return skip();
-    // The eye is the origin: its signed distance is d. Inside must be away from the eye.
-    if (d > 0.0) {
-      unit = -unit;
-      d = -d;
-    }
-    // No area seen from the eye: the eye (nearly) in the polygon's plane.
-    if (!(-d > deviation + double(params_.min_angle) * (glm::length(center) + diameter))) return skip();
-    // Behind every corner: push the plane back by the deviation (and its own rounding).
-    const Plane own{glm::vec3(unit), static_cast<float>(d - deviation)};
-    if (!is_valid(own)) return skip();
-
-    ConvexPolygon frag;
-    float scale = 0.0f;
-    for (std::size_t i = 0; i < n; ++i) {
-      frag.push_back(glm::vec3(a[i]));
-      scale = std::max(scale, detail::norm1(frag[i]));
-    }
-    current_ = Current{};
-    current_.edge_count = beam_edges(frag);
-    if (current_.edge_count == 0) return skip();
-    current_.is_box = false;
-    current_.closing[0] = own;
-    current_.closing_count = 1;
-    current_.split_epsilon = params_.margin * scale;
-    ++stats_.occluders_inserted;
-    insert_fragment(frag);
+    if (insert_polygon(polygon, count)) ++stats_.occluders_inserted;
+    else skip();
   }
 
   /// Inserts a solid box occluder through its outline (cullkit::make_box_proxy, front-face closure).
@@ -281,6 +234,26 @@ class OcclusionTree {
     current_.split_epsilon = params_.margin * scale;
     ++stats_.occluders_inserted;
     insert_fragment(frag);
+  }
+
+  /// Inserts a solid box in any orientation: `local_box` placed in the world by the affine matrix
+  /// `model` (rotation, translation, scale, shear; world = model * local). The box must be a SOLID:
+  /// opaque all through, like a building's walls and roof, never a bounding box of something with
+  /// gaps (a tree, a car, a fence): everything behind it is treated as hidden. Its front faces (the
+  /// ones the eye sees, 1 to 3) are inserted as polygon occluders; they share their edges bit for
+  /// bit, so the tree fuses them along every edge. Counted once in `stats().occluders_inserted`.
+  /// Skipped and counted when the box or matrix is invalid (NaN, infinite, min > max, last row not
+  /// (0, 0, 0, 1)) or the eye is inside or on the box (no face sees it), or no face has area seen
+  /// from the eye. An axis-aligned box with the identity matrix hides the same region as
+  /// `insert_box_occluder(box)` (which builds one chain from the outline; faster to insert).
+  /// Cost and allocation as `insert_occluder`, times the number of front faces.
+  void insert_box_occluder(const Aabb& local_box, const glm::mat4& model) {
+    glm::vec3 faces[3][4];
+    const int count = eye_ok_ ? detail::oriented_box_front_faces(local_box, model, eye_, faces) : 0;
+    bool any = false;
+    for (int f = 0; f < count; ++f) any = insert_polygon(faces[f], 4) || any;
+    if (any) ++stats_.occluders_inserted;
+    else skip();
   }
 
   /// Inserts many solid box occluders, nearest to the eye first (each as `insert_box_occluder`),
@@ -467,6 +440,60 @@ class OcclusionTree {
   };
 
   void skip() { ++stats_.occluders_skipped; }
+
+  // insert_occluder without the statistics: false when the polygon was not used.
+  bool insert_polygon(const glm::vec3* polygon, std::size_t count) {
+    if (!eye_ok_ || count < 3 || polygon == nullptr) return false;
+    const std::size_t n = std::min<std::size_t>(count, ConvexPolygon::capacity);
+    glm::dvec3 a[ConvexPolygon::capacity];
+    const glm::dvec3 e(eye_);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!detail::finite3(polygon[i])) return false;
+      a[i] = glm::dvec3(polygon[i]) - e;
+    }
+    glm::dvec3 normal(0.0), center(0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      normal += glm::cross(a[i], a[(i + 1) % n]);
+      center += a[i];
+    }
+    center /= static_cast<double>(n);
+    const double len = glm::length(normal);
+    if (!(len > 0.0) || !std::isfinite(len)) return false;
+    glm::dvec3 unit = normal / len;
+    double d = -glm::dot(unit, center);
+    double deviation = 0.0, diameter = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      deviation = std::max(deviation, std::fabs(glm::dot(unit, a[i]) + d));
+      diameter = std::max(diameter, glm::length(a[i] - a[0]));
+    }
+    if (!(deviation <= double(params_.planarity) * diameter)) return false;
+    // The eye is the origin: its signed distance is d. Inside must be away from the eye.
+    if (d > 0.0) {
+      unit = -unit;
+      d = -d;
+    }
+    // No area seen from the eye: the eye (nearly) in the polygon's plane.
+    if (!(-d > deviation + double(params_.min_angle) * (glm::length(center) + diameter))) return false;
+    // Behind every corner: push the plane back by the deviation (and its own rounding).
+    const Plane own{glm::vec3(unit), static_cast<float>(d - deviation)};
+    if (!is_valid(own)) return false;
+
+    ConvexPolygon frag;
+    float scale = 0.0f;
+    for (std::size_t i = 0; i < n; ++i) {
+      frag.push_back(glm::vec3(a[i]));
+      scale = std::max(scale, detail::norm1(frag[i]));
+    }
+    current_ = Current{};
+    current_.edge_count = beam_edges(frag);
+    if (current_.edge_count == 0) return false;
+    current_.is_box = false;
+    current_.closing[0] = own;
+    current_.closing_count = 1;
+    current_.split_epsilon = params_.margin * scale;
+    insert_fragment(frag);
+    return true;
+  }
 
   // The occluder's beam planes into current_.edges, longest edge (in angle) first: a query passing
   // beside the occluder is most likely outside a long edge, so it leaves the chain after fewer steps.

@@ -3,3 +3,4 @@ cullkit_add_test(test_occlusion_bruteforce SOURCES ${_occ}/test_occlusion_brutef
 cullkit_add_test(test_occlusion_embree SOURCES ${_occ}/test_occlusion_embree.cpp EMBREE)
 cullkit_add_test(test_occlusion_order SOURCES ${_occ}/test_occlusion_order.cpp)
 cullkit_add_test(test_occlusion_fusion SOURCES ${_occ}/test_occlusion_fusion.cpp)
+cullkit_add_test(test_occlusion_oriented_box SOURCES ${_occ}/test_occlusion_oriented_box.cpp)
