@@ -1,8 +1,8 @@
 // cullkit/occlusion_tree.hpp: the occlusion tree, a binary tree of planes for one eye that holds the
 // union of the regions hidden behind inserted occluders, and answers "is this box entirely hidden?".
 //
-// Seed: 基于主要遮挡物的动态可见性算法 (dynamic visibility with major occluders), §3.1-3.4, as corrected
-// in DESIGN.md §7. An occluder polygon becomes a chain of planes: one plane through the eye and each
+// Seed: 基于主要遮挡物的动态可见性算法 (dynamic visibility with major occluders), §3.1-3.4 (see
+// docs/papers.md), with the corrections said below. An occluder polygon becomes a chain of planes: one plane through the eye and each
 // edge (inside: toward the polygon), then the polygon's own plane (inside: away from the eye), then
 // an explicit hidden leaf. A solid box becomes its outline's edge planes, then its 1-3 front-face
 // planes (cullkit::BoxProxy), then hidden. Inserting pushes the occluder down the tree, splitting it
@@ -143,7 +143,7 @@ struct OcclusionQueryResult {
   /// The deepest node at which the query's corners were still all on one side of every plane above
   /// it, or `OcclusionTree::whole_tree` when that is the root slot. A query for a shape contained in
   /// this one (an ABT child box inside its parent box) may start there (seed §3.4.2, refinement 2).
-  std::uint32_t together = 0xFFFFFFFFu;
+  std::uint32_t together = 0xFFFFFFFDu;  // OcclusionTree::whole_tree
 };
 
 /// The occlusion tree for one eye position (see the file comment).
@@ -153,7 +153,8 @@ class OcclusionTree {
   static constexpr std::uint32_t visible_leaf = 0xFFFFFFFFu;  ///< empty: nothing hides this region
   static constexpr std::uint32_t hidden_leaf = 0xFFFFFFFEu;   ///< everything here is hidden
   /// "Start at the root" for `query`.
-  static constexpr std::uint32_t whole_tree = 0xFFFFFFFFu;
+  /// A value of its own, never a node index nor a leaf code: a node's child is never "the root".
+  static constexpr std::uint32_t whole_tree = 0xFFFFFFFDu;
   /// Pending fragments a query can hold; beyond that the query answers "visible".
   static constexpr int query_stack_size = 48;
   /// `OcclusionNode::seam` of a node that lies on no shared edge.
@@ -306,12 +307,14 @@ class OcclusionTree {
 
   /// The full query: is the box hidden, and (with `want_clear`) is it clear of every hidden region.
   /// `start`: `whole_tree`, or the `together` node of an earlier query, in this tree since the last
-  /// `reset`, for a box that contained this one (then the walk starts there; seed §3.4.2). With
+  /// `reset`, for a box that contained this one (then the walk starts there; seed §3.4.2); any other
+  /// value that is not a node of this tree starts at the root. With
   /// `want_clear` the walk does not stop at the first visible fragment, so it can report `clear`.
   /// Returns where the box last went down the tree whole. No allocation; safe concurrently.
   [[nodiscard]] OcclusionQueryResult query(const Aabb& box, std::uint32_t start = whole_tree,
                                            bool want_clear = false) const {
     OcclusionQueryResult result;
+    if (start != whole_tree && start >= nodes_.size()) start = whole_tree;  // stale or invalid: the root
     result.together = start;
     if (!eye_ok_ || !is_valid(box) || contains(box, eye_)) return result;
     // Eye-relative box; the largest norm1 over the corners separates per axis.
@@ -381,6 +384,7 @@ class OcclusionTree {
   [[nodiscard]] OcclusionQueryResult query(const ConvexPolygon& polygon, std::uint32_t start = whole_tree,
                                            bool want_clear = false) const {
     OcclusionQueryResult result;
+    if (start != whole_tree && start >= nodes_.size()) start = whole_tree;  // stale or invalid: the root
     result.together = start;
     if (!eye_ok_ || polygon.empty() || polygon.overflow()) return result;
     Fragment stack[query_stack_size];
