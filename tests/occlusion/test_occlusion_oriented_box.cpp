@@ -20,6 +20,8 @@ using cullkit::support::Rng;
 using occlusion_test::Occluders;
 using occlusion_test::OrientedBox;
 
+// Random vectors are built with braces: their components are then drawn left to right on every
+// compiler (argument order in parentheses is unspecified), so gcc and clang test the same scenes.
 namespace {
 
 Aabb around(const glm::vec3& c, const glm::vec3& h) { return Aabb{c - h, c + h}; }
@@ -68,7 +70,7 @@ void rotated_building() {
 
 glm::mat4 random_model(Rng& rng, const glm::vec3& at) {
   glm::mat4 m = glm::translate(glm::mat4(1.0f), at);
-  const glm::vec3 axis = glm::normalize(glm::vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) +
+  const glm::vec3 axis = glm::normalize(glm::vec3{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)} +
                                         glm::vec3(0.0f, 0.01f, 0.0f));
   m = glm::rotate(m, rng.uniform(0.0f, 6.2831853f), axis);
   if (rng.uniform() < 0.3f) {  // shear
@@ -77,7 +79,7 @@ glm::mat4 random_model(Rng& rng, const glm::vec3& at) {
     shear[2][1] = rng.uniform(-0.5f, 0.5f);
     m = m * shear;
   }
-  return glm::scale(m, glm::vec3(rng.uniform(0.5f, 2.0f), rng.uniform(0.5f, 2.0f), rng.uniform(0.5f, 2.0f)));
+  return glm::scale(m, glm::vec3{rng.uniform(0.5f, 2.0f), rng.uniform(0.5f, 2.0f), rng.uniform(0.5f, 2.0f)});
 }
 
 void random_boxes() {
@@ -85,15 +87,15 @@ void random_boxes() {
   long aligned_hidden = 0, identity_hidden = 0, disagree = 0, aligned_nodes = 0, identity_nodes = 0;
   for (unsigned seed = 1; seed <= 80; ++seed) {
     Rng rng(seed * 40503u);
-    const glm::vec3 eye(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    const glm::vec3 eye{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)};
     OcclusionTree tree(eye), aligned(eye), identity(eye);
     Occluders occ;
     const int count = rng.range(1, 25);
     for (int k = 0; k < count; ++k) {
-      const glm::vec3 dir = glm::normalize(glm::vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)));
+      const glm::vec3 dir = glm::normalize(glm::vec3{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)});
       const glm::vec3 at = eye + dir * rng.uniform(2.0f, 8.0f);
       const Aabb local = around(glm::vec3(rng.uniform(-0.5f, 0.5f)),
-                                glm::vec3(rng.uniform(0.2f, 2.0f), rng.uniform(0.2f, 2.0f), rng.uniform(0.2f, 2.0f)));
+                                glm::vec3{rng.uniform(0.2f, 2.0f), rng.uniform(0.2f, 2.0f), rng.uniform(0.2f, 2.0f)});
       const glm::mat4 model = random_model(rng, at);
       occ.oriented.emplace_back(local, model);
       tree.insert_box_occluder(local, model);
@@ -104,10 +106,10 @@ void random_boxes() {
     aligned_nodes += aligned.stats().nodes;
     identity_nodes += identity.stats().nodes;
     for (int k = 0; k < 150; ++k) {
-      const glm::vec3 dir = glm::normalize(glm::vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)));
+      const glm::vec3 dir = glm::normalize(glm::vec3{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)});
       const glm::vec3 c = eye + dir * rng.uniform(2.0f, 20.0f);
       const float s = rng.uniform() < 0.3f ? 0.02f : rng.uniform(0.05f, 1.5f);
-      const Aabb q = around(c, glm::vec3(s * rng.uniform(0.3f, 1.0f), s, s * rng.uniform(0.3f, 1.0f)));
+      const Aabb q = around(c, glm::vec3{s * rng.uniform(0.3f, 1.0f), s, s * rng.uniform(0.3f, 1.0f)});
       ++queries;
       const bool a = aligned.is_occluded(q), i = identity.is_occluded(q);
       aligned_hidden += a ? 1 : 0;
@@ -126,7 +128,7 @@ void random_boxes() {
               identity_hidden, aligned_hidden, disagree, identity_nodes, aligned_nodes);
   CHECK(hidden >= queries / 20);  // the test must exercise hidden answers
   // Faces fused along their shared edges hide what the outline chain hides, up to margin effects
-  // (measured: 3,972 vs 3,989 hidden, 59 answers differ, either way).
+  // (measured: 4,034 vs 4,066 hidden, 64 answers differ, either way).
   CHECK(disagree * 50 <= aligned_hidden);
   CHECK(identity_hidden * 100 >= aligned_hidden * 98);
 }
