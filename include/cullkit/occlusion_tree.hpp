@@ -34,6 +34,17 @@
 // same direction are merged, fragments with no area seen from the eye are dropped, and a slightly
 // non-planar occluder's own plane is pushed back behind its farthest corner.
 //
+// Fusion (seams; detail/occlusion_seams.hpp, docs/occlusion_fusion.md). Two occluders sharing an
+// edge each have a plane through the eye and that edge: one true plane, so a query piece within
+// the margin of it would be "not clearly inside" for both, and the pair would hide nothing along the
+// seam. Every edge plane therefore carries a seam id that names its true plane exactly (the edge's
+// corners bit for bit, or an axis plane through the eye), and edge normals are computed from the
+// corners in canonical order, so partners are exact negations. At a seam used by two occluders, a
+// piece within the band becomes two overlapping copies (distance >= -m inside, <= m outside), each
+// assuming its side; at every later node of that seam a copy follows its assumption. Each point has
+// a copy on its true side, and every plane of the chain that copy ends in holds for the point (by
+// the margin or by the assumption), so a hidden answer stays proof.
+//
 // Thread safety: queries are const and may run concurrently; insert/reset need exclusive access.
 // Allocation: insertion grows flat arrays (none once warm, since `reset` keeps capacity); queries
 // never allocate (their work stack is a fixed local array; if it fills, the answer is "visible").
