@@ -94,8 +94,8 @@ void random_boxes() {
     for (int k = 0; k < count; ++k) {
       const glm::vec3 dir = glm::normalize(glm::vec3{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)});
       const glm::vec3 at = eye + dir * rng.uniform(2.0f, 8.0f);
-      const Aabb local = around(glm::vec3(rng.uniform(-0.5f, 0.5f)),
-                                glm::vec3{rng.uniform(0.2f, 2.0f), rng.uniform(0.2f, 2.0f), rng.uniform(0.2f, 2.0f)});
+      const glm::vec3 centre(rng.uniform(-0.5f, 0.5f));
+      const Aabb local = around(centre, glm::vec3{rng.uniform(0.2f, 2.0f), rng.uniform(0.2f, 2.0f), rng.uniform(0.2f, 2.0f)});
       const glm::mat4 model = random_model(rng, at);
       occ.oriented.emplace_back(local, model);
       tree.insert_box_occluder(local, model);
@@ -128,7 +128,7 @@ void random_boxes() {
               identity_hidden, aligned_hidden, disagree, identity_nodes, aligned_nodes);
   CHECK(hidden >= queries / 20);  // the test must exercise hidden answers
   // Faces fused along their shared edges hide what the outline chain hides, up to margin effects
-  // (measured: 4,034 vs 4,066 hidden, 64 answers differ, either way).
+  // (measured: 4,158 vs 4,167 hidden, 49 answers differ, either way).
   CHECK(disagree * 50 <= aligned_hidden);
   CHECK(identity_hidden * 100 >= aligned_hidden * 98);
 }
