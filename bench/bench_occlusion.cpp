@@ -125,7 +125,7 @@ void micro() {
   }
 }
 
-// The setting: N box occluders all in view (a 90-degree wedge in front of the eye, 8-120 m
+// A street-level setting: N box occluders all in view (a 90-degree wedge in front of the eye, 8-120 m
 // away, random order) and query boxes in the same wedge, so most occluders overlap others on screen.
 void in_view() {
   const bool smoke = cullkit_bench::smoke();
