@@ -1,7 +1,8 @@
 // bench_occlusion: OcclusionTree speed. (1) per-query ns and per-insertion us against the number of
 // box occluders (10..1000), plain tree vs two-level top planes, insertion near-to-far and far-to-near
 // (adversarial); (2) whole-scene culling of a generated city: frustum only (the ABT) vs frustum +
-// occlusion with each seed refinement on and off. CSV (race.hpp) plus summary lines.
+// occlusion with each seed refinement on and off; (3) the generated city culled with box occluders
+// only and with polygon occluders added (occluder fusion). CSV (race.hpp) plus summary lines.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -124,7 +125,7 @@ void micro() {
   }
 }
 
-// The setting: N box occluders all in view (a 90-degree wedge in front of the eye, 8-120 m
+// A street-level setting: N box occluders all in view (a 90-degree wedge in front of the eye, 8-120 m
 // away, random order) and query boxes in the same wedge, so most occluders overlap others on screen.
 void in_view() {
   const bool smoke = cullkit_bench::smoke();
@@ -256,9 +257,91 @@ void scene_cull() {
   }
 }
 
+// The generated city (make_city(1, 8), the cameras of bench_occlusion_table: street level, seed 11)
+// culled with its buildings as box occluders, then with its other big surfaces (area >= (0.03 x the
+// scene diagonal)^2, facing the eye: the ground and street tiles) added as polygon occluders, the
+// rule of tests/occlusion/scene_cull.hpp. More occluders must not hide less: without fusion the
+// polygons' seams cut the hidden region into pieces no query box can fit in whole. Prints the mean
+// share of triangles kept, the frames where the polygons made it worse, and the time per frame.
+void city_fusion() {
+  const bool smoke = cullkit_bench::smoke();
+  const support::Scene scene = support::make_city(1, smoke ? 3 : 8);
+  const std::vector<Aabb> bounds = scene.object_bounds();
+  std::vector<std::uint8_t> is_box(scene.objects.size());
+  std::vector<std::vector<std::uint32_t>> big(scene.objects.size());
+  const float big_edge = glm::length(scene.bounds.max - scene.bounds.min) * 0.03f;
+  for (std::uint32_t o = 0; o < scene.objects.size(); ++o) {
+    const auto& obj = scene.objects[o];
+    is_box[o] = obj.major_occluder && obj.is_box;
+    if (is_box[o]) continue;
+    for (std::uint32_t t = obj.first_triangle; t < obj.first_triangle + obj.triangle_count; ++t) {
+      const glm::vec3 a = scene.positions[scene.indices[3 * t]], b = scene.positions[scene.indices[3 * t + 1]],
+                      c = scene.positions[scene.indices[3 * t + 2]];
+      if (0.5f * glm::length(glm::cross(b - a, c - a)) >= big_edge * big_edge) big[o].push_back(t);
+    }
+  }
+  const AdaptiveBinaryTree<Aabb> abt(bounds.data(), bounds.size());
+  const BoxOccluderSource boxes{bounds.data(), is_box.data()};
+  const auto boxes_and_polygons = [&](std::uint32_t o, OcclusionTree& tree) {
+    if (is_box[o]) return tree.insert_box_occluder(bounds[o]);
+    for (std::uint32_t t : big[o]) {
+      const glm::vec3 tri[3] = {scene.positions[scene.indices[3 * t]], scene.positions[scene.indices[3 * t + 1]],
+                                scene.positions[scene.indices[3 * t + 2]]};
+      if (glm::dot(glm::cross(tri[1] - tri[0], tri[2] - tri[0]), tree.eye() - tri[0]) > 0.0f)
+        tree.insert_occluder(tri, 3);
+    }
+  };
+  // The cameras of bench_occlusion_table's city row.
+  Rng rng(11u);
+  std::vector<Camera> cams;
+  const Aabb sb = scene.bounds;
+  const int wanted = smoke ? 3 : 100;
+  for (int tries = 0; static_cast<int>(cams.size()) < wanted && tries < 1000 * wanted; ++tries) {
+    const glm::vec3 eye(rng.uniform(sb.min.x, sb.max.x), sb.min.y + 1.7f, rng.uniform(sb.min.z, sb.max.z));
+    bool near = false;
+    for (const Aabb& b : bounds)
+      near = near || (eye.x >= b.min.x - 0.5f && eye.x <= b.max.x + 0.5f && eye.y >= b.min.y - 0.5f &&
+                      eye.y <= b.max.y + 0.5f && eye.z >= b.min.z - 0.5f && eye.z <= b.max.z + 0.5f);
+    if (near) continue;
+    const float yaw = rng.uniform(0.0f, 6.2831853f);
+    const float pitch = rng.uniform(-3.0f, 9.0f) * (3.14159265f / 180.0f);
+    const glm::vec3 dir(std::cos(yaw) * std::cos(pitch), std::sin(pitch), std::sin(yaw) * std::cos(pitch));
+    cams.push_back(support::make_camera(eye, eye + dir, 60.0f, 640, 480, 0.1f, glm::length(sb.max - sb.min)));
+  }
+  const double total = static_cast<double>(scene.triangle_count());
+  double kept[2] = {0, 0}, ms[2] = {0, 0}, nodes[2] = {0, 0};
+  int worse = 0;
+  std::vector<std::uint32_t> out;
+  OcclusionTree tree(glm::vec3(0.0f));
+  for (const Camera& cam : cams) {
+    const Frustum f = Frustum::from_matrix(cam.view_proj, cam.depth);
+    double frame[2] = {0, 0};
+    for (int step = 0; step < 2; ++step) {  // alternate the contenders and their order frame by frame
+      const int mode = (step + static_cast<int>(&cam - cams.data())) % 2;
+      const auto t0 = std::chrono::steady_clock::now();
+      tree.reset(cam.eye);
+      if (mode == 0) cull_with_occlusion(abt, f, tree, boxes, out);
+      else cull_with_occlusion(abt, f, tree, boxes_and_polygons, out);
+      const auto t1 = std::chrono::steady_clock::now();
+      ms[mode] += std::chrono::duration<double, std::milli>(t1 - t0).count();
+      nodes[mode] += tree.stats().nodes;
+      for (std::uint32_t o : out) frame[mode] += scene.objects[o].triangle_count;
+      kept[mode] += frame[mode] / total;
+    }
+    worse += frame[1] > frame[0] ? 1 : 0;
+  }
+  const double n = static_cast<double>(std::max<std::size_t>(cams.size(), 1));
+  std::printf("# city fusion (make_city(1, %d), %zu triangles, %zu cameras): triangles kept: boxes %.2f%%, "
+              "boxes + polygons %.2f%%; polygons worse in %d frames; tree nodes %.0f / %.0f; %.3f / %.3f ms per "
+              "frame\n",
+              smoke ? 3 : 8, scene.triangle_count(), cams.size(), 100.0 * kept[0] / n, 100.0 * kept[1] / n, worse,
+              nodes[0] / n, nodes[1] / n, ms[0] / n, ms[1] / n);
+}
+
 }  // namespace
 
 int main() {
+  city_fusion();
   micro();
   in_view();
   scene_cull();

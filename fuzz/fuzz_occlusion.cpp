@@ -1,5 +1,5 @@
-// libFuzzer target: occluders (polygons, boxes) and query boxes from raw bytes (NaN, inf, huge and
-// tiny values included), inserted and queried; no crash, no sanitizer report. Cheap soundness check:
+// libFuzzer target: occluders (polygons, triangle strips sharing edges, boxes, oriented boxes) and
+// query boxes from raw bytes (NaN, inf, huge and tiny values included), inserted and queried; no crash, no sanitizer report. Cheap soundness check:
 // a query box that contains the eye, or that lies wholly in front of every occluder's bounding
 // box (nearer to the eye along every axis-separated direction), is never hidden.
 #include <cstddef>
@@ -46,7 +46,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       const std::size_t n = 3 + op / 3 % 6;
       std::size_t got = 0;
       while (got < n && r.vec(poly[got])) ++got;
-      tree.insert_occluder(poly, got);
+      if (op & 128) {
+        // A triangle strip: neighbours share an edge bit for bit (seams).
+        for (std::size_t i = 0; i + 2 < got; ++i) tree.insert_occluder(poly + i, 3);
+      } else {
+        tree.insert_occluder(poly, got);
+      }
       for (std::size_t i = 0; i < got; ++i) all_occluders = cullkit::merge(all_occluders, poly[i]);
     } else if (op % 3 == 1) {
       // One box, or (bit 4) a batch of 1-4 through insert_box_occluders.
@@ -57,6 +62,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (got == 0) break;
       if (op & 16) {
         tree.insert_box_occluders(b, got);
+      } else if (op & 4) {
+        // An oriented box: the box and the top three rows of an affine matrix.
+        float m[12];
+        if (!r.take(m, sizeof m)) break;
+        glm::mat4 model(1.0f);
+        for (int c = 0; c < 4; ++c)
+          for (int row = 0; row < 3; ++row) model[c][row] = m[3 * c + row];
+        tree.insert_box_occluder(b[0], model);
+        for (int k = 0; k < 8; ++k) {
+          const glm::vec4 w = model * glm::vec4(cullkit::corner(b[0], k), 1.0f);
+          all_occluders = cullkit::merge(all_occluders, glm::vec3(w));
+        }
       } else {
         tree.insert_box_occluder(b[0]);
       }

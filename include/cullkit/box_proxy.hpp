@@ -1,9 +1,10 @@
 // cullkit/box_proxy.hpp: a solid box occluder reduced to its outline as seen from one eye.
 //
-// Seed: 基于主要遮挡物的动态可见性算法 (dynamic visibility with major occluders), §3.3, as corrected
-// in DESIGN.md §6. The eye's position against the three slabs of a box picks one of 27 regions; a
-// constant 26-entry table (detail/box_proxy_table.hpp) then names the 4 or 6 outline corners and the
-// 1 to 3 front faces directly, so building a proxy costs six comparisons and a table read.
+// Seed: 基于主要遮挡物的动态可见性算法 (dynamic visibility with major occluders), §3.3 (see
+// docs/papers.md), corrected as below. The eye's position against the three slabs of a box picks
+// one of 27 regions; a constant 26-entry table (detail/box_proxy_table.hpp) then names the 4 or 6
+// outline corners and the 1 to 3 front faces directly, so building a proxy costs six comparisons
+// and a table read.
 //
 // What a proxy hides. The outline spans a beam from the eye (one plane through the eye and each
 // outline edge). A point inside that beam is hidden exactly when it lies behind every front-face
@@ -46,7 +47,7 @@ namespace cullkit {
 /// How a proxy closes the beam of its outline (what counts as "behind" the box).
 enum class ProxyClosure : std::uint8_t {
   /// Default and exact: a point in the beam is hidden iff it is behind every front-face plane
-  /// (1 to 3 axis-aligned planes, exact in float). DESIGN.md §6.
+  /// (1 to 3 axis-aligned planes, exact in float).
   front_faces,
   /// The seed's single plane through the box centre, perpendicular to the eye-to-centre line.
   /// NOT conservative: seen obliquely, part of the box's front surface lies behind that plane, so

@@ -1,8 +1,8 @@
 // cullkit/occlusion_tree.hpp: the occlusion tree, a binary tree of planes for one eye that holds the
 // union of the regions hidden behind inserted occluders, and answers "is this box entirely hidden?".
 //
-// Seed: 基于主要遮挡物的动态可见性算法 (dynamic visibility with major occluders), §3.1-3.4, as corrected
-// in DESIGN.md §7. An occluder polygon becomes a chain of planes: one plane through the eye and each
+// Seed: 基于主要遮挡物的动态可见性算法 (dynamic visibility with major occluders), §3.1-3.4 (see
+// docs/papers.md), with the corrections said below. An occluder polygon becomes a chain of planes: one plane through the eye and each
 // edge (inside: toward the polygon), then the polygon's own plane (inside: away from the eye), then
 // an explicit hidden leaf. A solid box becomes its outline's edge planes, then its 1-3 front-face
 // planes (cullkit::BoxProxy), then hidden. Inserting pushes the occluder down the tree, splitting it
@@ -34,6 +34,17 @@
 // same direction are merged, fragments with no area seen from the eye are dropped, and a slightly
 // non-planar occluder's own plane is pushed back behind its farthest corner.
 //
+// Fusion (seams; detail/occlusion_seams.hpp, docs/occlusion_fusion.md). Two occluders sharing an
+// edge each have a plane through the eye and that edge: one true plane, so a query piece within
+// the margin of it would be "not clearly inside" for both, and the pair would hide nothing along the
+// seam. Every edge plane therefore carries a seam id that names its true plane exactly (the edge's
+// corners bit for bit, or an axis plane through the eye), and edge normals are computed from the
+// corners in canonical order, so partners are exact negations. At a seam used by two occluders, a
+// piece within the band becomes two overlapping copies (distance >= -m inside, <= m outside), each
+// assuming its side; at every later node of that seam a copy follows its assumption. Each point has
+// a copy on its true side, and every plane of the chain that copy ends in holds for the point (by
+// the margin or by the assumption), so a hidden answer stays proof.
+//
 // Thread safety: queries are const and may run concurrently; insert/reset need exclusive access.
 // Allocation: insertion grows flat arrays (none once warm, since `reset` keeps capacity); queries
 // never allocate (their work stack is a fixed local array; if it fills, the answer is "visible").
@@ -49,12 +60,14 @@
 
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
+#include <glm/mat4x4.hpp>
 #include <glm/ext/vector_double3.hpp>
 
 #include "box_proxy.hpp"
 #include "config.hpp"
 #include "detail/occlusion_geometry.hpp"
 #include "detail/occlusion_query.hpp"
+#include "detail/occlusion_seams.hpp"
 #include "geometry/aabb.hpp"
 #include "geometry/convex_polygon.hpp"
 #include "geometry/plane.hpp"
@@ -106,6 +119,11 @@ struct OcclusionNode {
   std::uint32_t outside;   ///< child on the negative side: node index, or a leaf code
   std::uint32_t depth;     ///< root = 0
   OcclusionNodeKind kind;
+  /// For an edge plane, its seam: `2 * id + 1` if this plane's normal is the seam's canonical
+  /// normal, `2 * id` if it is the opposite. Edge planes with one id lie on one true plane (through
+  /// the eye and one edge, given bit for bit, or an axis plane through the eye), which a query may
+  /// classify once for all of them; see the file comment. `OcclusionTree::no_seam` for other nodes.
+  std::uint32_t seam = 0xFFFFFFFFu;
 };
 
 /// Statistics since construction or the last `reset`.
@@ -136,7 +154,7 @@ struct OcclusionQueryResult {
   /// The deepest node at which the query's corners were still all on one side of every plane above
   /// it, or `OcclusionTree::whole_tree` when that is the root slot. A query for a shape contained in
   /// this one (an ABT child box inside its parent box) may start there (seed §3.4.2, refinement 2).
-  std::uint32_t together = 0xFFFFFFFFu;
+  std::uint32_t together = 0xFFFFFFFDu;  // OcclusionTree::whole_tree
 };
 
 /// The occlusion tree for one eye position (see the file comment).
@@ -146,9 +164,12 @@ class OcclusionTree {
   static constexpr std::uint32_t visible_leaf = 0xFFFFFFFFu;  ///< empty: nothing hides this region
   static constexpr std::uint32_t hidden_leaf = 0xFFFFFFFEu;   ///< everything here is hidden
   /// "Start at the root" for `query`.
-  static constexpr std::uint32_t whole_tree = 0xFFFFFFFFu;
+  /// A value of its own, never a node index nor a leaf code: a node's child is never "the root".
+  static constexpr std::uint32_t whole_tree = 0xFFFFFFFDu;
   /// Pending fragments a query can hold; beyond that the query answers "visible".
   static constexpr int query_stack_size = 48;
+  /// `OcclusionNode::seam` of a node that lies on no shared edge.
+  static constexpr std::uint32_t no_seam = 0xFFFFFFFFu;
 
   /// An empty tree for `eye` (hides nothing) with default parameters.
   explicit OcclusionTree(const glm::vec3& eye) : OcclusionTree(eye, OcclusionParams{}) {}
@@ -168,6 +189,8 @@ class OcclusionTree {
     eye_ok_ = detail::finite3(eye);
     eye_scale_ = eye_ok_ ? detail::norm1(eye) : 0.0f;
     nodes_.clear();
+    seams_.clear();
+    occluder_serial_ = 0;
     stats_ = OcclusionStats{};
     root_ = visible_leaf;
     if (eye_ok_) build_top_level();
@@ -191,64 +214,25 @@ class OcclusionTree {
   /// pre: `polygon` points to `count` corners (may be null when count is 0).
   /// Cost: O(fragments x depth) plane tests; allocates only while the node array grows.
   void insert_occluder(const glm::vec3* polygon, std::size_t count) {
-    if (!eye_ok_ || count < 3 || polygon == nullptr) return skip();
-    const std::size_t n = std::min<std::size_t>(count, ConvexPolygon::capacity);
-    glm::dvec3 a[ConvexPolygon::capacity];
-    const glm::dvec3 e(eye_);
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!detail::finite3(polygon[i])) return skip();
-      a[i] = glm::dvec3(polygon[i]) - e;
-    }
-    glm::dvec3 normal(0.0), center(0.0);
-    for (std::size_t i = 0; i < n; ++i) {
-      normal += glm::cross(a[i], a[(i + 1) % n]);
-      center += a[i];
-    }
-    center /= static_cast<double>(n);
-    const double len = glm::length(normal);
-    if (!(len > 0.0) || !std::isfinite(len)) return skip();
-    glm::dvec3 unit = normal / len;
-    double d = -glm::dot(unit, center);
-    double deviation = 0.0, diameter = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
-      deviation = std::max(deviation, std::fabs(glm::dot(unit, a[i]) + d));
-      diameter = std::max(diameter, glm::length(a[i] - a[0]));
-    }
-    if (!(deviation <= double(params_.planarity) * diameter)) return skip();
-    // The eye is the origin: its signed distance is d. Inside must be away from the eye.
-    if (d > 0.0) {
-      unit = -unit;
-      d = -d;
-    }
-    // No area seen from the eye: the eye (nearly) in the polygon's plane.
-    if (!(-d > deviation + double(params_.min_angle) * (glm::length(center) + diameter))) return skip();
-    // Behind every corner: push the plane back by the deviation (and its own rounding).
-    const Plane own{glm::vec3(unit), static_cast<float>(d - deviation)};
-    if (!is_valid(own)) return skip();
-
-    ConvexPolygon frag;
-    float scale = 0.0f;
-    for (std::size_t i = 0; i < n; ++i) {
-      frag.push_back(glm::vec3(a[i]));
-      scale = std::max(scale, detail::norm1(frag[i]));
-    }
-    current_ = Current{};
-    current_.edge_count = beam_edges(frag);
-    if (current_.edge_count == 0) return skip();
-    current_.is_box = false;
-    current_.closing[0] = own;
-    current_.closing_count = 1;
-    current_.split_epsilon = params_.margin * scale;
-    ++stats_.occluders_inserted;
-    insert_fragment(frag);
+    if (insert_polygon(polygon, count)) ++stats_.occluders_inserted;
+    else skip();
   }
 
   /// Inserts a solid box occluder through its outline (cullkit::make_box_proxy, front-face closure).
   /// Skipped and counted when the box is invalid, flat on two axes, or the eye is inside or on it.
-  /// Cost and allocation as `insert_occluder`.
+  /// A face the eye sees at a grazing angle (the eye within 1/250 of its distance to the box from
+  /// the face's plane) is left out, as if the eye were in that plane: the outline then runs along
+  /// the face's near edge, which a touching box shares bit for bit, so the two fuse (a box with one
+  /// face less hides a subset: safe; where the outline is then slightly concave, the beam through
+  /// its edges is smaller still). Cost and allocation as `insert_occluder`.
   void insert_box_occluder(const Aabb& box) {
     if (!eye_ok_) return skip();
-    const BoxProxy proxy = make_box_proxy(box, eye_);
+    glm::vec3 view = grazing_view(box);
+    BoxProxy proxy = make_box_proxy(box, view);
+    if (!proxy.valid()) {  // the moved eye landed on the box (an eye near one of its edges)
+      view = eye_;
+      proxy = make_box_proxy(box, eye_);
+    }
     if (!proxy.valid()) return skip();
     ConvexPolygon frag;
     float scale = 0.0f;
@@ -266,11 +250,37 @@ class OcclusionTree {
       current_.closing[f] = Plane{p.normal, static_cast<float>(d)};
     }
     current_.closing_count = proxy.face_count;
-    ConvexPolygon faces[3];
-    (void)detail::box_front_faces(box, eye_, faces, current_.box_points, current_.box_point_count);
+    int cycles[3][4];
+    const int face_count = detail::box_front_face_cycles(box, view, cycles);
+    unsigned corner_mask = 0;
+    for (int f = 0; f < face_count; ++f)
+      for (int k = 0; k < 4; ++k) corner_mask |= 1u << cycles[f][k];
+    current_.box_point_count = 0;
+    for (int c = 0; c < 8; ++c)
+      if (corner_mask & (1u << c)) current_.box_points[current_.box_point_count++] = corner(box, c) - eye_;
     current_.split_epsilon = params_.margin * scale;
     ++stats_.occluders_inserted;
     insert_fragment(frag);
+  }
+
+  /// Inserts a solid box in any orientation: `local_box` placed in the world by the affine matrix
+  /// `model` (rotation, translation, scale, shear; world = model * local). The box must be a SOLID:
+  /// opaque all through, like a building's walls and roof, never a bounding box of something with
+  /// gaps (a tree, a car, a fence): everything behind it is treated as hidden. Its front faces (the
+  /// ones the eye sees, 1 to 3) are inserted as polygon occluders; they share their edges bit for
+  /// bit, so the tree fuses them along every edge. Counted once in `stats().occluders_inserted`.
+  /// Skipped and counted when the box or matrix is invalid (NaN, infinite, min > max, last row not
+  /// (0, 0, 0, 1)) or the eye is inside or on the box (no face sees it), or no face has area seen
+  /// from the eye. An axis-aligned box with the identity matrix hides the same region as
+  /// `insert_box_occluder(box)` (which builds one chain from the outline; faster to insert).
+  /// Cost and allocation as `insert_occluder`, times the number of front faces.
+  void insert_box_occluder(const Aabb& local_box, const glm::mat4& model) {
+    glm::vec3 faces[3][4];
+    const int count = eye_ok_ ? detail::oriented_box_front_faces(local_box, model, eye_, faces) : 0;
+    bool any = false;
+    for (int f = 0; f < count; ++f) any = insert_polygon(faces[f], 4) || any;
+    if (any) ++stats_.occluders_inserted;
+    else skip();
   }
 
   /// Inserts many solid box occluders, nearest to the eye first (each as `insert_box_occluder`),
@@ -323,12 +333,14 @@ class OcclusionTree {
 
   /// The full query: is the box hidden, and (with `want_clear`) is it clear of every hidden region.
   /// `start`: `whole_tree`, or the `together` node of an earlier query, in this tree since the last
-  /// `reset`, for a box that contained this one (then the walk starts there; seed §3.4.2). With
+  /// `reset`, for a box that contained this one (then the walk starts there; seed §3.4.2); any other
+  /// value that is not a node of this tree starts at the root. With
   /// `want_clear` the walk does not stop at the first visible fragment, so it can report `clear`.
   /// Returns where the box last went down the tree whole. No allocation; safe concurrently.
   [[nodiscard]] OcclusionQueryResult query(const Aabb& box, std::uint32_t start = whole_tree,
                                            bool want_clear = false) const {
     OcclusionQueryResult result;
+    if (start != whole_tree && start >= nodes_.size()) start = whole_tree;  // stale or invalid: the root
     result.together = start;
     if (!eye_ok_ || !is_valid(box) || contains(box, eye_)) return result;
     // Eye-relative box; the largest norm1 over the corners separates per axis.
@@ -352,8 +364,15 @@ class OcclusionTree {
       const OcclusionNode& node = nodes_[ref];
       const float m = params_.margin * (scale + std::fabs(node.plane.d));
       float dmin = 0.0f;
-      const FrontSide side = front_side(node.plane, m, front, dmin);
+      FrontSide side = front_side(node.plane, m, front, dmin);
       if (side == FrontSide::unknown) return result;  // NaN: visible
+      // On a shared seam, a front within the margin band of the plane must meet the seam rule
+      // (walk_fragments), not slip to the outside where the other occluder's chain may not be.
+      if (side == FrontSide::outside && is_shared_seam(node)) {
+        float flipped_min = 0.0f;
+        const Plane flipped{-node.plane.normal, -node.plane.d};
+        if (front_side(flipped, m, front, flipped_min) != FrontSide::inside) side = FrontSide::straddles;
+      }
       if (side == FrontSide::straddles && splits++ == 0) {
         first_split = ref;
         clear_split = dmin <= -m;
@@ -374,6 +393,7 @@ class OcclusionTree {
       for (std::uint32_t i = 0; i < corners; ++i) stack[0].v[i] = outline[i] - eye_;
       stack[0].size = corners;
       stack[0].ref = first_split;
+      stack[0].assumed_count = 0;
       result.answer = walk_fragments(stack, 1, scale, want_clear, &front);
       if (result.answer != undecided_answer) return result;
     }
@@ -390,12 +410,14 @@ class OcclusionTree {
   [[nodiscard]] OcclusionQueryResult query(const ConvexPolygon& polygon, std::uint32_t start = whole_tree,
                                            bool want_clear = false) const {
     OcclusionQueryResult result;
+    if (start != whole_tree && start >= nodes_.size()) start = whole_tree;  // stale or invalid: the root
     result.together = start;
     if (!eye_ok_ || polygon.empty() || polygon.overflow()) return result;
     Fragment stack[query_stack_size];
     Fragment& local = stack[0];
     float scale = 0.0f;
     local.size = static_cast<std::uint32_t>(polygon.size());
+    local.assumed_count = 0;
     for (std::size_t i = 0; i < polygon.size(); ++i) {
       if (!detail::finite3(polygon[i])) return result;
       local.v[i] = polygon[i] - eye_;
@@ -415,6 +437,7 @@ class OcclusionTree {
       }
       if (!detail::finite_distance(dmin) || !detail::finite_distance(dmax)) return result;  // overflow, NaN: visible
       if (!(dmin >= m) && !(dmax <= m)) break;  // straddles: split from here
+      if (!(dmin >= m) && !(dmax <= -m) && is_shared_seam(node)) break;  // in a seam's band: the seam rule
       result.together = ref;
       ref = dmin >= m ? node.inside : node.outside;
     }
@@ -429,6 +452,7 @@ class OcclusionTree {
   // What the occluder being inserted closes its chain with.
   struct Current {
     Plane edges[ConvexPolygon::capacity] = {};  // the whole occluder's beam planes
+    std::uint32_t edge_seams[ConvexPolygon::capacity] = {};  // OcclusionNode::seam of each
     std::size_t edge_count = 0;
     bool is_box = false;
     Plane closing[3] = {};
@@ -447,24 +471,109 @@ class OcclusionTree {
 
   void skip() { ++stats_.occluders_skipped; }
 
+  // The eye moved into the plane of every box face it sees at a grazing angle (see
+  // insert_box_occluder), or the eye itself.
+  [[nodiscard]] glm::vec3 grazing_view(const Aabb& box) const {
+    const glm::vec3 gap = glm::max(glm::max(box.min - eye_, eye_ - box.max), glm::vec3(0.0f));
+    const float reach = (1.0f / 250.0f) * glm::length(gap);
+    glm::vec3 view = eye_;
+    for (int a = 0; a < 3; ++a) {
+      if (eye_[a] < box.min[a] && box.min[a] - eye_[a] <= reach) view[a] = box.min[a];
+      if (eye_[a] > box.max[a] && eye_[a] - box.max[a] <= reach) view[a] = box.max[a];
+    }
+    return view;
+  }
+
+  // insert_occluder without the statistics: false when the polygon was not used.
+  bool insert_polygon(const glm::vec3* polygon, std::size_t count) {
+    if (!eye_ok_ || count < 3 || polygon == nullptr) return false;
+    const std::size_t n = std::min<std::size_t>(count, ConvexPolygon::capacity);
+    glm::dvec3 a[ConvexPolygon::capacity];
+    const glm::dvec3 e(eye_);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!detail::finite3(polygon[i])) return false;
+      a[i] = glm::dvec3(polygon[i]) - e;
+    }
+    glm::dvec3 normal(0.0), center(0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      normal += glm::cross(a[i], a[(i + 1) % n]);
+      center += a[i];
+    }
+    center /= static_cast<double>(n);
+    const double len = glm::length(normal);
+    if (!(len > 0.0) || !std::isfinite(len)) return false;
+    glm::dvec3 unit = normal / len;
+    double d = -glm::dot(unit, center);
+    double deviation = 0.0, diameter = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      deviation = std::max(deviation, std::fabs(glm::dot(unit, a[i]) + d));
+      diameter = std::max(diameter, glm::length(a[i] - a[0]));
+    }
+    if (!(deviation <= double(params_.planarity) * diameter)) return false;
+    // The eye is the origin: its signed distance is d. Inside must be away from the eye.
+    if (d > 0.0) {
+      unit = -unit;
+      d = -d;
+    }
+    // No area seen from the eye: the eye (nearly) in the polygon's plane.
+    if (!(-d > deviation + double(params_.min_angle) * (glm::length(center) + diameter))) return false;
+    // Behind every corner: push the plane back by the deviation (and its own rounding).
+    const Plane own{glm::vec3(unit), static_cast<float>(d - deviation)};
+    if (!is_valid(own)) return false;
+
+    ConvexPolygon frag;
+    float scale = 0.0f;
+    for (std::size_t i = 0; i < n; ++i) {
+      frag.push_back(glm::vec3(a[i]));
+      scale = std::max(scale, detail::norm1(frag[i]));
+    }
+    current_ = Current{};
+    current_.edge_count = beam_edges(frag);
+    if (current_.edge_count == 0) return false;
+    current_.is_box = false;
+    current_.closing[0] = own;
+    current_.closing_count = 1;
+    current_.split_epsilon = params_.margin * scale;
+    insert_fragment(frag);
+    return true;
+  }
+
   // The occluder's beam planes into current_.edges, longest edge (in angle) first: a query passing
   // beside the occluder is most likely outside a long edge, so it leaves the chain after fewer steps.
   // (The chain's region does not depend on the order.)
   std::size_t beam_edges(const ConvexPolygon& outline) {
     float angles[ConvexPolygon::capacity];  // 1 - cos of each edge's angle: same order as the angle
-    const std::size_t n = detail::beam_planes(outline, params_.min_angle, current_.edges, angles);
+    glm::vec3 corners[ConvexPolygon::capacity];
+    const std::size_t n = detail::beam_planes(outline, params_.min_angle, current_.edges, angles, corners);
+    ++occluder_serial_;
+    for (std::size_t i = 0; i < n; ++i)
+      current_.edge_seams[i] = edge_seam(current_.edges[i], corners[i], corners[(i + 1) % n]);
     for (std::size_t i = 1; i < n; ++i) {
       const Plane plane = current_.edges[i];
+      const std::uint32_t seam = current_.edge_seams[i];
       const float angle = angles[i];
       std::size_t j = i;
       for (; j > 0 && angles[j - 1] < angle; --j) {
         current_.edges[j] = current_.edges[j - 1];
+        current_.edge_seams[j] = current_.edge_seams[j - 1];
         angles[j] = angles[j - 1];
       }
       current_.edges[j] = plane;
+      current_.edge_seams[j] = seam;
       angles[j] = angle;
     }
     return n;
+  }
+
+  // The seam code (OcclusionNode::seam) of the edge plane through the eye and a-b.
+  std::uint32_t edge_seam(const Plane& plane, const glm::vec3& a, const glm::vec3& b) {
+    bool forward = false;  // cross(a, b) is the seam's canonical normal
+    const detail::SeamKey key = detail::seam_key(a, b, forward);
+    const std::uint32_t id = seams_.use(key, occluder_serial_);
+    if (id >= no_seam / 2) return no_seam;
+    const glm::dvec3 ab = glm::cross(glm::dvec3(a), glm::dvec3(b));
+    const bool along_ab = glm::dot(glm::dvec3(plane.normal), ab) > 0.0;
+    return 2 * id + (along_ab == forward ? 1u : 0u);
   }
 
   [[nodiscard]] std::uint32_t slot_value(std::uint32_t parent, bool inside) const {
@@ -480,9 +589,10 @@ class OcclusionTree {
     return parent == whole_tree ? 0u : nodes_[parent].depth + 1u;
   }
 
-  std::uint32_t add_node(const Plane& plane, OcclusionNodeKind kind, std::uint32_t depth) {
+  std::uint32_t add_node(const Plane& plane, OcclusionNodeKind kind, std::uint32_t depth,
+                         std::uint32_t seam = no_seam) {
     const auto index = static_cast<std::uint32_t>(nodes_.size());
-    nodes_.push_back(OcclusionNode{plane, visible_leaf, visible_leaf, depth, kind});
+    nodes_.push_back(OcclusionNode{plane, visible_leaf, visible_leaf, depth, kind, seam});
     stats_.depth = std::max(stats_.depth, depth);
     return index;
   }
@@ -496,6 +606,7 @@ class OcclusionTree {
     {
       Fragment& f = work_[top].fragment;
       f.size = static_cast<std::uint32_t>(first.size());
+      f.assumed_count = 0;
       for (std::size_t i = 0; i < first.size(); ++i) f.v[i] = first[i];
       f.ref = whole_tree;
       work_[top].inside = false;
@@ -548,6 +659,8 @@ class OcclusionTree {
             break;
           }
           in_piece.ref = ref;
+          in_piece.assumed_count = 0;
+          alt->assumed_count = 0;
           work_[top].inside = true;
           ++top;
           alt->ref = ref;
@@ -579,7 +692,8 @@ class OcclusionTree {
       if (previous != whole_tree) nodes_[previous].inside = node;
       previous = node;
     };
-    for (std::size_t i = 0; i < n; ++i) link(add_node(edges[i], OcclusionNodeKind::edge, depth++));
+    for (std::size_t i = 0; i < n; ++i)
+      link(add_node(edges[i], OcclusionNodeKind::edge, depth++, current_.edge_seams[i]));
     const OcclusionNodeKind closing_kind = current_.is_box ? OcclusionNodeKind::box_face : OcclusionNodeKind::polygon;
     for (int f = 0; f < current_.closing_count; ++f) link(add_node(current_.closing[f], closing_kind, depth++));
     nodes_[previous].inside = hidden_leaf;
@@ -635,6 +749,73 @@ class OcclusionTree {
     return result;
   }
 
+  [[nodiscard]] bool is_shared_seam(const OcclusionNode& node) const noexcept {
+    return node.seam != no_seam && seams_.shared(node.seam >> 1);
+  }
+
+  enum class SeamStep : std::uint8_t {
+    moved,      // `cur` went on to one child (its ref is updated)
+    copies,     // `cur` became two copies: one pushed on the stack, the other written to `alt`
+    ordinary,   // no room for another assumption: treat the node as an ordinary plane
+    visible,    // cannot be decided (NaN, too many corners): the query answers visible
+  };
+
+  // One step at a node on a seam shared by several occluders (see occlusion_seams.hpp). A fragment
+  // that already assumed a side of this seam follows that side: every point it stands for is there.
+  // Otherwise a fragment clearly on one side (by the margin) goes there; one within the margin band
+  // becomes two overlapping copies, the part at distance >= -m going inside and the part at distance
+  // <= m going outside, each assuming its side. Each point then has a copy on its true side, and a
+  // copy meeting the other occluder's plane of the same seam no longer loses the band to "visible".
+  [[nodiscard]] SeamStep seam_step(const OcclusionNode& node, float m, Fragment& cur, Fragment* stack, int& top,
+                                   Fragment& alt) const {
+    const std::uint32_t id = node.seam >> 1;
+    const std::uint32_t node_side = node.seam & 1u;  // the canonical side this node's inside is
+    for (std::uint32_t k = 0; k < cur.assumed_count; ++k) {
+      if ((cur.assumed[k] >> 1) != id) continue;
+      cur.ref = (cur.assumed[k] & 1u) == node_side ? node.inside : node.outside;
+      return SeamStep::moved;
+    }
+    const Plane inner{node.plane.normal, node.plane.d - m};  // inside it: distance >= m
+    const Plane outer{node.plane.normal, node.plane.d + m};  // outside it: distance <= -m
+    const detail::FragmentSide in_side = detail::classify_fragment(cur, inner, 0.0f);
+    const detail::FragmentSide out_side = detail::classify_fragment(cur, outer, 0.0f);
+    if (in_side == detail::FragmentSide::undecided || out_side == detail::FragmentSide::undecided)
+      return SeamStep::visible;
+    if (in_side == detail::FragmentSide::inside) {
+      cur.ref = node.inside;
+      return SeamStep::moved;
+    }
+    if (out_side == detail::FragmentSide::outside || out_side == detail::FragmentSide::on) {
+      cur.ref = node.outside;
+      return SeamStep::moved;
+    }
+    if (cur.assumed_count >= detail::max_seam_assumptions || top >= query_stack_size) return SeamStep::ordinary;
+    Fragment scratch;
+    Fragment& in_copy = stack[top];
+    // The inside copy: the part at distance >= -m (all of it unless the fragment crosses `outer`).
+    if (out_side == detail::FragmentSide::split) {
+      if (detail::split_fragment(cur, outer, 0.0f, in_copy, scratch) != detail::FragmentSide::split)
+        return SeamStep::visible;
+    } else {
+      detail::copy_fragment(cur, in_copy);
+    }
+    // The outside copy: the part at distance <= m.
+    if (in_side == detail::FragmentSide::split) {
+      if (detail::split_fragment(cur, inner, 0.0f, scratch, alt) != detail::FragmentSide::split)
+        return SeamStep::visible;
+    } else {
+      detail::copy_fragment(cur, alt);
+    }
+    detail::copy_assumptions(cur, in_copy);
+    detail::copy_assumptions(cur, alt);
+    in_copy.assumed[in_copy.assumed_count++] = 2 * id + node_side;
+    alt.assumed[alt.assumed_count++] = 2 * id + (1u - node_side);
+    in_copy.ref = node.inside;
+    alt.ref = node.outside;
+    ++top;
+    return SeamStep::copies;
+  }
+
   // The exact walk: the fragments stack[0..count) are pushed down the tree from their `ref`, split
   // where they straddle a plane shifted inward by the margin. Depth first, outside pieces first, so
   // a query that reaches a visible leaf stops early (unless `want_clear`); hidden only if every
@@ -675,6 +856,15 @@ class OcclusionTree {
           else return undecided_answer;  // the front straddles (or NaN): walk the faces instead
           continue;
         }
+        if (is_shared_seam(node)) {
+          const SeamStep step = seam_step(node, m, *cur, stack, top, *alt);
+          if (step == SeamStep::visible) {
+            any_visible = true;
+            break;
+          }
+          if (step == SeamStep::copies) std::swap(cur, alt);
+          if (step != SeamStep::ordinary) continue;
+        }
         const Plane shifted{node.plane.normal, node.plane.d - m};
         // With the stack full, the inside piece has nowhere to go: a split then answers visible.
         Fragment& in_piece = top < query_stack_size ? stack[top] : *alt;
@@ -686,8 +876,10 @@ class OcclusionTree {
           cur->ref = node.outside;
         } else if (side == detail::FragmentSide::split && top < query_stack_size) {
           in_piece.ref = node.inside;
+          detail::copy_assumptions(*cur, in_piece);
           ++top;
           alt->ref = node.outside;
+          detail::copy_assumptions(*cur, *alt);
           std::swap(cur, alt);
         } else {
           any_visible = true;  // NaN, too many corners or a full stack: cannot be decided, visible
@@ -776,6 +968,8 @@ class OcclusionTree {
   std::vector<SortKey> order_;  // insert_box_occluders' scratch
   OcclusionStats stats_;
   Current current_;
+  detail::SeamTable seams_;
+  std::uint32_t occluder_serial_ = 0;  // numbers the occluders since `reset` (seam owners)
   glm::dvec3 up_ = glm::dvec3(0, 1, 0), fwd_ = glm::dvec3(0, 0, -1), right_ = glm::dvec3(1, 0, 0);
 };
 

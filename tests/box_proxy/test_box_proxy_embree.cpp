@@ -1,4 +1,4 @@
-// BoxProxy against Embree (the ground truth for what the eye sees), DESIGN.md §6.
+// BoxProxy against Embree, the ground truth for what the eye sees (seed paper: docs/papers.md).
 //
 // A long low building seen obliquely from above, a small box (a rooftop antenna) resting on the far
 // end of its roof. Embree sees the antenna at some pixels. The exact closure (front-face planes)

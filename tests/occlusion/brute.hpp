@@ -8,6 +8,10 @@
 
 #include <glm/geometric.hpp>
 #include <glm/ext/vector_double3.hpp>
+#include <glm/ext/vector_double4.hpp>
+#include <glm/ext/matrix_double4x4.hpp>
+#include <glm/matrix.hpp>
+#include <glm/mat4x4.hpp>
 
 #include <cullkit/cullkit.hpp>
 #include <cullkit_support/scene.hpp>
@@ -59,14 +63,29 @@ inline bool segment_hits_box(const dvec3& eye, const dvec3& p, const cullkit::Aa
   return true;
 }
 
+/// A solid box placed by an affine matrix; the brute force works in its local frame.
+struct OrientedBox {
+  cullkit::Aabb local;
+  glm::dmat4 world_to_local;
+  OrientedBox(const cullkit::Aabb& box, const glm::mat4& model)
+      : local(box), world_to_local(glm::inverse(glm::dmat4(model))) {}
+  [[nodiscard]] bool blocks(const dvec3& eye, const dvec3& p) const {
+    const dvec3 e(world_to_local * glm::dvec4(eye, 1.0)), q(world_to_local * glm::dvec4(p, 1.0));
+    return segment_hits_box(e, q, local);
+  }
+};
+
 struct Occluders {
   std::vector<std::vector<glm::vec3>> polygons;
   std::vector<cullkit::Aabb> boxes;
+  std::vector<OrientedBox> oriented;
   bool blocks(const dvec3& eye, const dvec3& p) const {
     for (const auto& poly : polygons)
       if (segment_hits_polygon(eye, p, poly)) return true;
     for (const auto& b : boxes)
       if (segment_hits_box(eye, p, b)) return true;
+    for (const auto& b : oriented)
+      if (b.blocks(eye, p)) return true;
     return false;
   }
 };

@@ -11,12 +11,14 @@
 
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
+#include <glm/mat4x4.hpp>
 #include <glm/ext/vector_double3.hpp>
 
 #include "../geometry/aabb.hpp"
 #include "../geometry/convex_polygon.hpp"
 #include "../geometry/plane.hpp"
 #include "occlusion_query.hpp"
+#include "occlusion_seams.hpp"
 
 namespace cullkit::detail {
 
@@ -45,11 +47,15 @@ namespace cullkit::detail {
 /// polygon) and returns how many, or 0 when fewer than 3 corners survive or the polygon has no area
 /// as seen from the eye (then the fragment must be dropped, which is also safe).
 /// With `angles`, also writes for each edge 1 - cos of the angle it subtends at the eye (which grows
-/// with the angle, so it orders edges by angular length without an atan2).
-/// pre: `out` (and `angles`, if given) has room for `poly.size()` entries.
+/// with the angle, so it orders edges by angular length without an atan2). With `corners`, writes
+/// the kept corners: edge i runs from corners[i] to corners[(i + 1) % n].
+/// Each normal is computed from the edge's corners in their canonical order (`corner_before`), so two
+/// occluders sharing an edge get planes that are exact negations of each other.
+/// pre: `out` (and `angles`, `corners`, if given) has room for `poly.size()` entries.
 template <std::size_t Capacity>
 [[nodiscard]] inline std::size_t beam_planes(const BasicConvexPolygon<Capacity>& poly, float min_angle,
-                                             Plane* out, float* angles = nullptr) noexcept {
+                                             Plane* out, float* angles = nullptr,
+                                             glm::vec3* corners = nullptr) noexcept {
   glm::dvec3 kept[Capacity];
   std::size_t n = 0;
   const double min_sin = static_cast<double>(min_angle);
@@ -85,12 +91,14 @@ template <std::size_t Capacity>
   if (!(std::fabs(facing) > min_sin * scale)) return 0;  // seen edge-on: no area from the eye
   const double sign = facing < 0.0 ? -1.0 : 1.0;
   for (std::size_t i = 0; i < n; ++i) {
-    const glm::dvec3 cross = glm::cross(kept[i], kept[(i + 1) % n]);
+    const glm::dvec3& a = kept[i];
+    const glm::dvec3& b = kept[(i + 1) % n];
+    // kept[] holds floats exactly, so the float round trip is exact.
+    const glm::dvec3 cross = corner_before(glm::vec3(b), glm::vec3(a)) ? -glm::cross(b, a) : glm::cross(a, b);
     out[i] = eye_plane_from_normal(sign * cross);
+    if (corners) corners[i] = glm::vec3(a);
     if (!is_valid(out[i])) return 0;
     if (angles) {
-      const glm::dvec3& a = kept[i];
-      const glm::dvec3& b = kept[(i + 1) % n];
       angles[i] = static_cast<float>(1.0 - glm::dot(a, b) / (glm::length(a) * glm::length(b)));
     }
   }
@@ -119,6 +127,48 @@ template <std::size_t Capacity>
   for (int c = 0; c < 8; ++c)
     if (corner_mask & (1u << c)) points[point_count++] = corner(box, c) - eye;
   return nfaces;
+}
+
+/// The faces of the box `local_box` placed by the affine matrix `model` that the eye (world) sees:
+/// up to 3 quads of world corners, written to `out`; returns how many. Every face uses the same 8
+/// rounded world corners, so neighbouring faces share their edges bit for bit. 0 when the box or
+/// the matrix is not finite, the box is invalid (min > max), the matrix is not affine (last row not
+/// 0 0 0 1), or the eye sees no face (inside or on the box). A face counts as seen when the eye is
+/// strictly on its outer side (away from the box's centre), in double precision.
+[[nodiscard]] inline int oriented_box_front_faces(const Aabb& local_box, const glm::mat4& model, const glm::vec3& eye,
+                                                  glm::vec3 out[3][4]) noexcept {
+  if (!is_valid(local_box)) return 0;
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(model[c][r])) return 0;
+  if (model[0][3] != 0.0f || model[1][3] != 0.0f || model[2][3] != 0.0f || model[3][3] != 1.0f) return 0;
+  glm::vec3 world[8];
+  glm::dvec3 centre(0.0);
+  for (int c = 0; c < 8; ++c) {
+    const glm::dvec3 p(corner(local_box, c));
+    const glm::dvec3 w = glm::dvec3(glm::vec3(model[3])) + glm::dvec3(glm::vec3(model[0])) * p.x +
+                         glm::dvec3(glm::vec3(model[1])) * p.y + glm::dvec3(glm::vec3(model[2])) * p.z;
+    world[c] = glm::vec3(w);
+    if (!finite3(world[c])) return 0;
+    centre += glm::dvec3(world[c]);
+  }
+  centre /= 8.0;
+  const glm::dvec3 e(eye);
+  int count = 0;
+  for (int axis = 0; axis < 3 && count < 3; ++axis) {
+    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+    for (int side = 0; side < 2 && count < 3; ++side) {
+      const int base = side << axis;
+      const int ids[4] = {base, base | (1 << a1), base | (1 << a1) | (1 << a2), base | (1 << a2)};
+      const glm::dvec3 p0(world[ids[0]]), p1(world[ids[1]]), p3(world[ids[3]]), p2(world[ids[2]]);
+      glm::dvec3 normal = glm::cross(p1 - p0, p3 - p0);
+      if (glm::dot(normal, 0.25 * (p0 + p1 + p2 + p3) - centre) < 0.0) normal = -normal;
+      if (!(glm::dot(normal, e - p0) > 0.0)) continue;
+      for (int k = 0; k < 4; ++k) out[count][k] = world[ids[k]];
+      ++count;
+    }
+  }
+  return count;
 }
 
 }  // namespace cullkit::detail

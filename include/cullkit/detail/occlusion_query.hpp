@@ -18,13 +18,21 @@
 
 namespace cullkit::detail {
 
+/// Seam assumptions a query fragment can carry (see occlusion_seams.hpp); a fragment that has no
+/// room for another one treats further seams as ordinary planes (safe, less precise).
+inline constexpr std::uint32_t max_seam_assumptions = 8;
+
 /// A convex query fragment (eye-relative vertices) and the tree slot it is about to enter.
-/// Deliberately trivial: uninitialized until `size` and the vertices are written.
+/// Deliberately trivial: uninitialized until `size`, `assumed_count` and the vertices are written.
 template <std::size_t Capacity>
 struct QueryFragment {
   glm::vec3 v[Capacity];
   std::uint32_t size;
   std::uint32_t ref;  ///< node index or leaf code the fragment enters next
+  /// The seams this fragment only stands for one side of: `2 * id + 1` for the positive side of
+  /// seam `id`'s canonical plane, `2 * id` for the negative side.
+  std::uint32_t assumed[max_seam_assumptions];
+  std::uint32_t assumed_count;
 };
 
 /// False for NaN and for infinities (a distance that overflowed: coordinates near the float range).
@@ -103,12 +111,20 @@ template <std::size_t Capacity>
   return FragmentSide::split;
 }
 
-/// Copies the used vertices, the size and the slot of a fragment.
+/// Copies the seam assumptions of a fragment.
+template <std::size_t Capacity>
+inline void copy_assumptions(const QueryFragment<Capacity>& from, QueryFragment<Capacity>& to) noexcept {
+  to.assumed_count = from.assumed_count;
+  for (std::uint32_t i = 0; i < from.assumed_count; ++i) to.assumed[i] = from.assumed[i];
+}
+
+/// Copies the used vertices, the size, the slot and the seam assumptions of a fragment.
 template <std::size_t Capacity>
 inline void copy_fragment(const QueryFragment<Capacity>& from, QueryFragment<Capacity>& to) noexcept {
   to.size = from.size;
   to.ref = from.ref;
   for (std::uint32_t i = 0; i < from.size; ++i) to.v[i] = from.v[i];
+  copy_assumptions(from, to);
 }
 
 /// The box faces the eye sees (at most 3; 0 when the eye is inside or on the box), each as its four
@@ -144,6 +160,7 @@ template <std::size_t Capacity>
     QueryFragment<Capacity>& f = faces[i];
     for (int k = 0; k < 4; ++k) f.v[k] = corner(box, cycles[i][k]) - eye;
     f.size = 4;
+    f.assumed_count = 0;
   }
   return nfaces;
 }
