@@ -66,14 +66,9 @@
 #include <cstring>
 #include <limits>
 #include <memory>
-#include <thread>
 #include <type_traits>
 #include <vector>
 
-#if defined(__SSE2__) || defined(_M_X64)
-#include <emmintrin.h>
-#define CULLKIT_NCI_SSE2 1
-#endif
 
 #include <glm/geometric.hpp>
 #include <glm/mat4x4.hpp>
@@ -81,9 +76,14 @@
 #include <glm/vec4.hpp>
 
 #include "config.hpp"
+#if CULLKIT_HAS_SSE2
+#include <emmintrin.h>
+#endif
 #include "geometry/aabb.hpp"
 #include "geometry/camera.hpp"
+#include "task_runner.hpp"
 #include "traits.hpp"
+#include "detail/worker_pool.hpp"
 #include "detail/nci_kmeans.hpp"
 #include "detail/nci_overlap.hpp"
 #include "detail/nci_watertight.hpp"
@@ -104,10 +104,17 @@ struct NciParams {
   /// outside at 640x480 is the one loss above 3 %), with 1-37 % less memory and the same precision
   /// within 0.06 (README, NormalClassIndex, round 7).
   int grid = 32;
-  /// Worker threads for select_visible; 0: all hardware threads. Never changes the result.
+  /// Worker threads for select_visible; 0: all hardware threads. Never changes the result. The
+  /// threads come from the library's persistent pool (started on first use, never per call) or,
+  /// with `task_runner`, from the caller's job system; 1 runs on the calling thread only.
   unsigned threads = 0;
   /// Worker threads for the build (per class); 0: all hardware threads. Never changes the index.
   unsigned build_threads = 0;
+  /// Where select_visible's parallel work runs: `threads` tasks (0: as many as hardware threads,
+  /// at most one per screen tile) handed to `task_runner.dispatch` when it is set, else to the
+  /// library's pool. Each task owns one worker's scratch in the NciContext and pulls screen tiles
+  /// from a shared counter, so the answer is the same however the tasks are run.
+  TaskRunner task_runner{};
   /// Screen tile edge in pixels, clamped to [2, 64]; 0 (the default): 64 for screens of at least
   /// 640x480 pixels, 32 below. Each tile walks the slices on its own and pays the per-triangle work
   /// (cell entry visits, screen-rectangle tests) once, so bigger tiles amortize it over more pixels;
@@ -544,8 +551,7 @@ class NormalClassIndex {
       context.stats.axis = frame.axis;
       const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
       const std::size_t tile_count = static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y);
-      unsigned thread_count = params_.threads ? params_.threads : std::thread::hardware_concurrency();
-      thread_count = std::max(1u, std::min<unsigned>(thread_count, static_cast<unsigned>(std::min<std::size_t>(tile_count, 1024))));
+      const unsigned thread_count = detail::resolve_threads(params_.threads, std::min<std::size_t>(tile_count, 1024));
       if (context.threads_.size() < thread_count) context.threads_.resize(thread_count);
       for (unsigned i = 0; i < thread_count; ++i) {
         auto& th = context.threads_[i];
@@ -593,15 +599,9 @@ class NormalClassIndex {
           context.tile_tested[t] = th.tested_count - before;
         }
       };
-      if (thread_count == 1) {
-        work(0);
-      } else {
-        std::vector<std::thread> workers;
-        workers.reserve(thread_count - 1);
-        for (unsigned i = 1; i < thread_count; ++i) workers.emplace_back(work, i);
-        work(0);
-        for (auto& w : workers) w.join();
-      }
+      using Work = decltype(work);
+      detail::run_tasks(params_.task_runner, thread_count,
+                        [](void* job, std::size_t task) { (*static_cast<Work*>(job))(static_cast<unsigned>(task)); }, &work);
       // Merge: distinct tested triangles (the union of the workers' bit sets) and the visible set
       // (pixel winners and edge-band extras), sorted by mesh id through a bit set over the mesh.
       for (unsigned i = 0; i < thread_count; ++i) {
@@ -612,6 +612,22 @@ class NormalClassIndex {
         context.stats.triangles_met += th.stats.triangles_met;
         context.stats.triangles_no_pixel += th.stats.triangles_no_pixel;
         for (const auto& e : th.extra) context.extras_.push_back(NciContext::Extra{original(e.tri), e.t, e.pixel});
+      }
+      {
+        // Every worker's lists grow to what any worker needed (the extras to this call's total), so
+        // a later frame that spreads the same tiles over the workers differently does not allocate.
+        std::size_t cand = 0, unsure = 0;
+        for (unsigned i = 0; i < thread_count; ++i) {
+          cand = std::max(cand, context.threads_[i].cand.capacity());
+          unsure = std::max(unsure, context.threads_[i].unsure.capacity());
+        }
+        for (unsigned i = 0; i < thread_count; ++i) {
+          auto& th = context.threads_[i];
+          th.cand.reserve(cand);
+          th.unsure.reserve(unsure);
+          th.extra.reserve(context.extras_.size());
+          th.active_classes.reserve(class_axis_.size());
+        }
       }
       auto& mesh_bits = context.shown_mesh_;
       mesh_bits.assign((stats_.triangles_input + 63) / 64, 0u);
@@ -828,8 +844,8 @@ class NormalClassIndex {
     }
     std::vector<ClassGrids> parts(classes);
     std::atomic<std::size_t> next{0}, done{0};
-    unsigned build_threads = params_.build_threads ? params_.build_threads : std::thread::hardware_concurrency();
-    build_threads = std::max(1u, std::min<unsigned>(build_threads, static_cast<unsigned>(std::min<std::size_t>(classes, 64))));
+    const unsigned build_threads = detail::resolve_threads(params_.build_threads, std::min<std::size_t>(classes, 64));
+    // Task 0 runs on the building thread (WorkerPool::run): the one that reports progress.
     auto work = [&](bool reporter) {
       for (;;) {
         const std::size_t c = next.fetch_add(1, std::memory_order_relaxed);
@@ -839,14 +855,9 @@ class NormalClassIndex {
         if (reporter) report(0.2f + 0.7f * static_cast<float>(d) / static_cast<float>(classes));
       }
     };
-    if (build_threads == 1) {
-      work(true);
-    } else {
-      std::vector<std::thread> workers;
-      for (unsigned i = 1; i < build_threads; ++i) workers.emplace_back(work, false);
-      work(true);
-      for (auto& w : workers) w.join();
-    }
+    using Work = decltype(work);
+    detail::WorkerPool::shared().run(build_threads, [](void* job, std::size_t task) { (*static_cast<Work*>(job))(task == 0); },
+                                     &work);
 
     // 4b. Internal numbering (memory locality of the select walk): class by class, each class's
     // triangles in the order their first cell comes in its X grid, so a cell's triangles are
@@ -1427,7 +1438,7 @@ class NormalClassIndex {
     for (int y = 0; y < th; ++y) {
       Mask bits = live[y];
       if (!bits) continue;
-#ifdef CULLKIT_NCI_SSE2
+#if CULLKIT_HAS_SSE2
       // Pre-test, 4 rays at a time in float: a ray with n.d > 5e-7 |d|_1 in float for all four
       // planes has exact n.d > 0 (the float dot product is within 3 2^-24 |d|_1 of it, |n| <= 1),
       // so its double value below is not negative and cannot raise `worst`: only the other rays
@@ -1739,7 +1750,7 @@ class NormalClassIndex {
       off[k] = -nx[k] * px[k] - ny[k] * py[k] + slack;
       if (!std::isfinite(off[k])) return false;
     }
-#ifdef CULLKIT_NCI_SSE2
+#if CULLKIT_HAS_SSE2
     // Two pixel centres at a time, the same double expressions (so the same mask) as below.
     const __m128d nx0 = _mm_set1_pd(nx[0]), nx1 = _mm_set1_pd(nx[1]), nx2 = _mm_set1_pd(nx[2]);
     const __m128d of0 = _mm_set1_pd(off[0]), of1 = _mm_set1_pd(off[1]), of2 = _mm_set1_pd(off[2]);
