@@ -1,4 +1,4 @@
-// cullkit/detail/nci_watertight.hpp: the watertight ray/triangle test the NormalClassIndex uses at
+// cullkit/detail/nci/watertight.hpp: the watertight ray/triangle test the NormalClassIndex uses at
 // pixel centres (after Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection", JCGT 2013).
 // Rays sharing an origin (the eye) share the per-triangle work; a ray precomputes its shear once.
 #pragma once

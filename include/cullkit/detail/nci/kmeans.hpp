@@ -1,4 +1,4 @@
-// cullkit/detail/nci_kmeans.hpp: spherical k-means for the NormalClassIndex's normal classes.
+// cullkit/detail/nci/kmeans.hpp: spherical k-means for the NormalClassIndex's normal classes.
 // Deterministic (seeded splitmix64, no clock), linear in the number of normals: centres are fitted
 // on a seeded sample, and every normal is assigned through a cube-map table of nearest centres.
 #pragma once
@@ -11,7 +11,7 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
-#include "splitmix64.hpp"
+#include "../splitmix64.hpp"
 
 namespace cullkit::detail {
 

@@ -1,0 +1,526 @@
+// cullkit/detail/nci/slice_walk.hpp: one screen tile of select_visible: its rays set up, the grid walked slice by slice outward from the eye, the admitted triangles ray-tested nearest first, rays finished as their hits come before the next slice.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+#include "beam.hpp"
+#include "context.hpp"
+#include "index_data.hpp"
+#include "rejection.hpp"
+#include "view.hpp"
+
+namespace cullkit::detail::nci {
+
+// Tests an admitted triangle against the unfinished rays under its rectangle; false when no ray
+// was tested (all of them already hold nearer hits, or the triangle passes beside them).
+inline bool test_triangle(const IndexData& data, const Frame& f, int x0, int y0, const Candidate& cand, const Mask* live,
+                   TileRays& r, Worker& thread) {
+  const int stride = r.stride;  // the tile's row pitch (kept in a register)
+  const std::uint32_t tri = cand.tri;
+  const int rx0 = cand.rx0, ry0 = cand.ry0, rx1 = cand.rx1, ry1 = cand.ry1;
+  const Mask span = TileRays::columns(rx0, rx1);
+  const glm::vec3& p0 = data.corner(tri, 0);
+  const glm::vec3& p1 = data.corner(tri, 1);
+  const glm::vec3& p2 = data.corner(tri, 2);
+  const float a[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};
+  const float b[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
+  const float c[3] = {p2.x - f.eye_f.x, p2.y - f.eye_f.y, p2.z - f.eye_f.z};
+  const float mag[3] = {std::max({std::fabs(a[0]), std::fabs(a[1]), std::fabs(a[2])}),
+                        std::max({std::fabs(b[0]), std::fabs(b[1]), std::fabs(b[2])}),
+                        std::max({std::fabs(c[0]), std::fabs(c[1]), std::fabs(c[2])})};
+  const float qlo[3] = {std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}), std::min({a[2], b[2], c[2]})};
+  const float qhi[3] = {std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}), std::max({a[2], b[2], c[2]})};
+  if (behind_hits(r, qlo, qhi, ry0, ry1, span, live)) return false;
+  if (f.use_rect && f.affine_rays && (rx1 > rx0 || ry1 > ry0) && beside_rect(r, a, b, c, rx0, ry0, rx1, ry1)) return false;
+  // Only the live rays whose pixel centres lie in the triangle's grown 2D footprint can hit it.
+  Mask rows[TileRays::max_tile];
+  for (int y = ry0; y <= ry1; ++y) rows[y] = live[y] & span;
+  if (f.footprint) {
+    Mask inside[TileRays::max_tile];
+    if (footprint_mask(f, p0, p1, p2, x0, y0, ry0, ry1, rows, inside, f.tile - 1)) {
+      Mask left = 0;
+      for (int y = ry0; y <= ry1; ++y) left |= (rows[y] &= inside[y]);
+      if (!left) return false;  // no live pixel centre can see it: not tested
+    }
+  }
+  bool any = false;
+  for (int y = ry0; y <= ry1; ++y) {
+    Mask bits = rows[y];
+    while (bits) {
+      const int x = TileRays::low_bit(bits);
+      bits &= bits - 1;
+      const int i = y * stride + x;
+      // The depth reject of behind_hits for this ray alone (its own scale sz on its own dominant
+      // axis, the same bound and margin): a ray that already holds a solid hit strictly nearer
+      // than any t the test could return is not tested. Skipping it changes no answer.
+      if (r.solid_t[i] < std::numeric_limits<float>::infinity()) {
+        const detail::WatertightRay<float>& w = r.wray[i];
+        const double sz = w.sz;
+        double bound = std::min(sz * double(qlo[w.kz]), sz * double(qhi[w.kz])) * (1.0 - 1e-6);
+        if (bound > 1e-30 && std::isfinite(bound) && double(r.solid_t[i]) < bound) continue;
+      }
+      ++thread.stats.ray_tests;
+      any = true;
+      float t = 0.0f;
+      bool near = false;
+      const bool hit = detail::watertight_hit_band(r.wray[i], a, b, c, mag, data.band, t, near);
+      // Ties go to the lower mesh index (the internal numbering is not the mesh's).
+      if (hit && (t < r.best_t[i] ||
+                  (t == r.best_t[i] && (r.best[i] == no_triangle || data.tri_original[tri] < data.tri_original[r.best[i]])))) {
+        r.best_t[i] = t;
+        r.best[i] = tri;
+      }
+      if (near) {
+        if (t <= r.solid_t[i]) thread.unsure.push_back(EdgeBandHit{tri, t, static_cast<std::uint16_t>(i)});
+      } else if (hit && (t < r.solid_t[i] || (t == r.solid_t[i] && (r.solid[i] == no_triangle ||
+                                                                    data.tri_original[tri] < data.tri_original[r.solid[i]])))) {
+        if (t < r.solid_t[i]) {
+          r.dirty[i] = true;
+          r.any_dirty = true;
+        }
+        r.solid_t[i] = t;
+        r.solid[i] = tri;
+      }
+    }
+  }
+  return any;
+}
+
+// The first slice (in walk order, from `from`) after which ray i may stop: its nearest solid
+// hit (or the box exit: nothing lies beyond) comes before where it enters the next slice, with
+// margins that only keep it longer (the predicate `done` below; the last slice of a walk always
+// qualifies). Rays exactly parallel to the slices never reach another slice. The predicate is
+// monotone along the walk; an estimate from the stop coordinate is corrected by the predicate
+// itself, so the answer is exactly the first slice where it holds. The predicate's per-ray parts
+// (stop coordinate and margin) are computed once, not per evaluation.
+[[nodiscard]] inline int finish_slice(const IndexData& data, const TileRays& r, int i, int walk, int from, double ea, int na) noexcept {
+  const int end = walk == 0 ? na - 1 : 0;
+  if (r.dir_a[i] == 0.0f) return from;
+  const float t_stop = std::min(r.solid_t[i], r.t_exit[i]);
+  const double reach = double(t_stop) * (1.0 + 1e-5) * double(r.dir_a[i]);
+  const double pos = ea + reach;
+  const double margin = 0.25 * data.delta - 1e-6 * std::fabs(reach);
+  const auto done = [&](int k) {
+    if (walk == 0 ? k + 1 >= na : k <= 0) return true;
+    const double next_plane = walk == 0 ? r.lo_a + (k + 1) * data.h : r.lo_a + k * data.h;
+    return walk == 0 ? pos < next_plane + margin : pos > next_plane - margin;
+  };
+  int s = from;
+  const double x = ea + double(t_stop) * double(r.dir_a[i]);
+  if (std::isfinite(x)) {
+    // Any start gives the same answer (the loops below correct it); starting at the slice
+    // holding the stop point usually needs two evaluations of the predicate.
+    const double cell = std::clamp((x - r.lo_a) * r.inv_h, -2.0, double(na) + 2.0);
+    // The slice holding the stop point: floor (cell is clamped, so an int holds it; no libm
+    // call without SSE4.1).
+    int cut = static_cast<int>(cell);
+    if (double(cut) > cell) --cut;
+    const double est = cut;
+    if (walk == 0 && est > from) s = static_cast<int>(std::min(est, double(end)));
+    if (walk == 1 && est < from) s = static_cast<int>(std::max(est, double(end)));
+  } else {
+    s = end;
+  }
+  const int step = walk == 0 ? 1 : -1;
+  // Back up while the previous slice already qualifies, then move on until this one does.
+  while (s != from && done(s - step)) s -= step;
+  while (s != end && !done(s)) s += step;
+  return s;
+}
+
+inline void write_tile(const Frame& f, const TileRays& r, int x0, int y0, int tw, int th, Scratch& scratch,
+                       Worker& thread) {
+  const int stride = r.stride;  // the tile's row pitch (kept in a register)
+  const std::size_t width = static_cast<std::size_t>(f.width);
+  for (int y = 0; y < th; ++y) {
+    for (int x = 0; x < tw; ++x) {
+      const std::size_t p = static_cast<std::size_t>(y0 + y) * width + static_cast<std::size_t>(x0 + x);
+      scratch.pixel_tri[p] = r.best[y * stride + x];
+      scratch.pixel_t[p] = r.best_t[y * stride + x];
+      scratch.pixel_solid_t[p] = r.solid_t[y * stride + x];
+      const std::uint32_t tri = r.best[y * stride + x];
+      if (tri != no_triangle) thread.shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
+    }
+  }
+}
+
+// `r` is the caller's scratch (any contents): every field read below is set here first.
+inline void process_tile(const IndexData& data, const Frame& f, int x0, int y0, int x1, int y1, TileRays& r, Worker& thread,
+                  Scratch& scratch) {
+  const int tw = x1 - x0, th = y1 - y0;
+  const int stride = r.stride = (tw + 3) & ~3;
+  {
+    // A tile beside the scene box's screen rectangle: every pixel keeps its initial depth (no
+    // triangle's rectangle reaches it, so no ray of it would be tested).
+    const Rect& b = f.box_rect;
+    if (b.x0 > b.x1 || (b.x0 != Rect::full && (b.x1 < x0 || b.x0 > x1 - 1 || b.y1 < y0 || b.y0 > y1 - 1))) {
+      // Written straight to the frame's buffers (no pixel state, no winner to mark).
+      for (int y = 0; y < th; ++y) {
+        const std::size_t row = static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(x0);
+        for (std::size_t p = row; p < row + static_cast<std::size_t>(tw); ++p) {
+          const float t = f.initial_depth ? f.initial_depth[p] : std::numeric_limits<float>::infinity();
+          scratch.pixel_tri[p] = no_triangle;
+          scratch.pixel_t[p] = t;
+          scratch.pixel_solid_t[p] = f.initial_solid ? f.initial_solid[p] : t;
+        }
+      }
+      return;
+    }
+  }
+  r.any_dirty = true;
+  r.beam = false;
+  r.beam_eps = 0.0f;
+  for (int k = 0; k < 4; ++k) r.beam_box[k] = -1;
+  for (int k = 0; k < 3; ++k) r.mean_dir[k] = 0.0f;
+  r.axis = f.axis;
+  r.lo_a = data.lo[f.axis];
+  r.inv_h = 1.0 / data.h;
+  const int a = f.axis, b = (a + 1) % 3, c = (a + 2) % 3;
+  Mask live[TileRays::max_tile] = {};  // unfinished rays, both walks
+  Mask walk_mask[2][TileRays::max_tile] = {};  // [0]: toward +axis (and flat), [1]: toward -axis
+  const glm::dvec3 blo = glm::dvec3(data.box.min) - data.delta, bhi = glm::dvec3(data.box.max) + data.delta;
+  // The same per component in plain arrays (the per-ray loop below indexes them by a variable;
+  // glm's component access is a switch), and the box relative to the eye.
+  const double eye3[3] = {f.eye.x, f.eye.y, f.eye.z};
+  const double blo3[3] = {blo.x, blo.y, blo.z}, bhi3[3] = {bhi.x, bhi.y, bhi.z};
+  const double rlo3[3] = {blo3[0] - eye3[0], blo3[1] - eye3[1], blo3[2] - eye3[2]};
+  const double rhi3[3] = {bhi3[0] - eye3[0], bhi3[1] - eye3[1], bhi3[2] - eye3[2]};
+  glm::dvec3 cone_sum(0.0);
+  for (int k = 0; k < 3; ++k) {
+    r.sz_lo[k] = std::numeric_limits<float>::infinity();
+    r.sz_hi[k] = -std::numeric_limits<float>::infinity();
+  }
+  for (int y = 0; y < th; ++y) {
+    for (int x = tw, x_end = (tw + 3) & ~3; x < x_end; ++x) r.dx[y * stride + x] = r.dy[y * stride + x] = r.dz[y * stride + x] = 0.0f;
+    const std::size_t row = static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(x0);
+    const float* initial_depth = f.initial_depth ? f.initial_depth + row : nullptr;
+    const float* initial_solid = f.initial_solid ? f.initial_solid + row : nullptr;
+    f.rays.directions(x0, y0 + y, tw, &r.dx[y * stride], &r.dy[y * stride], &r.dz[y * stride]);
+    for (int x = 0; x < tw; ++x) {
+      const int i = y * stride + x;
+      const glm::vec3 direction(r.dx[i], r.dy[i], r.dz[i]);
+      const double d3[3] = {direction.x, direction.y, direction.z};
+      r.dir_a[i] = static_cast<float>(d3[a]);
+      r.best_t[i] = initial_depth ? initial_depth[x] : std::numeric_limits<float>::infinity();
+      r.best[i] = no_triangle;
+      r.solid_t[i] = initial_solid ? initial_solid[x] : r.best_t[i];
+      r.solid[i] = no_triangle;
+      r.dirty[i] = true;
+      // WatertightRay::make's validity (finite, not zero) without its shear: a ray that misses
+      // the scene box is never tested, only its validity is read (make_beam's corners).
+      // (the 1-norm in double cannot overflow; it is NaN or infinite iff a component is).
+      const double norm1 = std::fabs(d3[0]) + std::fabs(d3[1]) + std::fabs(d3[2]);
+      r.wray[i].valid = norm1 > 0.0 && norm1 < std::numeric_limits<double>::infinity();
+      if (!r.wray[i].valid) continue;
+      // Does the ray reach the (inflated) scene box at all? Entry and exit per axis (the face
+      // by the direction's sign: rlo <= rhi, so that is the smaller and the larger of the two
+      // products), each widened by a relative 1e-9. The widening x -> x -/+ 1e-9 |x| is
+      // monotone (also after rounding), so it is applied once to the largest entry and the
+      // smallest exit: the same values as widening every axis's, in fewer instructions.
+      double enter = 0.0, leave = std::numeric_limits<double>::infinity();
+      double inv3[3] = {0.0, 0.0, 0.0};
+      bool hit = true;
+      if (d3[0] != 0.0 && d3[1] != 0.0 && d3[2] != 0.0) {
+        for (int k = 0; k < 3; ++k) {  // branch-free: min / max instructions
+          const double inv = inv3[k] = 1.0 / d3[k];
+          const double t0 = rlo3[k] * inv, t1 = rhi3[k] * inv;
+          enter = std::max(enter, std::min(t0, t1));
+          leave = std::min(leave, std::max(t0, t1));
+        }
+      } else {
+        for (int k = 0; k < 3; ++k) {
+          if (d3[k] == 0.0) {
+            hit = hit && !(eye3[k] < blo3[k] || eye3[k] > bhi3[k]);
+            continue;
+          }
+          const double inv = inv3[k] = 1.0 / d3[k];
+          const double t0 = rlo3[k] * inv, t1 = rhi3[k] * inv;
+          enter = std::max(enter, std::min(t0, t1));
+          leave = std::min(leave, std::max(t0, t1));
+        }
+      }
+      const double tmin = enter - 1e-9 * std::fabs(enter), tmax = leave + 1e-9 * std::fabs(leave);
+      if (!hit || tmin > tmax) continue;
+      r.wray[i] = detail::WatertightRay<float>::make(direction);
+      r.t_exit[i] = static_cast<float>(tmax * (1.0 + 1e-6)) * (1.0f + 1e-6f);
+      const double da = d3[a];
+      r.flat[i] = std::fabs(da) < 1e-6;
+      // Slopes by the reciprocal the box test took (inv3[a] is 1 / da when not flat): within a
+      // double rounding of the quotient, far inside the float rounding the beam allows for.
+      r.slope_b[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[b] * inv3[a]);
+      r.slope_c[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[c] * inv3[a]);
+      live[y] |= TileRays::bit(x);
+      const detail::WatertightRay<float>& w = r.wray[i];
+      r.sz_lo[w.kz] = std::min(r.sz_lo[w.kz], w.sz);
+      r.sz_hi[w.kz] = std::max(r.sz_hi[w.kz], w.sz);
+      walk_mask[da >= 0.0 ? 0 : 1][y] |= TileRays::bit(x);
+      cone_sum += glm::dvec3(d3[0], d3[1], d3[2]);
+    }
+  }
+  bool any = false;
+  for (int y = 0; y < th; ++y) any = any || live[y] != 0;
+  if (!any) {
+    write_tile(f, r, x0, y0, tw, th, scratch, thread);
+    return;
+  }
+
+  make_beam(r, tw, th, live);
+
+  // Classes that may face some ray of the tile: skip a class only when every normal of its cone
+  // and every live ray direction make an angle below 90 degrees (a back face for all of them).
+  auto& active = thread.active_classes;
+  active.clear();
+  {
+    const double len = glm::length(cone_sum);
+    double cos_psi = -1.0;
+    glm::dvec3 axis(0.0);
+    if (len > 1e-12) {
+      axis = cone_sum / len;
+      for (int j = 0; j < 3; ++j) r.mean_dir[j] = static_cast<float>(axis[j]);
+      cos_psi = 1.0;
+      for (int y = 0; y < th; ++y)
+        for (int x = 0; x < tw; ++x)
+          if (live[y] & (TileRays::bit(x))) cos_psi = std::min(cos_psi, glm::dot(axis, r.direction(y * stride + x)));
+    }
+    const double psi = std::acos(std::clamp(cos_psi, -1.0, 1.0)) + 2e-3;
+    const bool can_skip = psi < 1.5707963267948966;
+    const double sp = std::sin(psi), cp = std::cos(psi);
+    for (std::size_t k = 0; k < data.class_axis.size(); ++k) {
+      bool skip = false;
+      if (can_skip && data.class_sin[k] <= 1.0f) {
+        // angle(axis_k, tile axis) < 90 - theta - psi  <=>  dot > sin(theta + psi), if theta + psi < 90.
+        const double st = data.class_sin[k], ct = data.class_cos[k];
+        const double cos_sum = ct * cp - st * sp;  // cos(theta + psi)
+        if (cos_sum > 0.0) {
+          const double sin_sum = st * cp + ct * sp;
+          skip = glm::dot(glm::dvec3(data.class_axis[k]), axis) > sin_sum + 1e-6;
+        }
+      }
+      if (!skip) active.push_back(static_cast<std::uint16_t>(k));
+    }
+  }
+
+  if (++thread.stamp_value == 0) {
+    for (auto& t : thread.tri) t.stamp = 0u;
+    thread.stamp_value = 1;
+  }
+  const std::uint32_t stamp = thread.stamp_value;
+  const double ea = f.eye[a], eb = f.eye[b], ec = f.eye[c];
+  const int na = data.dims[a], nb = data.dims[b], nc = data.dims[c];
+
+  std::size_t met = 0;  // NciSelectStats::triangles_met of this tile (a local: the visit loop is hot)
+  for (int walk = 0; walk < 2; ++walk) {
+    Mask* mask = walk_mask[walk];
+    const int step = walk == 0 ? 1 : -1;
+    const int start = data.cell_of(ea, a);
+    // The beam's slopes change only when rays finish; the finish test runs only when a ray's
+    // hit improved or the walk reaches the earliest finishing slice (`next_finish`).
+    r.any_dirty = true;
+    int next_finish = start;
+    bool slopes_stale = true, full = false;
+    float smin_b = 0.0f, smax_b = 0.0f, smin_c = 0.0f, smax_c = 0.0f;
+    for (int s = start; s >= 0 && s < na; s += step) {
+      Mask unfinished = 0;  // any ray of this walk still live
+      for (int y = 0; y < th; ++y) unfinished |= mask[y];
+      if (!unfinished) break;
+      ++thread.stats.slices_walked;
+      // The part of the slab this walk's rays cross, inflated like the cells.
+      double s0 = data.lo[a] + s * data.h - data.delta, s1 = data.lo[a] + (s + 1) * data.h + data.delta;
+      if (walk == 0) s0 = std::max(s0, ea);
+      else s1 = std::min(s1, ea);
+      if (s0 <= s1) {
+        // Beam of the walk's unfinished rays across [s0, s1].
+        double bmin = std::numeric_limits<double>::infinity(), bmax = -bmin, cmin = bmin, cmax = -bmin;
+        if (slopes_stale) {
+          slopes_stale = false;
+          full = false;
+          smin_b = std::numeric_limits<float>::infinity();
+          smax_b = -smin_b;
+          smin_c = smin_b;
+          smax_c = -smin_b;
+          for (int y = 0; y < th; ++y) {
+            Mask bits = mask[y];
+            while (bits) {
+              const int x = TileRays::low_bit(bits);
+              bits &= bits - 1;
+              const int i = y * stride + x;
+              if (r.flat[i]) full = true;
+              smin_b = std::min(smin_b, r.slope_b[i]);
+              smax_b = std::max(smax_b, r.slope_b[i]);
+              smin_c = std::min(smin_c, r.slope_c[i]);
+              smax_c = std::max(smax_c, r.slope_c[i]);
+            }
+          }
+        }
+        int rlo = 0, rhi = nb - 1, clo = 0, chi = nc - 1;
+        if (!full) {
+          const double ends[2] = {s0 - ea, s1 - ea};
+          for (double e : ends) {
+            bmin = std::min({bmin, eb + e * double(smin_b), eb + e * double(smax_b)});
+            bmax = std::max({bmax, eb + e * double(smin_b), eb + e * double(smax_b)});
+            cmin = std::min({cmin, ec + e * double(smin_c), ec + e * double(smax_c)});
+            cmax = std::max({cmax, ec + e * double(smin_c), ec + e * double(smax_c)});
+          }
+          // Slopes were rounded to float: widen by their relative error over the slab's reach.
+          const double reach = std::max(std::fabs(ends[0]), std::fabs(ends[1]));
+          const double wb = data.delta + 1e-6 * reach * (1.0 + std::max(std::fabs(double(smin_b)), std::fabs(double(smax_b))));
+          const double wc = data.delta + 1e-6 * reach * (1.0 + std::max(std::fabs(double(smin_c)), std::fabs(double(smax_c))));
+          bmin -= wb;
+          bmax += wb;
+          cmin -= wc;
+          cmax += wc;
+          if (bmax < data.lo[b] || cmax < data.lo[c] || bmin > data.lo[b] + nb * data.h || cmin > data.lo[c] + nc * data.h) {
+            rlo = 1;
+            rhi = 0;  // beam outside the box in this slice
+          } else {
+            rlo = data.cell_of(bmin, b);
+            rhi = data.cell_of(bmax, b);
+            clo = data.cell_of(cmin, c);
+            chi = data.cell_of(cmax, c);
+          }
+        }
+        if (rlo <= rhi && clo <= chi) {
+          for (std::uint16_t k : active) {
+            const std::size_t base = data.grid_base[static_cast<std::size_t>(k) * 3 + static_cast<std::size_t>(a)];
+            const std::uint32_t shift = data.grid_shift[static_cast<std::size_t>(k) * 3 + static_cast<std::size_t>(a)];
+            const std::uint32_t class_base = data.class_cell_base[k];
+            const std::uint32_t row_first = data.slice_rows[base + static_cast<std::size_t>(s)];
+            const std::uint32_t row_last = data.slice_rows[base + static_cast<std::size_t>(s) + 1];
+            // Rows are sorted: a class whose rows in this slice all lie outside [rlo, rhi] is
+            // passed over without a search.
+            if (row_first == row_last || data.row_coord[row_first] > rhi || data.row_coord[row_last - 1] < rlo) continue;
+            auto row_it = data.row_coord[row_first] >= rlo
+                              ? data.row_coord.begin() + row_first
+                              : std::lower_bound(data.row_coord.begin() + row_first, data.row_coord.begin() + row_last,
+                                                 static_cast<std::uint16_t>(rlo));
+            for (; row_it != data.row_coord.begin() + row_last && *row_it <= rhi; ++row_it) {
+              const std::size_t row = static_cast<std::size_t>(row_it - data.row_coord.begin());
+              const std::uint32_t cf = data.row_begin[row], cl = data.row_begin[row + 1];
+              if (data.cell_col[cf] > chi || data.cell_col[cl - 1] < clo) continue;  // sorted columns, none in range
+              auto cell_it = data.cell_col[cf] >= clo ? data.cell_col.begin() + cf
+                                                  : std::lower_bound(data.cell_col.begin() + cf, data.cell_col.begin() + cl,
+                                                                     static_cast<std::uint16_t>(clo));
+              for (; cell_it != data.cell_col.begin() + cl && *cell_it <= chi; ++cell_it) {
+                const std::uint32_t pos = static_cast<std::uint32_t>(cell_it - data.cell_col.begin());
+                const std::uint32_t cell = a == 0     ? pos - shift
+                                           : data.wide_ids ? data.cell_id[pos - shift]
+                                                       : class_base + data.cell_id16[pos - shift];
+                ++thread.stats.cells_visited;
+                std::uint32_t e, e_end;
+                if (data.cell_begin16.empty()) {
+                  e = data.cell_tri_begin[cell];
+                  e_end = data.cell_tri_begin[cell + 1];
+                } else {
+                  e = data.class_entry_base[k] + data.cell_begin16[cell + k];
+                  e_end = data.class_entry_base[k] + data.cell_begin16[cell + k + 1];
+                }
+                auto visit = [&](std::uint32_t tri) {
+                  if (thread.tri[tri].stamp == stamp) return;
+                  thread.tri[tri].stamp = stamp;
+                  ++met;
+                  Candidate cand;
+                  if (admit_triangle(data, f, tri, x0, y0, tw, th, live, r, thread, cand)) thread.cand.push_back(cand);
+                };
+                const std::uint32_t tri_base = data.class_tri_begin[k];
+                while (e < e_end) {
+                  std::uint32_t part_end = e_end;
+                  if (!data.chunk_box.empty() && r.beam) {
+                    const std::uint32_t j = e / static_cast<std::uint32_t>(data.chunk);
+                    part_end = std::min(e_end, (j + 1) * static_cast<std::uint32_t>(data.chunk));
+                    if (chunk_outside_beam(r, &data.chunk_box[6 * std::size_t{j}], f) ||
+                        chunk_hidden(data, f, j, x0, y0, tw, th, live, r, thread)) {
+                      e = part_end;
+                      continue;
+                    }
+                  }
+                  if (data.wide_tris) {
+                    for (; e < part_end; ++e) visit(data.cell_tris[e]);
+                  } else {
+                    for (; e < part_end; ++e) visit(tri_base + data.cell_tris16[e]);
+                  }
+                }
+              }
+            }
+          }
+          // Nearest first, so hits found early let behind_hits drop the triangles behind them.
+          if (!thread.cand.empty()) {
+            std::sort(thread.cand.begin(), thread.cand.end(), [](const auto& p, const auto& q) {
+              return p.key != q.key ? p.key < q.key : p.tri < q.tri;
+            });
+            for (const auto& cand : thread.cand)
+              if (test_triangle(data, f, x0, y0, cand, live, r, thread)) {
+                ++thread.tested_count;
+                thread.tested_bits[cand.tri / 64] |= std::uint64_t{1} << (cand.tri % 64);
+              }
+            thread.cand.clear();
+          }
+        }
+      }
+      // Finish the rays whose nearest hit lies before the next slice (with margins that only
+      // keep rays unfinished longer). Nothing to do while no hit improved and no ray's finishing
+      // slice is reached.
+      if (!r.any_dirty && (walk == 0 ? s < next_finish : s > next_finish)) continue;
+      r.any_dirty = false;
+      next_finish = walk == 0 ? na : -1;
+      for (int y = 0; y < th; ++y) {
+        Mask bits = mask[y];
+        while (bits) {
+          const int x = TileRays::low_bit(bits);
+          bits &= bits - 1;
+          const int i = y * stride + x;
+          if (r.dirty[i]) {
+            r.finish[i] = finish_slice(data, r, i, walk, s, ea, na);
+            r.dirty[i] = false;
+          }
+          const bool done = walk == 0 ? s >= r.finish[i] : s <= r.finish[i];
+          if (done) {
+            mask[y] &= ~TileRays::bit(x);
+            live[y] &= ~TileRays::bit(x);
+            slopes_stale = true;
+          } else {
+            next_finish = walk == 0 ? std::min(next_finish, r.finish[i]) : std::max(next_finish, r.finish[i]);
+          }
+        }
+      }
+      if (slopes_stale) narrow_beam(r, tw, th, live);
+    }
+    for (int y = 0; y < th; ++y) {  // a walk that ran out of slices finishes its rays
+      live[y] &= ~mask[y];
+      mask[y] = 0;
+    }
+  }
+  thread.stats.triangles_met += met;
+  // Beside each pixel's first hit: the triangles within rounding of an edge in front of its
+  // solid hit, and that solid hit itself.
+  const auto global = [&](int i) {
+    return static_cast<std::uint32_t>(y0 + i / stride) * static_cast<std::uint32_t>(f.width) +
+           static_cast<std::uint32_t>(x0 + i % stride);
+  };
+  const auto show = [&](std::uint32_t tri) { thread.shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64); };
+  for (const auto& u : thread.unsure) {
+    if (u.t <= r.solid_t[u.pixel] && u.tri != r.best[u.pixel]) {
+      thread.extra.push_back(Extra{u.tri, u.t, global(u.pixel)});
+      show(u.tri);
+    }
+  }
+  thread.unsure.clear();
+  for (int y = 0; y < th; ++y)
+    for (int x = 0; x < tw; ++x) {
+      const int i = y * stride + x;
+      if (r.solid[i] != no_triangle && r.solid[i] != r.best[i]) {
+        thread.extra.push_back(Extra{r.solid[i], r.solid_t[i], global(i)});
+        show(r.solid[i]);
+      }
+    }
+  write_tile(f, r, x0, y0, tw, th, scratch, thread);
+}
+
+}  // namespace cullkit::detail::nci
