@@ -11,10 +11,12 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
+#include "../../config.hpp"
 #include "beam.hpp"
 #include "context.hpp"
 #include "index_data.hpp"
 #include "rejection.hpp"
+#include "tolerances.hpp"
 #include "view.hpp"
 
 namespace cullkit::detail::nci {
@@ -152,29 +154,36 @@ inline void write_tile(const Frame& f, const TileRays& r, int x0, int y0, int tw
   }
 }
 
-// `r` is the caller's scratch (any contents): every field read below is set here first.
-inline void process_tile(const IndexData& data, const Frame& f, int x0, int y0, int x1, int y1, TileRays& r, Worker& thread,
-                  Scratch& scratch) {
+// The live rays of a tile as one bit mask per tile row, for both walks and for each.
+struct TileMasks {
+  Mask live[TileRays::max_tile] = {};     // unfinished rays, both walks
+  Mask walk[2][TileRays::max_tile] = {};  // [0]: toward +axis (and flat), [1]: toward -axis
+};
+
+// A tile whose pixels no triangle's rectangle can reach (beside the scene box's rectangle): every
+// pixel keeps its initial depth, written straight to the frame's buffers (no pixel state, no
+// winner to mark).
+[[nodiscard]] inline bool write_if_off_scene(const Frame& f, int x0, int y0, int x1, int y1, Scratch& scratch) {
   const int tw = x1 - x0, th = y1 - y0;
-  const int stride = r.stride = (tw + 3) & ~3;
-  {
-    // A tile beside the scene box's screen rectangle: every pixel keeps its initial depth (no
-    // triangle's rectangle reaches it, so no ray of it would be tested).
-    const Rect& b = f.box_rect;
-    if (b.x0 > b.x1 || (b.x0 != Rect::full && (b.x1 < x0 || b.x0 > x1 - 1 || b.y1 < y0 || b.y0 > y1 - 1))) {
-      // Written straight to the frame's buffers (no pixel state, no winner to mark).
-      for (int y = 0; y < th; ++y) {
-        const std::size_t row = static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(x0);
-        for (std::size_t p = row; p < row + static_cast<std::size_t>(tw); ++p) {
-          const float t = f.initial_depth ? f.initial_depth[p] : std::numeric_limits<float>::infinity();
-          scratch.pixel_tri[p] = no_triangle;
-          scratch.pixel_t[p] = t;
-          scratch.pixel_solid_t[p] = f.initial_solid ? f.initial_solid[p] : t;
-        }
-      }
-      return;
+  const Rect& b = f.box_rect;
+  if (!(b.x0 > b.x1 || (b.x0 != Rect::full && (b.x1 < x0 || b.x0 > x1 - 1 || b.y1 < y0 || b.y0 > y1 - 1)))) return false;
+  for (int y = 0; y < th; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y0 + y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(x0);
+    for (std::size_t p = row; p < row + static_cast<std::size_t>(tw); ++p) {
+      const float t = f.initial_depth ? f.initial_depth[p] : std::numeric_limits<float>::infinity();
+      scratch.pixel_tri[p] = no_triangle;
+      scratch.pixel_t[p] = t;
+      scratch.pixel_solid_t[p] = f.initial_solid ? f.initial_solid[p] : t;
     }
   }
+  return true;
+}
+
+// Sets up every ray of the tile (directions, initial depths, box entry and exit, slopes across
+// the walk axis, depth-bound scales) and marks the rays that reach the scene box live. Returns
+// the sum of the live rays' directions (the tile's mean ray, unnormalized).
+CULLKIT_FORCEINLINE glm::dvec3 setup_rays(const IndexData& data, const Frame& f, int x0, int y0, int tw, int th,
+                                          TileRays& r, TileMasks& m) {
   r.any_dirty = true;
   r.beam = false;
   r.beam_eps = 0.0f;
@@ -184,8 +193,7 @@ inline void process_tile(const IndexData& data, const Frame& f, int x0, int y0, 
   r.lo_a = data.lo[f.axis];
   r.inv_h = 1.0 / data.h;
   const int a = f.axis, b = (a + 1) % 3, c = (a + 2) % 3;
-  Mask live[TileRays::max_tile] = {};  // unfinished rays, both walks
-  Mask walk_mask[2][TileRays::max_tile] = {};  // [0]: toward +axis (and flat), [1]: toward -axis
+  const int stride = r.stride;
   const glm::dvec3 blo = glm::dvec3(data.box.min) - data.delta, bhi = glm::dvec3(data.box.max) + data.delta;
   // The same per component in plain arrays (the per-ray loop below indexes them by a variable;
   // glm's component access is a switch), and the box relative to the eye.
@@ -257,249 +265,306 @@ inline void process_tile(const IndexData& data, const Frame& f, int x0, int y0, 
       // double rounding of the quotient, far inside the float rounding the beam allows for.
       r.slope_b[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[b] * inv3[a]);
       r.slope_c[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[c] * inv3[a]);
-      live[y] |= TileRays::bit(x);
+      m.live[y] |= TileRays::bit(x);
       const detail::WatertightRay<float>& w = r.wray[i];
       r.sz_lo[w.kz] = std::min(r.sz_lo[w.kz], w.sz);
       r.sz_hi[w.kz] = std::max(r.sz_hi[w.kz], w.sz);
-      walk_mask[da >= 0.0 ? 0 : 1][y] |= TileRays::bit(x);
+      m.walk[da >= 0.0 ? 0 : 1][y] |= TileRays::bit(x);
       cone_sum += glm::dvec3(d3[0], d3[1], d3[2]);
     }
   }
-  bool any = false;
-  for (int y = 0; y < th; ++y) any = any || live[y] != 0;
-  if (!any) {
-    write_tile(f, r, x0, y0, tw, th, scratch, thread);
-    return;
-  }
+  return cone_sum;
+}
 
-  make_beam(r, tw, th, live);
-
-  // Classes that may face some ray of the tile: skip a class only when every normal of its cone
-  // and every live ray direction make an angle below 90 degrees (a back face for all of them).
-  auto& active = thread.active_classes;
+// Classes that may face some live ray of the tile into `active`: a class is skipped only when every
+// normal of its cone and every live ray direction make an angle below 90 degrees (a back face for
+// all of them). Also sets the tile's mean ray (the candidates' sort key).
+CULLKIT_FORCEINLINE void select_classes(const IndexData& data, TileRays& r, int tw, int th, const Mask* live,
+                                        const glm::dvec3& cone_sum, std::vector<std::uint16_t>& active) {
+  const int stride = r.stride;
   active.clear();
-  {
-    const double len = glm::length(cone_sum);
-    double cos_psi = -1.0;
-    glm::dvec3 axis(0.0);
-    if (len > 1e-12) {
-      axis = cone_sum / len;
-      for (int j = 0; j < 3; ++j) r.mean_dir[j] = static_cast<float>(axis[j]);
-      cos_psi = 1.0;
-      for (int y = 0; y < th; ++y)
-        for (int x = 0; x < tw; ++x)
-          if (live[y] & (TileRays::bit(x))) cos_psi = std::min(cos_psi, glm::dot(axis, r.direction(y * stride + x)));
-    }
-    const double psi = std::acos(std::clamp(cos_psi, -1.0, 1.0)) + 2e-3;
-    const bool can_skip = psi < 1.5707963267948966;
-    const double sp = std::sin(psi), cp = std::cos(psi);
-    for (std::size_t k = 0; k < data.class_axis.size(); ++k) {
-      bool skip = false;
-      if (can_skip && data.class_sin[k] <= 1.0f) {
-        // angle(axis_k, tile axis) < 90 - theta - psi  <=>  dot > sin(theta + psi), if theta + psi < 90.
-        const double st = data.class_sin[k], ct = data.class_cos[k];
-        const double cos_sum = ct * cp - st * sp;  // cos(theta + psi)
-        if (cos_sum > 0.0) {
-          const double sin_sum = st * cp + ct * sp;
-          skip = glm::dot(glm::dvec3(data.class_axis[k]), axis) > sin_sum + 1e-6;
-        }
+  const double len = glm::length(cone_sum);
+  double cos_psi = -1.0;
+  glm::dvec3 axis(0.0);
+  if (len > 1e-12) {
+    axis = cone_sum / len;
+    for (int j = 0; j < 3; ++j) r.mean_dir[j] = static_cast<float>(axis[j]);
+    cos_psi = 1.0;
+    for (int y = 0; y < th; ++y)
+      for (int x = 0; x < tw; ++x)
+        if (live[y] & (TileRays::bit(x))) cos_psi = std::min(cos_psi, glm::dot(axis, r.direction(y * stride + x)));
+  }
+  const double psi = std::acos(std::clamp(cos_psi, -1.0, 1.0)) + 2e-3;
+  const bool can_skip = psi < 1.5707963267948966;
+  const double sp = std::sin(psi), cp = std::cos(psi);
+  for (std::size_t k = 0; k < data.class_axis.size(); ++k) {
+    bool skip = false;
+    if (can_skip && data.class_sin[k] <= 1.0f) {
+      // angle(axis_k, tile axis) < 90 - theta - psi  <=>  dot > sin(theta + psi), if theta + psi < 90.
+      const double st = data.class_sin[k], ct = data.class_cos[k];
+      const double cos_sum = ct * cp - st * sp;  // cos(theta + psi)
+      if (cos_sum > 0.0) {
+        const double sin_sum = st * cp + ct * sp;
+        skip = glm::dot(glm::dvec3(data.class_axis[k]), axis) > sin_sum + 1e-6;
       }
-      if (!skip) active.push_back(static_cast<std::uint16_t>(k));
     }
+    if (!skip) active.push_back(static_cast<std::uint16_t>(k));
   }
+}
 
-  if (++thread.stamp_value == 0) {
-    for (auto& t : thread.tri) t.stamp = 0u;
-    thread.stamp_value = 1;
-  }
-  const std::uint32_t stamp = thread.stamp_value;
-  const double ea = f.eye[a], eb = f.eye[b], ec = f.eye[c];
-  const int na = data.dims[a], nb = data.dims[b], nc = data.dims[c];
-
+// One walk of a tile through the slices of its grid, from the eye's slice in one direction: what
+// the steps below share.
+struct TileWalk {
+  const IndexData& data;
+  const Frame& f;
+  TileRays& r;
+  Worker& thread;
+  int x0, y0, tw, th;
+  Mask* live;  // the tile's live rays (both walks)
+  Mask* mask;  // this walk's live rays
+  int walk;    // 0: toward +axis, 1: toward -axis
+  int a, b, c;  // walk axis, then the grid's row and column axes
+  double ea, eb, ec;
+  int na, nb, nc;
+  std::uint32_t stamp;  // the tile's stamp in Worker::tri (each triangle met once per tile)
   std::size_t met = 0;  // NciSelectStats::triangles_met of this tile (a local: the visit loop is hot)
-  for (int walk = 0; walk < 2; ++walk) {
-    Mask* mask = walk_mask[walk];
-    const int step = walk == 0 ? 1 : -1;
-    const int start = data.cell_of(ea, a);
-    // The beam's slopes change only when rays finish; the finish test runs only when a ray's
-    // hit improved or the walk reaches the earliest finishing slice (`next_finish`).
-    r.any_dirty = true;
-    int next_finish = start;
-    bool slopes_stale = true, full = false;
-    float smin_b = 0.0f, smax_b = 0.0f, smin_c = 0.0f, smax_c = 0.0f;
-    for (int s = start; s >= 0 && s < na; s += step) {
-      Mask unfinished = 0;  // any ray of this walk still live
-      for (int y = 0; y < th; ++y) unfinished |= mask[y];
-      if (!unfinished) break;
-      ++thread.stats.slices_walked;
-      // The part of the slab this walk's rays cross, inflated like the cells.
-      double s0 = data.lo[a] + s * data.h - data.delta, s1 = data.lo[a] + (s + 1) * data.h + data.delta;
-      if (walk == 0) s0 = std::max(s0, ea);
-      else s1 = std::min(s1, ea);
-      if (s0 <= s1) {
-        // Beam of the walk's unfinished rays across [s0, s1].
-        double bmin = std::numeric_limits<double>::infinity(), bmax = -bmin, cmin = bmin, cmax = -bmin;
-        if (slopes_stale) {
-          slopes_stale = false;
-          full = false;
-          smin_b = std::numeric_limits<float>::infinity();
-          smax_b = -smin_b;
-          smin_c = smin_b;
-          smax_c = -smin_b;
-          for (int y = 0; y < th; ++y) {
-            Mask bits = mask[y];
-            while (bits) {
-              const int x = TileRays::low_bit(bits);
-              bits &= bits - 1;
-              const int i = y * stride + x;
-              if (r.flat[i]) full = true;
-              smin_b = std::min(smin_b, r.slope_b[i]);
-              smax_b = std::max(smax_b, r.slope_b[i]);
-              smin_c = std::min(smin_c, r.slope_c[i]);
-              smax_c = std::max(smax_c, r.slope_c[i]);
-            }
-          }
-        }
-        int rlo = 0, rhi = nb - 1, clo = 0, chi = nc - 1;
-        if (!full) {
-          const double ends[2] = {s0 - ea, s1 - ea};
-          for (double e : ends) {
-            bmin = std::min({bmin, eb + e * double(smin_b), eb + e * double(smax_b)});
-            bmax = std::max({bmax, eb + e * double(smin_b), eb + e * double(smax_b)});
-            cmin = std::min({cmin, ec + e * double(smin_c), ec + e * double(smax_c)});
-            cmax = std::max({cmax, ec + e * double(smin_c), ec + e * double(smax_c)});
-          }
-          // Slopes were rounded to float: widen by their relative error over the slab's reach.
-          const double reach = std::max(std::fabs(ends[0]), std::fabs(ends[1]));
-          const double wb = data.delta + 1e-6 * reach * (1.0 + std::max(std::fabs(double(smin_b)), std::fabs(double(smax_b))));
-          const double wc = data.delta + 1e-6 * reach * (1.0 + std::max(std::fabs(double(smin_c)), std::fabs(double(smax_c))));
-          bmin -= wb;
-          bmax += wb;
-          cmin -= wc;
-          cmax += wc;
-          if (bmax < data.lo[b] || cmax < data.lo[c] || bmin > data.lo[b] + nb * data.h || cmin > data.lo[c] + nc * data.h) {
-            rlo = 1;
-            rhi = 0;  // beam outside the box in this slice
-          } else {
-            rlo = data.cell_of(bmin, b);
-            rhi = data.cell_of(bmax, b);
-            clo = data.cell_of(cmin, c);
-            chi = data.cell_of(cmax, c);
-          }
-        }
-        if (rlo <= rhi && clo <= chi) {
-          for (std::uint16_t k : active) {
-            const std::size_t base = data.grid_base[static_cast<std::size_t>(k) * 3 + static_cast<std::size_t>(a)];
-            const std::uint32_t shift = data.grid_shift[static_cast<std::size_t>(k) * 3 + static_cast<std::size_t>(a)];
-            const std::uint32_t class_base = data.class_cell_base[k];
-            const std::uint32_t row_first = data.slice_rows[base + static_cast<std::size_t>(s)];
-            const std::uint32_t row_last = data.slice_rows[base + static_cast<std::size_t>(s) + 1];
-            // Rows are sorted: a class whose rows in this slice all lie outside [rlo, rhi] is
-            // passed over without a search.
-            if (row_first == row_last || data.row_coord[row_first] > rhi || data.row_coord[row_last - 1] < rlo) continue;
-            auto row_it = data.row_coord[row_first] >= rlo
-                              ? data.row_coord.begin() + row_first
-                              : std::lower_bound(data.row_coord.begin() + row_first, data.row_coord.begin() + row_last,
-                                                 static_cast<std::uint16_t>(rlo));
-            for (; row_it != data.row_coord.begin() + row_last && *row_it <= rhi; ++row_it) {
-              const std::size_t row = static_cast<std::size_t>(row_it - data.row_coord.begin());
-              const std::uint32_t cf = data.row_begin[row], cl = data.row_begin[row + 1];
-              if (data.cell_col[cf] > chi || data.cell_col[cl - 1] < clo) continue;  // sorted columns, none in range
-              auto cell_it = data.cell_col[cf] >= clo ? data.cell_col.begin() + cf
-                                                  : std::lower_bound(data.cell_col.begin() + cf, data.cell_col.begin() + cl,
-                                                                     static_cast<std::uint16_t>(clo));
-              for (; cell_it != data.cell_col.begin() + cl && *cell_it <= chi; ++cell_it) {
-                const std::uint32_t pos = static_cast<std::uint32_t>(cell_it - data.cell_col.begin());
-                const std::uint32_t cell = a == 0     ? pos - shift
-                                           : data.wide_ids ? data.cell_id[pos - shift]
-                                                       : class_base + data.cell_id16[pos - shift];
-                ++thread.stats.cells_visited;
-                std::uint32_t e, e_end;
-                if (data.cell_begin16.empty()) {
-                  e = data.cell_tri_begin[cell];
-                  e_end = data.cell_tri_begin[cell + 1];
-                } else {
-                  e = data.class_entry_base[k] + data.cell_begin16[cell + k];
-                  e_end = data.class_entry_base[k] + data.cell_begin16[cell + k + 1];
-                }
-                auto visit = [&](std::uint32_t tri) {
-                  if (thread.tri[tri].stamp == stamp) return;
-                  thread.tri[tri].stamp = stamp;
-                  ++met;
-                  Candidate cand;
-                  if (admit_triangle(data, f, tri, x0, y0, tw, th, live, r, thread, cand)) thread.cand.push_back(cand);
-                };
-                const std::uint32_t tri_base = data.class_tri_begin[k];
-                while (e < e_end) {
-                  std::uint32_t part_end = e_end;
-                  if (!data.chunk_box.empty() && r.beam) {
-                    const std::uint32_t j = e / static_cast<std::uint32_t>(data.chunk);
-                    part_end = std::min(e_end, (j + 1) * static_cast<std::uint32_t>(data.chunk));
-                    if (chunk_outside_beam(r, &data.chunk_box[6 * std::size_t{j}], f) ||
-                        chunk_hidden(data, f, j, x0, y0, tw, th, live, r, thread)) {
-                      e = part_end;
-                      continue;
-                    }
-                  }
-                  if (data.wide_tris) {
-                    for (; e < part_end; ++e) visit(data.cell_tris[e]);
-                  } else {
-                    for (; e < part_end; ++e) visit(tri_base + data.cell_tris16[e]);
-                  }
-                }
-              }
-            }
-          }
-          // Nearest first, so hits found early let behind_hits drop the triangles behind them.
-          if (!thread.cand.empty()) {
-            std::sort(thread.cand.begin(), thread.cand.end(), [](const auto& p, const auto& q) {
-              return p.key != q.key ? p.key < q.key : p.tri < q.tri;
-            });
-            for (const auto& cand : thread.cand)
-              if (test_triangle(data, f, x0, y0, cand, live, r, thread)) {
-                ++thread.tested_count;
-                thread.tested_bits[cand.tri / 64] |= std::uint64_t{1} << (cand.tri % 64);
-              }
-            thread.cand.clear();
-          }
-        }
-      }
-      // Finish the rays whose nearest hit lies before the next slice (with margins that only
-      // keep rays unfinished longer). Nothing to do while no hit improved and no ray's finishing
-      // slice is reached.
-      if (!r.any_dirty && (walk == 0 ? s < next_finish : s > next_finish)) continue;
-      r.any_dirty = false;
-      next_finish = walk == 0 ? na : -1;
-      for (int y = 0; y < th; ++y) {
-        Mask bits = mask[y];
-        while (bits) {
-          const int x = TileRays::low_bit(bits);
-          bits &= bits - 1;
-          const int i = y * stride + x;
-          if (r.dirty[i]) {
-            r.finish[i] = finish_slice(data, r, i, walk, s, ea, na);
-            r.dirty[i] = false;
-          }
-          const bool done = walk == 0 ? s >= r.finish[i] : s <= r.finish[i];
-          if (done) {
-            mask[y] &= ~TileRays::bit(x);
-            live[y] &= ~TileRays::bit(x);
-            slopes_stale = true;
-          } else {
-            next_finish = walk == 0 ? std::min(next_finish, r.finish[i]) : std::max(next_finish, r.finish[i]);
-          }
-        }
-      }
-      if (slopes_stale) narrow_beam(r, tw, th, live);
-    }
-    for (int y = 0; y < th; ++y) {  // a walk that ran out of slices finishes its rays
-      live[y] &= ~mask[y];
-      mask[y] = 0;
+  // The walk's live rays' slopes across the walk axis (recomputed only after rays finished).
+  bool slopes_stale = true, full = false;
+  float smin_b = 0.0f, smax_b = 0.0f, smin_c = 0.0f, smax_c = 0.0f;
+  int next_finish = 0;  // the earliest slice where some ray may finish
+};
+
+// The slopes of the walk's live rays (`full`: some ray runs parallel to the slices).
+CULLKIT_FORCEINLINE void update_slopes(TileWalk& w) {
+  const TileRays& r = w.r;
+  const int stride = r.stride;
+  w.slopes_stale = false;
+  w.full = false;
+  w.smin_b = std::numeric_limits<float>::infinity();
+  w.smax_b = -w.smin_b;
+  w.smin_c = w.smin_b;
+  w.smax_c = -w.smin_b;
+  for (int y = 0; y < w.th; ++y) {
+    Mask bits = w.mask[y];
+    while (bits) {
+      const int x = TileRays::low_bit(bits);
+      bits &= bits - 1;
+      const int i = y * stride + x;
+      if (r.flat[i]) w.full = true;
+      w.smin_b = std::min(w.smin_b, r.slope_b[i]);
+      w.smax_b = std::max(w.smax_b, r.slope_b[i]);
+      w.smin_c = std::min(w.smin_c, r.slope_c[i]);
+      w.smax_c = std::max(w.smax_c, r.slope_c[i]);
     }
   }
-  thread.stats.triangles_met += met;
-  // Beside each pixel's first hit: the triangles within rounding of an edge in front of its
-  // solid hit, and that solid hit itself.
+}
+
+// The rows rlo..rhi and columns clo..chi of the cells the walk's live rays may cross between the
+// walk-axis coordinates s0 and s1 (rlo > rhi: none).
+CULLKIT_FORCEINLINE void beam_cells(const TileWalk& w, double s0, double s1, int& rlo, int& rhi, int& clo, int& chi) {
+  const IndexData& data = w.data;
+  const int b = w.b, c = w.c, nb = w.nb, nc = w.nc;
+  const double ea = w.ea, eb = w.eb, ec = w.ec;
+  rlo = 0, rhi = nb - 1, clo = 0, chi = nc - 1;
+  if (w.full) return;
+  double bmin = std::numeric_limits<double>::infinity(), bmax = -bmin, cmin = bmin, cmax = -bmin;
+  const double ends[2] = {s0 - ea, s1 - ea};
+  for (double e : ends) {
+    bmin = std::min({bmin, eb + e * double(w.smin_b), eb + e * double(w.smax_b)});
+    bmax = std::max({bmax, eb + e * double(w.smin_b), eb + e * double(w.smax_b)});
+    cmin = std::min({cmin, ec + e * double(w.smin_c), ec + e * double(w.smax_c)});
+    cmax = std::max({cmax, ec + e * double(w.smin_c), ec + e * double(w.smax_c)});
+  }
+  // Slopes were rounded to float: widen by their relative error over the slab's reach.
+  const double reach = std::max(std::fabs(ends[0]), std::fabs(ends[1]));
+  const double wb = data.delta + tolerance::float_slope * reach * (1.0 + std::max(std::fabs(double(w.smin_b)), std::fabs(double(w.smax_b))));
+  const double wc = data.delta + tolerance::float_slope * reach * (1.0 + std::max(std::fabs(double(w.smin_c)), std::fabs(double(w.smax_c))));
+  bmin -= wb;
+  bmax += wb;
+  cmin -= wc;
+  cmax += wc;
+  if (bmax < data.lo[b] || cmax < data.lo[c] || bmin > data.lo[b] + nb * data.h || cmin > data.lo[c] + nc * data.h) {
+    rlo = 1;
+    rhi = 0;  // beam outside the box in this slice
+  } else {
+    rlo = data.cell_of(bmin, b);
+    rhi = data.cell_of(bmax, b);
+    clo = data.cell_of(cmin, c);
+    chi = data.cell_of(cmax, c);
+  }
+}
+
+// The entries e..e_end of one cell of class k: each triangle not yet met by the tile goes through
+// admit_triangle into the worker's candidates; on crowded indexes a chunk of entries whose box is
+// outside the beam, off the live pixels or behind their hits is passed over whole.
+CULLKIT_FORCEINLINE void visit_cell(TileWalk& w, std::uint16_t k, std::uint32_t e, std::uint32_t e_end) {
+  const IndexData& data = w.data;
+  const Frame& f = w.f;
+  TileRays& r = w.r;
+  Worker& thread = w.thread;
+  const std::uint32_t stamp = w.stamp;
+  std::size_t met = w.met;
+  auto visit = [&](std::uint32_t tri) {
+    if (thread.tri[tri].stamp == stamp) return;
+    thread.tri[tri].stamp = stamp;
+    ++met;
+    Candidate cand;
+    if (admit_triangle(data, f, tri, w.x0, w.y0, w.tw, w.th, w.live, r, thread, cand)) thread.cand.push_back(cand);
+  };
+  const std::uint32_t tri_base = data.class_tri_begin[k];
+  while (e < e_end) {
+    std::uint32_t part_end = e_end;
+    if (!data.chunk_box.empty() && r.beam) {
+      const std::uint32_t j = e / static_cast<std::uint32_t>(data.chunk);
+      part_end = std::min(e_end, (j + 1) * static_cast<std::uint32_t>(data.chunk));
+      if (chunk_outside_beam(r, &data.chunk_box[6 * std::size_t{j}], f) ||
+          chunk_hidden(data, f, j, w.x0, w.y0, w.tw, w.th, w.live, r, thread)) {
+        e = part_end;
+        continue;
+      }
+    }
+    if (data.wide_tris) {
+      for (; e < part_end; ++e) visit(data.cell_tris[e]);
+    } else {
+      for (; e < part_end; ++e) visit(tri_base + data.cell_tris16[e]);
+    }
+  }
+  w.met = met;
+}
+
+// The cells of slice s in rows rlo..rhi and columns clo..chi, class by class (active classes
+// only), found by binary search in the sorted rows and columns.
+CULLKIT_FORCEINLINE void visit_slice(TileWalk& w, const std::vector<std::uint16_t>& active, int s, int rlo, int rhi,
+                                     int clo, int chi) {
+  const IndexData& data = w.data;
+  const int a = w.a;
+  for (std::uint16_t k : active) {
+    const std::size_t base = data.grid_base[static_cast<std::size_t>(k) * 3 + static_cast<std::size_t>(a)];
+    const std::uint32_t shift = data.grid_shift[static_cast<std::size_t>(k) * 3 + static_cast<std::size_t>(a)];
+    const std::uint32_t class_base = data.class_cell_base[k];
+    const std::uint32_t row_first = data.slice_rows[base + static_cast<std::size_t>(s)];
+    const std::uint32_t row_last = data.slice_rows[base + static_cast<std::size_t>(s) + 1];
+    // Rows are sorted: a class whose rows in this slice all lie outside [rlo, rhi] is
+    // passed over without a search.
+    if (row_first == row_last || data.row_coord[row_first] > rhi || data.row_coord[row_last - 1] < rlo) continue;
+    auto row_it = data.row_coord[row_first] >= rlo
+                      ? data.row_coord.begin() + row_first
+                      : std::lower_bound(data.row_coord.begin() + row_first, data.row_coord.begin() + row_last,
+                                         static_cast<std::uint16_t>(rlo));
+    for (; row_it != data.row_coord.begin() + row_last && *row_it <= rhi; ++row_it) {
+      const std::size_t row = static_cast<std::size_t>(row_it - data.row_coord.begin());
+      const std::uint32_t cf = data.row_begin[row], cl = data.row_begin[row + 1];
+      if (data.cell_col[cf] > chi || data.cell_col[cl - 1] < clo) continue;  // sorted columns, none in range
+      auto cell_it = data.cell_col[cf] >= clo ? data.cell_col.begin() + cf
+                                              : std::lower_bound(data.cell_col.begin() + cf, data.cell_col.begin() + cl,
+                                                                 static_cast<std::uint16_t>(clo));
+      for (; cell_it != data.cell_col.begin() + cl && *cell_it <= chi; ++cell_it) {
+        const std::uint32_t pos = static_cast<std::uint32_t>(cell_it - data.cell_col.begin());
+        const std::uint32_t cell = a == 0          ? pos - shift
+                                   : data.wide_ids ? data.cell_id[pos - shift]
+                                                   : class_base + data.cell_id16[pos - shift];
+        ++w.thread.stats.cells_visited;
+        std::uint32_t e, e_end;
+        if (data.cell_begin16.empty()) {
+          e = data.cell_tri_begin[cell];
+          e_end = data.cell_tri_begin[cell + 1];
+        } else {
+          e = data.class_entry_base[k] + data.cell_begin16[cell + k];
+          e_end = data.class_entry_base[k] + data.cell_begin16[cell + k + 1];
+        }
+        visit_cell(w, k, e, e_end);
+      }
+    }
+  }
+}
+
+// Ray-tests the slice's candidates nearest first, so hits found early let behind_hits drop the
+// triangles behind them.
+CULLKIT_FORCEINLINE void test_candidates(TileWalk& w) {
+  Worker& thread = w.thread;
+  if (thread.cand.empty()) return;
+  std::sort(thread.cand.begin(), thread.cand.end(), [](const auto& p, const auto& q) {
+    return p.key != q.key ? p.key < q.key : p.tri < q.tri;
+  });
+  for (const auto& cand : thread.cand)
+    if (test_triangle(w.data, w.f, w.x0, w.y0, cand, w.live, w.r, thread)) {
+      ++thread.tested_count;
+      thread.tested_bits[cand.tri / 64] |= std::uint64_t{1} << (cand.tri % 64);
+    }
+  thread.cand.clear();
+}
+
+// After slice s: finishes the rays whose nearest hit lies before the next slice (with margins
+// that only keep rays unfinished longer). Nothing to do while no hit improved and no ray's
+// finishing slice is reached.
+CULLKIT_FORCEINLINE void finish_rays(TileWalk& w, int s) {
+  TileRays& r = w.r;
+  const int walk = w.walk, na = w.na, stride = r.stride;
+  if (!r.any_dirty && (walk == 0 ? s < w.next_finish : s > w.next_finish)) return;
+  r.any_dirty = false;
+  int next_finish = walk == 0 ? na : -1;
+  for (int y = 0; y < w.th; ++y) {
+    Mask bits = w.mask[y];
+    while (bits) {
+      const int x = TileRays::low_bit(bits);
+      bits &= bits - 1;
+      const int i = y * stride + x;
+      if (r.dirty[i]) {
+        r.finish[i] = finish_slice(w.data, r, i, walk, s, w.ea, na);
+        r.dirty[i] = false;
+      }
+      const bool done = walk == 0 ? s >= r.finish[i] : s <= r.finish[i];
+      if (done) {
+        w.mask[y] &= ~TileRays::bit(x);
+        w.live[y] &= ~TileRays::bit(x);
+        w.slopes_stale = true;
+      } else {
+        next_finish = walk == 0 ? std::min(next_finish, r.finish[i]) : std::max(next_finish, r.finish[i]);
+      }
+    }
+  }
+  w.next_finish = next_finish;
+  if (w.slopes_stale) narrow_beam(r, w.tw, w.th, w.live);
+}
+
+// Walks the slices from the eye's outward in one direction until every ray of the walk is
+// finished or the grid ends (which finishes the rest).
+CULLKIT_FORCEINLINE void walk_slices(TileWalk& w, const std::vector<std::uint16_t>& active) {
+  const IndexData& data = w.data;
+  const int step = w.walk == 0 ? 1 : -1;
+  const int start = data.cell_of(w.ea, w.a);
+  w.r.any_dirty = true;
+  w.next_finish = start;
+  for (int s = start; s >= 0 && s < w.na; s += step) {
+    Mask unfinished = 0;  // any ray of this walk still live
+    for (int y = 0; y < w.th; ++y) unfinished |= w.mask[y];
+    if (!unfinished) break;
+    ++w.thread.stats.slices_walked;
+    // The part of the slab this walk's rays cross, inflated like the cells.
+    double s0 = data.lo[w.a] + s * data.h - data.delta, s1 = data.lo[w.a] + (s + 1) * data.h + data.delta;
+    if (w.walk == 0) s0 = std::max(s0, w.ea);
+    else s1 = std::min(s1, w.ea);
+    if (s0 <= s1) {
+      if (w.slopes_stale) update_slopes(w);
+      int rlo, rhi, clo, chi;
+      beam_cells(w, s0, s1, rlo, rhi, clo, chi);
+      if (rlo <= rhi && clo <= chi) {
+        visit_slice(w, active, s, rlo, rhi, clo, chi);
+        test_candidates(w);
+      }
+    }
+    finish_rays(w, s);
+  }
+  for (int y = 0; y < w.th; ++y) {  // a walk that ran out of slices finishes its rays
+    w.live[y] &= ~w.mask[y];
+    w.mask[y] = 0;
+  }
+}
+
+// Beside each pixel's first hit: the triangles within rounding of an edge in front of its solid
+// hit, and that solid hit itself, into the worker's extras and selected set.
+inline void collect_edge_band(const Frame& f, const TileRays& r, int x0, int y0, int tw, int th, Worker& thread) {
+  const int stride = r.stride;
   const auto global = [&](int i) {
     return static_cast<std::uint32_t>(y0 + i / stride) * static_cast<std::uint32_t>(f.width) +
            static_cast<std::uint32_t>(x0 + i % stride);
@@ -520,6 +585,42 @@ inline void process_tile(const IndexData& data, const Frame& f, int x0, int y0, 
         show(r.solid[i]);
       }
     }
+}
+
+// One screen tile (x0, y0)..(x1, y1) of the frame: its pixels' first hits, solid hits and edge-band
+// extras into the worker's records and the frame's per-pixel buffers. `r` is the worker's scratch
+// (any contents): every field read is set here first.
+inline void process_tile(const IndexData& data, const Frame& f, int x0, int y0, int x1, int y1, TileRays& r,
+                         Worker& thread, Scratch& scratch) {
+  if (write_if_off_scene(f, x0, y0, x1, y1, scratch)) return;
+  const int tw = x1 - x0, th = y1 - y0;
+  r.stride = (tw + 3) & ~3;
+  TileMasks m;
+  const glm::dvec3 cone_sum = setup_rays(data, f, x0, y0, tw, th, r, m);
+  bool any = false;
+  for (int y = 0; y < th; ++y) any = any || m.live[y] != 0;
+  if (!any) {
+    write_tile(f, r, x0, y0, tw, th, scratch, thread);
+    return;
+  }
+  make_beam(r, tw, th, m.live);
+  auto& active = thread.active_classes;
+  select_classes(data, r, tw, th, m.live, cone_sum, active);
+  if (++thread.stamp_value == 0) {
+    for (auto& t : thread.tri) t.stamp = 0u;
+    thread.stamp_value = 1;
+  }
+  const int a = f.axis, b = (a + 1) % 3, c = (a + 2) % 3;
+  std::size_t met = 0;
+  for (int walk = 0; walk < 2; ++walk) {
+    TileWalk w{data, f, r, thread, x0, y0, tw, th, m.live, m.walk[walk], walk, a, b, c, f.eye[a], f.eye[b], f.eye[c],
+               data.dims[a], data.dims[b], data.dims[c], thread.stamp_value};
+    w.met = met;
+    walk_slices(w, active);
+    met = w.met;
+  }
+  thread.stats.triangles_met += met;
+  collect_edge_band(f, r, x0, y0, tw, th, thread);
   write_tile(f, r, x0, y0, tw, th, scratch, thread);
 }
 
