@@ -141,19 +141,8 @@ inline void build_class(const IndexData& data, const std::uint32_t* tris, std::s
   }
 }
 
-// Builds the index from the valid triangles `gather` left in `data` (vertices, tri_vertices,
-// tri_original, box, the skip counts) and their unit normals.
-inline void build(IndexData& data, std::vector<glm::vec3>& normals) {
-  data.stats.triangles_indexed = data.tri_original.size();
-  const std::size_t n = data.tri_original.size();
-  report(data, 0.1f);
-  if (n == 0) {
-    data.class_of.assign(data.stats.triangles_input, skipped_class);
-    report(data, 1.0f);
-    return;
-  }
-
-  // 2. The grid: cubic cells, `grid` along the longest axis.
+// The grid: cubic cells, `grid` along the longest axis.
+inline void make_grid(IndexData& data) {
   const glm::dvec3 lo(data.box.min), hi(data.box.max);
   const glm::dvec3 ext = hi - lo;
   const double longest = std::max({ext.x, ext.y, ext.z});
@@ -169,8 +158,12 @@ inline void build(IndexData& data, std::vector<glm::vec3>& normals) {
   const double max_abs = std::max({std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z), std::fabs(hi.x),
                                    std::fabs(hi.y), std::fabs(hi.z)});
   data.delta = std::max(1e-3 * data.h, 64.0 * double(std::numeric_limits<float>::epsilon()) * max_abs);
+}
 
-  // 3. Normal classes.
+// Normal classes (spherical k-means), then each class's axis as the mean of its members and the
+// cone around it. Returns each kept triangle's class (in gathering order); frees `normals`.
+inline std::vector<std::uint16_t> make_classes(IndexData& data, std::vector<glm::vec3>& normals) {
+  const std::size_t n = data.tri_original.size();
   std::vector<std::uint16_t> class_of;  // kept triangle (input order) -> class
   {
     std::vector<std::uint32_t> cls;
@@ -208,19 +201,25 @@ inline void build(IndexData& data, std::vector<glm::vec3>& normals) {
   }
   normals.clear();
   normals.shrink_to_fit();
-  report(data, 0.2f);
+  return class_of;
+}
 
-  // 4. Per class: cells by separating axes, then the three grids. Classes in parallel, merged in
-  // class order so the index does not depend on the thread count.
-  std::vector<std::uint32_t> class_begin(classes + 1, 0);
+// Per class: cells by separating axes, then the three grids. Classes in parallel, merged in
+// class order so the index does not depend on the thread count.
+// `class_begin` and `by_class` list the kept triangles class by class.
+inline void build_class_grids(const IndexData& data, const std::vector<std::uint16_t>& class_of,
+                              std::vector<std::uint32_t>& class_begin, std::vector<std::uint32_t>& by_class,
+                              std::vector<ClassGrids>& parts) {
+  const std::size_t n = class_of.size(), classes = data.class_axis.size();
+  class_begin.assign(classes + 1, 0);
   for (std::size_t i = 0; i < n; ++i) ++class_begin[class_of[i] + 1];
   for (std::size_t c = 0; c < classes; ++c) class_begin[c + 1] += class_begin[c];
-  std::vector<std::uint32_t> by_class(n);
+  by_class.resize(n);
   {
     std::vector<std::uint32_t> fill(class_begin.begin(), class_begin.end() - 1);
     for (std::size_t i = 0; i < n; ++i) by_class[fill[class_of[i]]++] = static_cast<std::uint32_t>(i);
   }
-  std::vector<ClassGrids> parts(classes);
+  parts.resize(classes);
   std::atomic<std::size_t> next{0}, done{0};
   const unsigned build_threads = detail::resolve_threads(data.params.build_threads, std::min<std::size_t>(classes, 64));
   // Task 0 runs on the building thread (WorkerPool::run): the one that reports progress.
@@ -236,11 +235,16 @@ inline void build(IndexData& data, std::vector<glm::vec3>& normals) {
   using Work = decltype(work);
   detail::WorkerPool::shared().run(build_threads, [](void* job, std::size_t task) { (*static_cast<Work*>(job))(task == 0); },
                                    &work);
+}
 
-  // 4b. Internal numbering (memory locality of the select walk): class by class, each class's
-  // triangles in the order their first cell comes in its X grid, so a cell's triangles are
-  // mostly one run of consecutive ids (and so are their vertices and per-thread records).
-  // data.tri_original maps back to the mesh; cell lists are rewritten and sorted in the new ids.
+// Internal numbering (memory locality of the select walk): class by class, each class's
+// triangles in the order their first cell comes in its X grid, so a cell's triangles are
+// mostly one run of consecutive ids (and so are their vertices and per-thread records).
+// data.tri_original maps back to the mesh; cell lists are rewritten and sorted in the new ids.
+inline void renumber(IndexData& data, const std::vector<std::uint16_t>& class_of,
+                     const std::vector<std::uint32_t>& class_begin, const std::vector<std::uint32_t>& by_class,
+                     std::vector<ClassGrids>& parts) {
+  const std::size_t n = data.tri_original.size(), classes = data.class_axis.size();
   {
     std::vector<std::uint32_t> new_id(n, no_triangle), order;
     order.reserve(n);
@@ -313,8 +317,12 @@ inline void build(IndexData& data, std::vector<glm::vec3>& normals) {
     data.wide_tris = false;
     for (std::size_t c = 0; c < classes; ++c) data.wide_tris = data.wide_tris || data.class_tri_begin[c + 1] - data.class_tri_begin[c] > 65536;
   }
+}
 
-  // 5. Merge into flat arrays.
+// The classes' grids merged into the flat arrays, class after class (each part freed once
+// copied). Returns, per class, one past its last cell entry.
+inline std::vector<std::uint32_t> flatten(IndexData& data, std::vector<ClassGrids>& parts) {
+  const std::size_t classes = data.class_axis.size();
   std::size_t total_cells = 0, total_entries = 0, total_rows = 0, total_grid_cells = 0, total_slices = 0;
   data.wide_ids = false;
   for (const auto& p : parts) {
@@ -382,10 +390,15 @@ inline void build(IndexData& data, std::vector<glm::vec3>& normals) {
     p = ClassGrids{};
   }
   data.row_begin.push_back(static_cast<std::uint32_t>(data.cell_col.size()));
-  // 6. Chunk boxes when cells are crowded (mean entries per cell >= data.chunk_min_mean): one box
-  // per data.chunk consecutive entries (chunks cut the entry array at fixed positions, so a chunk
-  // may span two cells: its box bounds both parts). A tile skips a chunk lying wholly outside
-  // its beam instead of meeting its triangles one by one.
+  return class_entry_end;
+}
+
+// Chunk boxes when cells are crowded (mean entries per cell >= data.chunk_min_mean): one box
+// per data.chunk consecutive entries (chunks cut the entry array at fixed positions, so a chunk
+// may span two cells: its box bounds both parts). A tile skips a chunk lying wholly outside
+// its beam instead of meeting its triangles one by one.
+inline void make_chunk_boxes(IndexData& data, const std::vector<std::uint32_t>& class_entry_end) {
+  const std::size_t classes = data.class_axis.size(), total_cells = data.stats.cells, total_entries = data.stats.cell_entries;
   if (total_cells > 0 && total_entries >= data.chunk_min_mean * total_cells) {
     const std::size_t chunks = (total_entries + data.chunk - 1) / data.chunk;
     data.chunk_box.assign(6 * chunks, 0.0f);
@@ -409,9 +422,13 @@ inline void build(IndexData& data, std::vector<glm::vec3>& normals) {
       }
     }
   }
-  // 7. Narrow forms: 16-bit vertex ids when there are at most 65536 vertices; cell entry ranges
-  // in 16 bits relative to their class when every class has at most 65535 entries (one extra
-  // end per class: class k's cells c read ranges at c + k and c + k + 1).
+}
+
+// Narrow forms: 16-bit vertex ids when there are at most 65536 vertices; cell entry ranges
+// in 16 bits relative to their class when every class has at most 65535 entries (one extra
+// end per class: class k's cells c read ranges at c + k and c + k + 1).
+inline void narrow_forms(IndexData& data) {
+  const std::size_t classes = data.class_axis.size(), total_cells = data.stats.cells;
   if (data.vertices.size() <= 65536) {
     data.tri_vertices16.assign(data.tri_vertices.begin(), data.tri_vertices.end());
     std::vector<std::uint32_t>().swap(data.tri_vertices);
@@ -436,11 +453,32 @@ inline void build(IndexData& data, std::vector<glm::vec3>& normals) {
       std::vector<std::uint32_t>().swap(data.cell_tri_begin);
     }
   }
+}
+
+// Builds the index from the valid triangles `gather` left in `data` (vertices, tri_vertices,
+// tri_original, box, the skip counts) and their unit normals: the steps above, in order.
+inline void build(IndexData& data, std::vector<glm::vec3>& normals) {
+  data.stats.triangles_indexed = data.tri_original.size();
+  report(data, 0.1f);
+  if (data.tri_original.empty()) {
+    data.class_of.assign(data.stats.triangles_input, skipped_class);
+    report(data, 1.0f);
+    return;
+  }
+  make_grid(data);
+  const std::vector<std::uint16_t> class_of = make_classes(data, normals);
+  report(data, 0.2f);
+  std::vector<std::uint32_t> class_begin, by_class;
+  std::vector<ClassGrids> parts;
+  build_class_grids(data, class_of, class_begin, by_class, parts);
+  renumber(data, class_of, class_begin, by_class, parts);
+  const std::vector<std::uint32_t> class_entry_end = flatten(data, parts);
+  make_chunk_boxes(data, class_entry_end);
+  narrow_forms(data);
   data.vertices.shrink_to_fit();
   data.tri_vertices.shrink_to_fit();
   data.tri_original.shrink_to_fit();
   data.class_of.shrink_to_fit();
   report(data, 1.0f);
 }
-
 }  // namespace cullkit::detail::nci
