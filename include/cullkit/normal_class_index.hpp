@@ -139,7 +139,7 @@ class NormalClassIndex {
   /// depends on NciParams::threads. Cost: proportional to the rays times the triangles met near
   /// the visible surfaces, divided over the threads.
   void select_visible(const Camera& camera, NciContext& context, VisibleSet& out, NciPixels* pixels) const {
-    detail::nci::select_impl(data_, camera, context, out, pixels, nullptr, nullptr);
+    detail::nci::select_frame(data_, camera, context, out, pixels, nullptr, nullptr);
   }
 
   /// With moving objects (DESIGN.md §8): each object has its own index, built in its local frame,
@@ -160,7 +160,7 @@ class NormalClassIndex {
     object_triangles.clear();
     const int width = camera.width, height = camera.height;
     if (width <= 0 || height <= 0 || object_count == 0) {
-      detail::nci::select_impl(data_, camera, context, out, pixels, nullptr, nullptr);
+      detail::nci::select_frame(data_, camera, context, out, pixels, nullptr, nullptr);
       return;
     }
     const std::size_t pixel_count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
@@ -199,7 +199,7 @@ class NormalClassIndex {
       for (const auto& e : object_scratch.extras)
         if (e.t <= o.solid[e.pixel]) o.candidates.push_back(detail::nci::MovingScratch::Candidate{id, e.tri, e.t, e.pixel});
     }
-    detail::nci::select_impl(data_, camera, context, out, pixels, o.depth.data(), o.solid.data());
+    detail::nci::select_frame(data_, camera, context, out, pixels, o.depth.data(), o.solid.data());
     // An object's triangle is reported where it lies no farther than the pixel's solid depth after
     // the static scene (then nothing certain hides it); the pixels keep the objects' first hits
     // where no static triangle came in front.

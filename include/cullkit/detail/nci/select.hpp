@@ -24,8 +24,150 @@ namespace cullkit::detail::nci {
   return static_cast<long long>(width) * height >= 640LL * 480LL ? TileRays::max_tile : 32;
 }
 
-inline void select_impl(const IndexData& data, const Camera& camera, NciContext& context, VisibleSet& out, NciPixels* pixels,
-                 const float* initial_depth, const float* initial_solid) {
+// The pixels whose centres may see the scene box grown by data.delta (as the per-ray box test),
+// its corners rounded outward to float: it holds every triangle's rectangle.
+[[nodiscard]] inline Rect scene_box_rect(const IndexData& data, const Frame& frame) {
+  const glm::dvec3 lo = glm::dvec3(data.box.min) - data.delta, hi = glm::dvec3(data.box.max) + data.delta;
+  const auto down = [](double x) {
+    const float v = static_cast<float>(x);
+    return double(v) > x ? std::nextafter(v, -std::numeric_limits<float>::infinity()) : v;
+  };
+  const auto up = [](double x) {
+    const float v = static_cast<float>(x);
+    return double(v) < x ? std::nextafter(v, std::numeric_limits<float>::infinity()) : v;
+  };
+  glm::vec3 corner[8];
+  for (int k = 0; k < 8; ++k)
+    corner[k] = glm::vec3((k & 1) ? up(hi.x) : down(lo.x), (k & 2) ? up(hi.y) : down(lo.y),
+                          (k & 4) ? up(hi.z) : down(lo.z));
+  return project_rect(frame, corner, 8);
+}
+
+// The first `count` worker slots ready for a call: per-triangle and per-chunk records sized to
+// the index (their stamps and epochs restarted when they are made or wrap), lists emptied.
+inline void prepare_workers(const IndexData& data, Scratch& scratch, unsigned count) {
+  if (scratch.workers.size() < count) scratch.workers.resize(count);
+  for (unsigned i = 0; i < count; ++i) {
+    auto& th = scratch.workers[i];
+    if (th.tri.size() != data.triangle_count()) {
+      th.tri.assign(data.triangle_count(), Worker::Tri{0u, 0u, Rect{0, 0, -1, -1}});
+      th.stamp_value = 0;
+      th.frame_epoch = 0;
+    }
+    if (th.chunk.size() != data.chunk_box.size() / 6) {
+      th.chunk.assign(data.chunk_box.size() / 6, Worker::Chunk{0u, Rect{0, 0, -1, -1}});
+      th.frame_epoch = 0;
+      for (auto& t : th.tri) t.epoch = 0u;
+    }
+    if (++th.frame_epoch == 0) {
+      for (auto& t : th.tri) t.epoch = 0u;
+      for (auto& c : th.chunk) c.epoch = 0u;
+      th.frame_epoch = 1;
+    }
+    th.tested_count = 0;
+    th.extra.clear();
+    th.unsure.clear();
+    th.stats = NciSelectStats{};
+  }
+}
+
+// Every tile of the frame, on `count` tasks (the caller's TaskRunner or the library's pool): task
+// i uses worker slot i and takes tiles from a shared counter until none is left.
+inline void run_tiles(const IndexData& data, const Frame& frame, NciContext& context, Scratch& scratch, unsigned count,
+                      int tiles_x, std::size_t tile_count) {
+  const int tile = frame.tile, width = frame.width, height = frame.height;
+  std::atomic<std::size_t> next{0};
+  auto work = [&](unsigned index) {
+    auto& th = scratch.workers[index];
+    // Per-tile ray scratch (about 320 KB), made once per worker slot of the context and reused
+    // across calls (not per tile, not on the stack); process_tile sets every field it reads.
+    if (th.tile_rays.empty()) th.tile_rays.resize(1);
+    TileRays& rays = th.tile_rays.front();
+    const std::size_t words = (data.triangle_count() + 63) / 64;
+    th.tested_bits.assign(words, 0u);
+    th.shown_bits.assign(words, 0u);
+    for (;;) {
+      const std::size_t t = next.fetch_add(1, std::memory_order_relaxed);
+      if (t >= tile_count) break;
+      const int tx = static_cast<int>(t % static_cast<std::size_t>(tiles_x));
+      const int ty = static_cast<int>(t / static_cast<std::size_t>(tiles_x));
+      const std::uint32_t before = th.tested_count;
+      process_tile(data, frame, tx * tile, ty * tile, std::min(width, (tx + 1) * tile), std::min(height, (ty + 1) * tile),
+                   rays, th, scratch);
+      context.tile_tested[t] = th.tested_count - before;
+    }
+  };
+  using Work = decltype(work);
+  detail::run_tasks(data.params.task_runner, count,
+                    [](void* job, std::size_t task) { (*static_cast<Work*>(job))(static_cast<unsigned>(task)); }, &work);
+}
+
+// Merges the workers' answers: statistics, edge-band extras (in the mesh's numbering), the count
+// of distinct tested triangles (the union of the workers' bit sets) and the visible set (pixel
+// winners and extras), sorted by mesh id through a bit set over the mesh.
+inline void merge_workers(const IndexData& data, NciContext& context, Scratch& scratch, unsigned count, VisibleSet& out) {
+  for (unsigned i = 0; i < count; ++i) {
+    const auto& th = scratch.workers[i];
+    context.stats.ray_tests += th.stats.ray_tests;
+    context.stats.cells_visited += th.stats.cells_visited;
+    context.stats.slices_walked += th.stats.slices_walked;
+    context.stats.triangles_met += th.stats.triangles_met;
+    context.stats.triangles_no_pixel += th.stats.triangles_no_pixel;
+    for (const auto& e : th.extra) scratch.extras.push_back(Extra{data.original(e.tri), e.t, e.pixel});
+  }
+  {
+    // Every worker's lists grow to what any worker needed (the extras to this call's total), so
+    // a later frame that spreads the same tiles over the workers differently does not allocate.
+    std::size_t cand = 0, unsure = 0;
+    for (unsigned i = 0; i < count; ++i) {
+      cand = std::max(cand, scratch.workers[i].cand.capacity());
+      unsure = std::max(unsure, scratch.workers[i].unsure.capacity());
+    }
+    for (unsigned i = 0; i < count; ++i) {
+      auto& th = scratch.workers[i];
+      th.cand.reserve(cand);
+      th.unsure.reserve(unsure);
+      th.extra.reserve(scratch.extras.size());
+      th.active_classes.reserve(data.class_axis.size());
+    }
+  }
+  auto& mesh_bits = scratch.shown_mesh;
+  mesh_bits.assign((data.stats.triangles_input + 63) / 64, 0u);
+  const std::size_t words = (data.triangle_count() + 63) / 64;
+  for (std::size_t w = 0; w < words; ++w) {
+    std::uint64_t tested = 0, shown = 0;
+    for (unsigned i = 0; i < count; ++i) {
+      tested |= scratch.workers[i].tested_bits[w];
+      shown |= scratch.workers[i].shown_bits[w];
+    }
+    out.triangles_tested += static_cast<std::size_t>(__builtin_popcountll(tested));
+    while (shown) {
+      const std::uint32_t m = data.original(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(__builtin_ctzll(shown)));
+      shown &= shown - 1;
+      mesh_bits[m / 64] |= std::uint64_t{1} << (m % 64);
+    }
+  }
+  for (std::size_t w = 0; w < mesh_bits.size(); ++w) {
+    for (std::uint64_t bits = mesh_bits[w]; bits; bits &= bits - 1)
+      out.triangles.push_back(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(__builtin_ctzll(bits)));
+  }
+}
+
+// The frame's per-pixel answer in the mesh's numbering.
+inline void write_pixels(const IndexData& data, const Scratch& scratch, std::size_t pixel_count, NciPixels& pixels) {
+  pixels.triangle.resize(pixel_count);
+  pixels.depth.resize(pixel_count);
+  for (std::size_t i = 0; i < pixel_count; ++i) {
+    const std::uint32_t tri = scratch.pixel_tri[i];
+    pixels.triangle[i] = tri == no_triangle ? NciPixels::miss : data.original(tri);
+    pixels.depth[i] = tri == no_triangle ? std::numeric_limits<float>::infinity() : scratch.pixel_t[i];
+  }
+}
+
+// NormalClassIndex::select_visible for the static scene. `initial_depth` and `initial_solid`
+// (per pixel, or null): the depths the pixels start from (moving objects selected before).
+inline void select_frame(const IndexData& data, const Camera& camera, NciContext& context, VisibleSet& out,
+                         NciPixels* pixels, const float* initial_depth, const float* initial_solid) {
   Scratch& scratch = ContextAccess::scratch(context);
   out.triangles.clear();
   out.triangles_tested = 0;
@@ -50,140 +192,23 @@ inline void select_impl(const IndexData& data, const Camera& camera, NciContext&
     scratch.pixel_tri.resize(pixel_count);
     scratch.pixel_t.resize(pixel_count);
     scratch.pixel_solid_t.resize(pixel_count);
-  }
-  if (data.triangle_count() > 0) {
     Frame frame = make_frame(data, camera);
-    {
-      // The box grown by data.delta (as the per-ray box test), rounded outward to float.
-      const glm::dvec3 lo = glm::dvec3(data.box.min) - data.delta, hi = glm::dvec3(data.box.max) + data.delta;
-      const auto down = [](double x) {
-        const float v = static_cast<float>(x);
-        return double(v) > x ? std::nextafter(v, -std::numeric_limits<float>::infinity()) : v;
-      };
-      const auto up = [](double x) {
-        const float v = static_cast<float>(x);
-        return double(v) < x ? std::nextafter(v, std::numeric_limits<float>::infinity()) : v;
-      };
-      glm::vec3 corner[8];
-      for (int k = 0; k < 8; ++k)
-        corner[k] = glm::vec3((k & 1) ? up(hi.x) : down(lo.x), (k & 2) ? up(hi.y) : down(lo.y),
-                              (k & 4) ? up(hi.z) : down(lo.z));
-      frame.box_rect = project_rect(frame, corner, 8);
-    }
+    frame.box_rect = scene_box_rect(data, frame);
     frame.initial_depth = initial_depth;
     frame.initial_solid = initial_solid;
     const int tile = frame.tile = tile_edge(data, width, height);
     context.stats.axis = frame.axis;
     const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
     const std::size_t tile_count = static_cast<std::size_t>(tiles_x) * static_cast<std::size_t>(tiles_y);
-    const unsigned thread_count = detail::resolve_threads(data.params.threads, std::min<std::size_t>(tile_count, 1024));
-    if (scratch.workers.size() < thread_count) scratch.workers.resize(thread_count);
-    for (unsigned i = 0; i < thread_count; ++i) {
-      auto& th = scratch.workers[i];
-      if (th.tri.size() != data.triangle_count()) {
-        th.tri.assign(data.triangle_count(), Worker::Tri{0u, 0u, Rect{0, 0, -1, -1}});
-        th.stamp_value = 0;
-        th.frame_epoch = 0;
-      }
-      if (th.chunk.size() != data.chunk_box.size() / 6) {
-        th.chunk.assign(data.chunk_box.size() / 6, Worker::Chunk{0u, Rect{0, 0, -1, -1}});
-        th.frame_epoch = 0;
-        for (auto& t : th.tri) t.epoch = 0u;
-      }
-      if (++th.frame_epoch == 0) {
-        for (auto& t : th.tri) t.epoch = 0u;
-        for (auto& c : th.chunk) c.epoch = 0u;
-        th.frame_epoch = 1;
-      }
-      th.tested_count = 0;
-      th.extra.clear();
-      th.unsure.clear();
-      th.stats = NciSelectStats{};
-    }
+    const unsigned count = detail::resolve_threads(data.params.threads, std::min<std::size_t>(tile_count, 1024));
+    prepare_workers(data, scratch, count);
     context.tile_tested.assign(tile_count, 0u);
     context.tiles_x = tiles_x;
     context.tile_size = tile;
-    std::atomic<std::size_t> next{0};
-    auto work = [&](unsigned index) {
-      auto& th = scratch.workers[index];
-      // Per-tile ray scratch (about 320 KB), made once per worker slot of the context and reused
-      // across calls (not per tile, not on the stack); process_tile sets every field it reads.
-      if (th.tile_rays.empty()) th.tile_rays.resize(1);
-      TileRays& rays = th.tile_rays.front();
-      const std::size_t words = (data.triangle_count() + 63) / 64;
-      th.tested_bits.assign(words, 0u);
-      th.shown_bits.assign(words, 0u);
-      for (;;) {
-        const std::size_t t = next.fetch_add(1, std::memory_order_relaxed);
-        if (t >= tile_count) break;
-        const int tx = static_cast<int>(t % static_cast<std::size_t>(tiles_x));
-        const int ty = static_cast<int>(t / static_cast<std::size_t>(tiles_x));
-        const std::uint32_t before = th.tested_count;
-        process_tile(data, frame, tx * tile, ty * tile, std::min(width, (tx + 1) * tile),
-                     std::min(height, (ty + 1) * tile), rays, th, scratch);
-        context.tile_tested[t] = th.tested_count - before;
-      }
-    };
-    using Work = decltype(work);
-    detail::run_tasks(data.params.task_runner, thread_count,
-                      [](void* job, std::size_t task) { (*static_cast<Work*>(job))(static_cast<unsigned>(task)); }, &work);
-    // Merge: distinct tested triangles (the union of the workers' bit sets) and the visible set
-    // (pixel winners and edge-band extras), sorted by mesh id through a bit set over the mesh.
-    for (unsigned i = 0; i < thread_count; ++i) {
-      const auto& th = scratch.workers[i];
-      context.stats.ray_tests += th.stats.ray_tests;
-      context.stats.cells_visited += th.stats.cells_visited;
-      context.stats.slices_walked += th.stats.slices_walked;
-      context.stats.triangles_met += th.stats.triangles_met;
-      context.stats.triangles_no_pixel += th.stats.triangles_no_pixel;
-      for (const auto& e : th.extra) scratch.extras.push_back(Extra{data.original(e.tri), e.t, e.pixel});
-    }
-    {
-      // Every worker's lists grow to what any worker needed (the extras to this call's total), so
-      // a later frame that spreads the same tiles over the workers differently does not allocate.
-      std::size_t cand = 0, unsure = 0;
-      for (unsigned i = 0; i < thread_count; ++i) {
-        cand = std::max(cand, scratch.workers[i].cand.capacity());
-        unsure = std::max(unsure, scratch.workers[i].unsure.capacity());
-      }
-      for (unsigned i = 0; i < thread_count; ++i) {
-        auto& th = scratch.workers[i];
-        th.cand.reserve(cand);
-        th.unsure.reserve(unsure);
-        th.extra.reserve(scratch.extras.size());
-        th.active_classes.reserve(data.class_axis.size());
-      }
-    }
-    auto& mesh_bits = scratch.shown_mesh;
-    mesh_bits.assign((data.stats.triangles_input + 63) / 64, 0u);
-    const std::size_t words = (data.triangle_count() + 63) / 64;
-    for (std::size_t w = 0; w < words; ++w) {
-      std::uint64_t tested = 0, shown = 0;
-      for (unsigned i = 0; i < thread_count; ++i) {
-        tested |= scratch.workers[i].tested_bits[w];
-        shown |= scratch.workers[i].shown_bits[w];
-      }
-      out.triangles_tested += static_cast<std::size_t>(__builtin_popcountll(tested));
-      while (shown) {
-        const std::uint32_t m = data.original(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(__builtin_ctzll(shown)));
-        shown &= shown - 1;
-        mesh_bits[m / 64] |= std::uint64_t{1} << (m % 64);
-      }
-    }
-    for (std::size_t w = 0; w < mesh_bits.size(); ++w) {
-      for (std::uint64_t bits = mesh_bits[w]; bits; bits &= bits - 1)
-        out.triangles.push_back(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(__builtin_ctzll(bits)));
-    }
+    run_tiles(data, frame, context, scratch, count, tiles_x, tile_count);
+    merge_workers(data, context, scratch, count, out);
   }
-  if (pixels) {
-    pixels->triangle.resize(pixel_count);
-    pixels->depth.resize(pixel_count);
-    for (std::size_t i = 0; i < pixel_count; ++i) {
-      const std::uint32_t tri = scratch.pixel_tri[i];
-      pixels->triangle[i] = tri == no_triangle ? NciPixels::miss : data.original(tri);
-      pixels->depth[i] = tri == no_triangle ? std::numeric_limits<float>::infinity() : scratch.pixel_t[i];
-    }
-  }
+  if (pixels) write_pixels(data, scratch, pixel_count, *pixels);
 }
 
 }  // namespace cullkit::detail::nci
