@@ -1,6 +1,6 @@
 // cullkit/normal_class_index.hpp: NormalClassIndex, pixel-driven near-to-far selection of the
 // triangles a camera sees (seed: Wei, Wang, Wu, "Fast selecting visible surfaces in high
-// precision", Journal of Software 17(10), 2006; DESIGN.md §8 gives the corrected algorithm).
+// precision", Journal of Software 17(10), 2006, with the corrections docs/nci_internals.md lists).
 //
 // Preprocess: triangle normals are clustered on the unit sphere (spherical k-means, fixed seed);
 // each class keeps its normal cone and three sparse grids over the scene box, one per axis
@@ -49,7 +49,7 @@
 // test in float on corners taken relative to the eye, front faces only, and the eye strictly on
 // the front side of the triangle's plane in double (a triangle seen exactly edge-on is never hit).
 // Known limit: a triangle whose plane passes within float rounding of the eye (the eye touching
-// the surface: detail::touches_eye, within 2^-20 of its farthest corner's distance) gets noise from
+// the surface: its plane within 2^-20 of the farthest corner's distance from the eye) gets noise from
 // the float ray test, up to hits at depth about 0 on rays the exact geometry sends away from it. The
 // index keeps such hits only where its exact rejections (class cones, beams, screen rectangles, edge
 // planes) allow them, so there its answer may differ from a plain float ray caster's and may depend
@@ -107,7 +107,7 @@ class NormalClassIndex {
     NciParams& p = data_.params = params;
     p.classes = std::clamp(p.classes, 1, 4096);
     p.grid = std::clamp(p.grid, 1, 4096);
-    if (p.tile_size != 0) p.tile_size = std::clamp(p.tile_size, 2, detail::nci::TileRays::max_tile);
+    if (p.tile_size != 0) p.tile_size = std::clamp(p.tile_size, 2, detail::nci::TileState::max_tile);
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<glm::vec3> normals;
     gather(mesh, normals);
@@ -142,7 +142,7 @@ class NormalClassIndex {
     detail::nci::select_frame(data_, camera, context, out, pixels, nullptr, nullptr);
   }
 
-  /// With moving objects (DESIGN.md §8): each object has its own index, built in its local frame,
+  /// With moving objects: each object has its own index, built in its local frame,
   /// and a rigid `local_to_world` transform (rotation and translation only: ray parameters t stay
   /// the same in both frames). The objects are selected first, each with the camera taken into its
   /// local frame; then the static scene, whose pixels stay unfinished but start from the objects'

@@ -19,7 +19,7 @@
 
 namespace cullkit::detail::nci {
 
-using Mask = TileRays::Mask;  // one bit per pixel of a tile row
+using Mask = TileState::Mask;  // one bit per pixel of a tile row
 
 // The beam of the tile's live rays: planes through the eye and consecutive corner rays, then
 // measured against every live ray so that the margin covers whatever the projection did.
@@ -38,7 +38,7 @@ inline bool live_box(int tw, int th, const Mask* live, int box[4]) noexcept {
     cols |= live[y];
   }
   if (y0 < 0) return false;
-  int x0 = TileRays::low_bit(cols), x1 = TileRays::high_bit(cols);
+  int x0 = TileState::low_bit(cols), x1 = TileState::high_bit(cols);
   if (x0 == x1) x1 < tw - 1 ? ++x1 : --x0;
   if (y0 == y1) y1 < th - 1 ? ++y1 : --y0;
   box[0] = x0;
@@ -48,7 +48,7 @@ inline bool live_box(int tw, int th, const Mask* live, int box[4]) noexcept {
   return true;
 }
 
-inline void make_beam(TileRays& r, int tw, int th, const Mask* live) noexcept {
+inline void make_beam(TileState& r, int tw, int th, const Mask* live) noexcept {
   const int stride = r.stride;  // the tile's row pitch (kept in a register)
   r.beam = false;
   int box[4];
@@ -81,7 +81,7 @@ inline void make_beam(TileRays& r, int tw, int th, const Mask* live) noexcept {
     {
       Mask maybe = 0;
       const __m128 sign = _mm_set1_ps(-0.0f), lim = _mm_set1_ps(5e-7f);
-      for (int q = TileRays::low_bit(bits) / 4, q_end = TileRays::high_bit(bits) / 4; q <= q_end; ++q) {
+      for (int q = TileState::low_bit(bits) / 4, q_end = TileState::high_bit(bits) / 4; q <= q_end; ++q) {
         if (!((bits >> (4 * q)) & 15u)) continue;
         const int i0 = y * stride + 4 * q;
         const __m128 vx = _mm_load_ps(&r.dx[i0]), vy = _mm_load_ps(&r.dy[i0]), vz = _mm_load_ps(&r.dz[i0]);
@@ -100,7 +100,7 @@ inline void make_beam(TileRays& r, int tw, int th, const Mask* live) noexcept {
     }
 #endif
     while (bits) {
-      const int x = TileRays::low_bit(bits);
+      const int x = TileState::low_bit(bits);
       bits &= bits - 1;
       const glm::dvec3 dir = r.direction(y * stride + x);
       const double dl = std::fabs(dir.x) + std::fabs(dir.y) + std::fabs(dir.z);
@@ -119,7 +119,7 @@ inline void make_beam(TileRays& r, int tw, int th, const Mask* live) noexcept {
 
 // Re-makes the beam when the live pixels' rectangle has shrunk since it was made (a beam that
 // cannot be made for the smaller rectangle leaves the old one, which still holds every live ray).
-inline void narrow_beam(TileRays& r, int tw, int th, const Mask* live) noexcept {
+inline void narrow_beam(TileState& r, int tw, int th, const Mask* live) noexcept {
   int box[4];
   if (!r.beam || !live_box(tw, th, live, box)) return;
   // Re-made only when the rectangle lost at least half its pixels (the re-make visits every

@@ -18,6 +18,7 @@
 #include "overlap.hpp"
 #include "../worker_pool.hpp"
 #include "index_data.hpp"
+#include "tolerances.hpp"
 
 namespace cullkit::detail::nci {
 
@@ -189,7 +190,7 @@ inline std::vector<std::uint16_t> make_classes(IndexData& data, std::vector<glm:
     data.class_cos.resize(classes);
     for (std::size_t c = 0; c < classes; ++c) {
       // Half-angle plus a margin for the float normals and the float ray test.
-      const double angle = std::acos(std::clamp(min_dot[c], -1.0, 1.0)) + 2e-3;
+      const double angle = std::acos(std::clamp(min_dot[c], -1.0, 1.0)) + tolerance::cone_angle;
       if (angle >= 1.5707963267948966) {
         data.class_sin[c] = 2.0f;  // never skipped
         data.class_cos[c] = 0.0f;

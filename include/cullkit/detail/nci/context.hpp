@@ -29,7 +29,7 @@ struct Rect {
 };
 
 // A hit or near miss within rounding of an edge (detail::watertight_hit_band) in the current
-// tile: reported when nearer than its pixel's solid hit (see TileRays::solid_t).
+// tile: reported when nearer than its pixel's solid hit (see TileState::solid_t).
 struct EdgeBandHit {
   std::uint32_t tri;
   float t;
@@ -66,11 +66,11 @@ struct Worker {
   // ORs them: no serial pass over the pixels, no sort.
   std::vector<std::uint64_t> tested_bits, shown_bits;
   std::uint32_t tested_count = 0;  // ray-tested (triangle, tile) pairs so far in this call
-  std::vector<EdgeBandHit> unsure;
-  std::vector<Extra> extra;  // selected beside the pixels' first hits (unsure, solid)
-  std::vector<Candidate> cand;
+  std::vector<EdgeBandHit> edge_hits;
+  std::vector<Extra> extra;  // selected beside the pixels' first hits (edge hits, solid)
+  std::vector<Candidate> candidates;
   std::vector<std::uint16_t> active_classes;
-  std::vector<TileRays> tile_rays;  // empty or one: the worker's tile scratch
+  std::vector<TileState> tile_rays;  // empty or one: the worker's tile scratch
   NciSelectStats stats;
 };
 

@@ -18,6 +18,7 @@
 #include "beam.hpp"
 #include "context.hpp"
 #include "index_data.hpp"
+#include "tolerances.hpp"
 #include "view.hpp"
 
 namespace cullkit::detail::nci {
@@ -38,7 +39,7 @@ namespace cullkit::detail::nci {
     ry0 = std::max(0, ly0);
     ry1 = std::min(th - 1, ly1);
   }
-  span = TileRays::columns(rx0, rx1);
+  span = TileState::columns(rx0, rx1);
   Mask under = 0;
   for (int y = ry0; y <= ry1; ++y) under |= live[y] & span;
   return under != 0;
@@ -46,13 +47,13 @@ namespace cullkit::detail::nci {
 
 // Whether every ray that would test the triangle (live, under its rectangle) already holds a
 // hit strictly nearer than any t the watertight test can compute for it: a lower bound on that
-// t (see TileRays::sz_lo) times (1 - 1e-6), against the farthest of those rays' hits. The
+// t (see TileState::sz_lo) times (1 - 1e-6), against the farthest of those rays' hits. The
 // computed t is tt / det with tt and det sums of non-negative products, so it is at least the
 // bound times (1 - 8 2^-24); the margin covers that, and strictness keeps ties (lower index
 // wins) with the ray test. Such a triangle is not tested at all.
 // `qlo` and `qhi` bound the corners' coordinates relative to the eye as the ray test computes
 // them (float differences; rounding is monotone, so the box of the float corners bounds them).
-[[nodiscard]] inline bool behind_hits(const TileRays& r, const float qlo[3], const float qhi[3], int ry0, int ry1,
+[[nodiscard]] inline bool behind_hits(const TileState& r, const float qlo[3], const float qhi[3], int ry0, int ry1,
                                       Mask span, const Mask* live) noexcept {
   const int stride = r.stride;  // the tile's row pitch (kept in a register)
   double bound = std::numeric_limits<double>::infinity();
@@ -61,12 +62,12 @@ namespace cullkit::detail::nci {
     const double lo = r.sz_lo[k], hi = r.sz_hi[k];
     bound = std::min({bound, lo * double(qlo[k]), lo * double(qhi[k]), hi * double(qlo[k]), hi * double(qhi[k])});
   }
-  bound *= 1.0 - 1e-6;
+  bound *= 1.0 - tolerance::float_relative;
   if (!(bound > 1e-30) || !std::isfinite(bound)) return false;
   for (int y = ry0; y <= ry1; ++y) {
     Mask bits = live[y] & span;
     while (bits) {
-      const int x = TileRays::low_bit(bits);
+      const int x = TileState::low_bit(bits);
       bits &= bits - 1;
       if (!(double(r.solid_t[y * stride + x]) < bound)) return false;
     }
@@ -78,7 +79,7 @@ namespace cullkit::detail::nci {
 // margin of outside_beam (then so does every triangle inside it): the largest n.x + eps |x|_1
 // over the box, x relative to the eye, is below zero. In double with a 1e-12 relative slack, so
 // the sign is exact for the float data.
-[[nodiscard]] inline bool chunk_outside_beam(const TileRays& r, const float* box, const Frame& f) noexcept {
+[[nodiscard]] inline bool chunk_outside_beam(const TileState& r, const float* box, const ViewSetup& f) noexcept {
   double lo[3], hi[3], l1 = 0.0, gap[3];
   for (int a = 0; a < 3; ++a) {
     lo[a] = double(box[a]) - f.eye[a];
@@ -100,12 +101,12 @@ namespace cullkit::detail::nci {
 // Whether no live ray of the tile can take a hit from chunk j: its box's screen rectangle
 // (cached per frame and thread) covers no live pixel of the tile, or every live ray under it
 // already holds a hit strictly nearer than any t the ray test could give a point of the box.
-[[nodiscard]] inline bool chunk_hidden(const IndexData& data, const Frame& f, std::uint32_t j, int x0, int y0, int tw, int th,
-                                const Mask* live, const TileRays& r, Worker& thread) noexcept {
+[[nodiscard]] inline bool chunk_hidden(const IndexData& data, const ViewSetup& f, std::uint32_t j, int x0, int y0, int tw, int th,
+                                const Mask* live, const TileState& r, Worker& worker) noexcept {
   const float* box = &data.chunk_box[6 * std::size_t{j}];
-  auto& slot = thread.chunk[j];
-  if (slot.epoch != thread.frame_epoch) {
-    slot.epoch = thread.frame_epoch;
+  auto& slot = worker.chunk[j];
+  if (slot.epoch != worker.frame_epoch) {
+    slot.epoch = worker.frame_epoch;
     glm::vec3 corner[8];
     for (int k = 0; k < 8; ++k)
       corner[k] = glm::vec3(box[(k & 1) ? 3 : 0], box[(k & 2) ? 4 : 1], box[(k & 4) ? 5 : 2]);
@@ -123,7 +124,7 @@ namespace cullkit::detail::nci {
 // corner x (relative to the eye, in float as the ray test takes it) has n.x + eps |x|_1 < 0.
 // That set is convex, so it holds the whole triangle; a ray direction d (unit) with
 // n.d >= -eps |d|_1 meets no point of it.
-[[nodiscard]] inline bool outside_beam(const IndexData& data, const TileRays& r, std::uint32_t tri, const Frame& f) noexcept {
+[[nodiscard]] inline bool outside_beam(const IndexData& data, const TileState& r, std::uint32_t tri, const ViewSetup& f) noexcept {
   float x[3][3];
   for (int k = 0; k < 3; ++k) {
     const glm::vec3& p = data.corner(tri, k);
@@ -151,7 +152,7 @@ namespace cullkit::detail::nci {
 // directions are positive multiples of an affine function of the pixel position, so every pixel ray of the
 // rectangle is a positive combination of the corner rays and lies outside that plane as well;
 // the margin covers the float rounding of the directions and of the ray test (about 1e-7).
-[[nodiscard]] inline bool beside_rect(const TileRays& r, const float a[3], const float b[3], const float c[3], int rx0,
+[[nodiscard]] inline bool beside_rect(const TileState& r, const float a[3], const float b[3], const float c[3], int rx0,
                                       int ry0, int rx1, int ry1) noexcept {
   const int stride = r.stride;  // the tile's row pitch (kept in a register)
   const glm::dvec3 p[3] = {glm::dvec3(a[0], a[1], a[2]), glm::dvec3(b[0], b[1], b[2]), glm::dvec3(c[0], c[1], c[2])};
@@ -174,7 +175,7 @@ namespace cullkit::detail::nci {
   return false;
 }
 
-// The 2D footprint pre-test (project issue #6): which live pixels of `bits` (rows ry0..ry1 of the
+// The 2D footprint pre-test: which live pixels of `bits` (rows ry0..ry1 of the
 // tile at (x0, y0)) have their centre inside the projected triangle grown by a margin; only
 // those rays can hit it. False when the test does not apply (a corner not strictly in front of
 // the eye, a projection that is not finite or has no area): then every ray is tested as before.
@@ -187,8 +188,8 @@ namespace cullkit::detail::nci {
 //    direction rounded to float, the shear constants d[kx] / d[kz], the corners' float offsets
 //    from the eye and the sheared coordinates (each relative error <= 2^-24 of a length at most
 //    sqrt(3) times the depth along the ray, together well below 1e-6 rad); at most 25,000 pixels
-//    per radian (Frame::footprint) makes that < 0.025 pixel, inside the margin m = 0.05 pixel
-//    per axis (the screen rectangles' margin Frame::margin, which adds the ray test's edge band
+//    per radian (ViewSetup::footprint) makes that < 0.025 pixel, inside the margin m = 0.05 pixel
+//    per axis (the screen rectangles' margin ViewSetup::margin, which adds the ray test's edge band
 //    so near misses are tested too; an edge grows by m times the 1-norm of its normal); (b) the rounding of the edge products cx * by - cy * bx, at most about 4 * 2^-24 |B| |C|:
 //    in pixel units (the map from the shear plane to the screen is a projective map close to a
 //    similarity near the ray, condition number well below 10) at most 1e-5 R^2, R bounding the
@@ -197,7 +198,7 @@ namespace cullkit::detail::nci {
 //    a relative 1e-12 of the coordinates.
 //  A pixel centre outside the grown triangle has one exact edge function below -(margin), so its
 //  float ray sees that edge function negative and the watertight test rejects it.
-[[nodiscard]] inline bool footprint_mask(const Frame& f, const glm::vec3& p0, const glm::vec3& p1,
+[[nodiscard]] inline bool footprint_mask(const ViewSetup& f, const glm::vec3& p0, const glm::vec3& p1,
                                          const glm::vec3& p2, int x0, int y0, int ry0, int ry1,
                                          const Mask* bits, Mask* mask, int x_last) noexcept {
   double px[3], py[3];
@@ -241,7 +242,7 @@ namespace cullkit::detail::nci {
     const double qy = y0 + y;
     const __m128d ey0 = _mm_set1_pd(ny[0] * qy), ey1 = _mm_set1_pd(ny[1] * qy), ey2 = _mm_set1_pd(ny[2] * qy);
     Mask m = 0;
-    for (int x = TileRays::low_bit(b), x_end = TileRays::high_bit(b); x <= x_end; x += 2) {
+    for (int x = TileState::low_bit(b), x_end = TileState::high_bit(b); x <= x_end; x += 2) {
       const __m128d qx = _mm_set_pd(double(x0 + x + 1), double(x0 + x));
       const __m128d e0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(nx0, qx), ey0), of0);
       const __m128d e1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(nx1, qx), ey1), of1);
@@ -257,12 +258,12 @@ namespace cullkit::detail::nci {
     Mask m = 0;
     const double qy = y0 + y;
     while (b) {
-      const int x = TileRays::low_bit(b);
+      const int x = TileState::low_bit(b);
       b &= b - 1;
       const double qx = x0 + x;
       if (nx[0] * qx + ny[0] * qy + off[0] >= 0.0 && nx[1] * qx + ny[1] * qy + off[1] >= 0.0 &&
           nx[2] * qx + ny[2] * qy + off[2] >= 0.0)
-        m |= TileRays::bit(x);
+        m |= TileState::bit(x);
     }
     mask[y] = m;
   }
@@ -274,18 +275,18 @@ namespace cullkit::detail::nci {
 // ray was tested (a back face seen from the eye, or no live pixel under its rectangle).
 // Whether `tri` may be hit by an unfinished ray of the tile (beam, screen rectangle, live
 // pixels under it); when it may, `out` gets the pixels under its rectangle and its sort key.
-inline bool admit_triangle(const IndexData& data, const Frame& f, std::uint32_t tri, int x0, int y0, int tw, int th, const Mask* live,
-                    const TileRays& r, Worker& thread, Candidate& out) {
+inline bool admit_triangle(const IndexData& data, const ViewSetup& f, std::uint32_t tri, int x0, int y0, int tw, int th, const Mask* live,
+                    const TileState& r, Worker& worker, Candidate& out) {
   // The triangle's screen rectangle, computed once per frame and thread (cached: a triangle is
   // met by many tiles).
-  auto& slot = thread.tri[tri];
+  auto& slot = worker.tri[tri];
   bool in_beam = !r.beam;
-  if (slot.epoch != thread.frame_epoch) {
+  if (slot.epoch != worker.frame_epoch) {
     // Not yet met this frame: a triangle wholly outside the tile's beam is rejected without
     // computing its rectangle (most triangles of a big scene met by a tile are).
     if (r.beam && outside_beam(data, r, tri, f)) return false;
     in_beam = true;
-    slot.epoch = thread.frame_epoch;
+    slot.epoch = worker.frame_epoch;
     slot.rect = screen_rect(f, data.corner(tri, 0), data.corner(tri, 1), data.corner(tri, 2));
   }
   // None (back face, edge-on from the eye, off screen) or no live pixel under it: not tested.
@@ -293,7 +294,7 @@ inline bool admit_triangle(const IndexData& data, const Frame& f, std::uint32_t 
   Mask span;
   if (!live_under(slot.rect, x0, y0, tw, th, live, rx0, ry0, rx1, ry1, span)) {
     // Counted only inside the beam, so the count does not depend on which thread met it first.
-    if (slot.rect.x0 > slot.rect.x1 && (in_beam || !outside_beam(data, r, tri, f))) ++thread.stats.triangles_no_pixel;
+    if (slot.rect.x0 > slot.rect.x1 && (in_beam || !outside_beam(data, r, tri, f))) ++worker.stats.triangles_no_pixel;
     return false;
   }
   // The same beam test when the rectangle came from the cache, so what is tested does not depend

@@ -21,12 +21,12 @@ namespace cullkit::detail::nci {
 // and 32 below (bigger tiles pay from there on; see NciParams::tile_size).
 [[nodiscard]] inline int tile_edge(const IndexData& data, int width, int height) noexcept {
   if (data.params.tile_size != 0) return data.params.tile_size;
-  return static_cast<long long>(width) * height >= 640LL * 480LL ? TileRays::max_tile : 32;
+  return static_cast<long long>(width) * height >= 640LL * 480LL ? TileState::max_tile : 32;
 }
 
 // The pixels whose centres may see the scene box grown by data.delta (as the per-ray box test),
 // its corners rounded outward to float: it holds every triangle's rectangle.
-[[nodiscard]] inline Rect scene_box_rect(const IndexData& data, const Frame& frame) {
+[[nodiscard]] inline Rect scene_box_rect(const IndexData& data, const ViewSetup& frame) {
   const glm::dvec3 lo = glm::dvec3(data.box.min) - data.delta, hi = glm::dvec3(data.box.max) + data.delta;
   const auto down = [](double x) {
     const float v = static_cast<float>(x);
@@ -48,53 +48,53 @@ namespace cullkit::detail::nci {
 inline void prepare_workers(const IndexData& data, Scratch& scratch, unsigned count) {
   if (scratch.workers.size() < count) scratch.workers.resize(count);
   for (unsigned i = 0; i < count; ++i) {
-    auto& th = scratch.workers[i];
-    if (th.tri.size() != data.triangle_count()) {
-      th.tri.assign(data.triangle_count(), Worker::Tri{0u, 0u, Rect{0, 0, -1, -1}});
-      th.stamp_value = 0;
-      th.frame_epoch = 0;
+    auto& worker = scratch.workers[i];
+    if (worker.tri.size() != data.triangle_count()) {
+      worker.tri.assign(data.triangle_count(), Worker::Tri{0u, 0u, Rect{0, 0, -1, -1}});
+      worker.stamp_value = 0;
+      worker.frame_epoch = 0;
     }
-    if (th.chunk.size() != data.chunk_box.size() / 6) {
-      th.chunk.assign(data.chunk_box.size() / 6, Worker::Chunk{0u, Rect{0, 0, -1, -1}});
-      th.frame_epoch = 0;
-      for (auto& t : th.tri) t.epoch = 0u;
+    if (worker.chunk.size() != data.chunk_box.size() / 6) {
+      worker.chunk.assign(data.chunk_box.size() / 6, Worker::Chunk{0u, Rect{0, 0, -1, -1}});
+      worker.frame_epoch = 0;
+      for (auto& t : worker.tri) t.epoch = 0u;
     }
-    if (++th.frame_epoch == 0) {
-      for (auto& t : th.tri) t.epoch = 0u;
-      for (auto& c : th.chunk) c.epoch = 0u;
-      th.frame_epoch = 1;
+    if (++worker.frame_epoch == 0) {
+      for (auto& t : worker.tri) t.epoch = 0u;
+      for (auto& c : worker.chunk) c.epoch = 0u;
+      worker.frame_epoch = 1;
     }
-    th.tested_count = 0;
-    th.extra.clear();
-    th.unsure.clear();
-    th.stats = NciSelectStats{};
+    worker.tested_count = 0;
+    worker.extra.clear();
+    worker.edge_hits.clear();
+    worker.stats = NciSelectStats{};
   }
 }
 
 // Every tile of the frame, on `count` tasks (the caller's TaskRunner or the library's pool): task
 // i uses worker slot i and takes tiles from a shared counter until none is left.
-inline void run_tiles(const IndexData& data, const Frame& frame, NciContext& context, Scratch& scratch, unsigned count,
+inline void run_tiles(const IndexData& data, const ViewSetup& frame, NciContext& context, Scratch& scratch, unsigned count,
                       int tiles_x, std::size_t tile_count) {
   const int tile = frame.tile, width = frame.width, height = frame.height;
   std::atomic<std::size_t> next{0};
   auto work = [&](unsigned index) {
-    auto& th = scratch.workers[index];
+    auto& worker = scratch.workers[index];
     // Per-tile ray scratch (about 320 KB), made once per worker slot of the context and reused
     // across calls (not per tile, not on the stack); process_tile sets every field it reads.
-    if (th.tile_rays.empty()) th.tile_rays.resize(1);
-    TileRays& rays = th.tile_rays.front();
+    if (worker.tile_rays.empty()) worker.tile_rays.resize(1);
+    TileState& rays = worker.tile_rays.front();
     const std::size_t words = (data.triangle_count() + 63) / 64;
-    th.tested_bits.assign(words, 0u);
-    th.shown_bits.assign(words, 0u);
+    worker.tested_bits.assign(words, 0u);
+    worker.shown_bits.assign(words, 0u);
     for (;;) {
       const std::size_t t = next.fetch_add(1, std::memory_order_relaxed);
       if (t >= tile_count) break;
       const int tx = static_cast<int>(t % static_cast<std::size_t>(tiles_x));
       const int ty = static_cast<int>(t / static_cast<std::size_t>(tiles_x));
-      const std::uint32_t before = th.tested_count;
+      const std::uint32_t before = worker.tested_count;
       process_tile(data, frame, tx * tile, ty * tile, std::min(width, (tx + 1) * tile), std::min(height, (ty + 1) * tile),
-                   rays, th, scratch);
-      context.tile_tested[t] = th.tested_count - before;
+                   rays, worker, scratch);
+      context.tile_tested[t] = worker.tested_count - before;
     }
   };
   using Work = decltype(work);
@@ -107,28 +107,28 @@ inline void run_tiles(const IndexData& data, const Frame& frame, NciContext& con
 // winners and extras), sorted by mesh id through a bit set over the mesh.
 inline void merge_workers(const IndexData& data, NciContext& context, Scratch& scratch, unsigned count, VisibleSet& out) {
   for (unsigned i = 0; i < count; ++i) {
-    const auto& th = scratch.workers[i];
-    context.stats.ray_tests += th.stats.ray_tests;
-    context.stats.cells_visited += th.stats.cells_visited;
-    context.stats.slices_walked += th.stats.slices_walked;
-    context.stats.triangles_met += th.stats.triangles_met;
-    context.stats.triangles_no_pixel += th.stats.triangles_no_pixel;
-    for (const auto& e : th.extra) scratch.extras.push_back(Extra{data.original(e.tri), e.t, e.pixel});
+    const auto& worker = scratch.workers[i];
+    context.stats.ray_tests += worker.stats.ray_tests;
+    context.stats.cells_visited += worker.stats.cells_visited;
+    context.stats.slices_walked += worker.stats.slices_walked;
+    context.stats.triangles_met += worker.stats.triangles_met;
+    context.stats.triangles_no_pixel += worker.stats.triangles_no_pixel;
+    for (const auto& e : worker.extra) scratch.extras.push_back(Extra{data.original(e.tri), e.t, e.pixel});
   }
   {
     // Every worker's lists grow to what any worker needed (the extras to this call's total), so
     // a later frame that spreads the same tiles over the workers differently does not allocate.
     std::size_t cand = 0, unsure = 0;
     for (unsigned i = 0; i < count; ++i) {
-      cand = std::max(cand, scratch.workers[i].cand.capacity());
-      unsure = std::max(unsure, scratch.workers[i].unsure.capacity());
+      cand = std::max(cand, scratch.workers[i].candidates.capacity());
+      unsure = std::max(unsure, scratch.workers[i].edge_hits.capacity());
     }
     for (unsigned i = 0; i < count; ++i) {
-      auto& th = scratch.workers[i];
-      th.cand.reserve(cand);
-      th.unsure.reserve(unsure);
-      th.extra.reserve(scratch.extras.size());
-      th.active_classes.reserve(data.class_axis.size());
+      auto& worker = scratch.workers[i];
+      worker.candidates.reserve(cand);
+      worker.edge_hits.reserve(unsure);
+      worker.extra.reserve(scratch.extras.size());
+      worker.active_classes.reserve(data.class_axis.size());
     }
   }
   auto& mesh_bits = scratch.shown_mesh;
@@ -192,7 +192,7 @@ inline void select_frame(const IndexData& data, const Camera& camera, NciContext
     scratch.pixel_tri.resize(pixel_count);
     scratch.pixel_t.resize(pixel_count);
     scratch.pixel_solid_t.resize(pixel_count);
-    Frame frame = make_frame(data, camera);
+    ViewSetup frame = make_frame(data, camera);
     frame.box_rect = scene_box_rect(data, frame);
     frame.initial_depth = initial_depth;
     frame.initial_solid = initial_solid;

@@ -23,12 +23,12 @@ namespace cullkit::detail::nci {
 
 // Tests an admitted triangle against the unfinished rays under its rectangle; false when no ray
 // was tested (all of them already hold nearer hits, or the triangle passes beside them).
-inline bool test_triangle(const IndexData& data, const Frame& f, int x0, int y0, const Candidate& cand, const Mask* live,
-                   TileRays& r, Worker& thread) {
+inline bool test_triangle(const IndexData& data, const ViewSetup& f, int x0, int y0, const Candidate& cand, const Mask* live,
+                   TileState& r, Worker& worker) {
   const int stride = r.stride;  // the tile's row pitch (kept in a register)
   const std::uint32_t tri = cand.tri;
   const int rx0 = cand.rx0, ry0 = cand.ry0, rx1 = cand.rx1, ry1 = cand.ry1;
-  const Mask span = TileRays::columns(rx0, rx1);
+  const Mask span = TileState::columns(rx0, rx1);
   const glm::vec3& p0 = data.corner(tri, 0);
   const glm::vec3& p1 = data.corner(tri, 1);
   const glm::vec3& p2 = data.corner(tri, 2);
@@ -43,10 +43,10 @@ inline bool test_triangle(const IndexData& data, const Frame& f, int x0, int y0,
   if (behind_hits(r, qlo, qhi, ry0, ry1, span, live)) return false;
   if (f.use_rect && f.affine_rays && (rx1 > rx0 || ry1 > ry0) && beside_rect(r, a, b, c, rx0, ry0, rx1, ry1)) return false;
   // Only the live rays whose pixel centres lie in the triangle's grown 2D footprint can hit it.
-  Mask rows[TileRays::max_tile];
+  Mask rows[TileState::max_tile];
   for (int y = ry0; y <= ry1; ++y) rows[y] = live[y] & span;
   if (f.footprint) {
-    Mask inside[TileRays::max_tile];
+    Mask inside[TileState::max_tile];
     if (footprint_mask(f, p0, p1, p2, x0, y0, ry0, ry1, rows, inside, f.tile - 1)) {
       Mask left = 0;
       for (int y = ry0; y <= ry1; ++y) left |= (rows[y] &= inside[y]);
@@ -57,7 +57,7 @@ inline bool test_triangle(const IndexData& data, const Frame& f, int x0, int y0,
   for (int y = ry0; y <= ry1; ++y) {
     Mask bits = rows[y];
     while (bits) {
-      const int x = TileRays::low_bit(bits);
+      const int x = TileState::low_bit(bits);
       bits &= bits - 1;
       const int i = y * stride + x;
       // The depth reject of behind_hits for this ray alone (its own scale sz on its own dominant
@@ -66,10 +66,10 @@ inline bool test_triangle(const IndexData& data, const Frame& f, int x0, int y0,
       if (r.solid_t[i] < std::numeric_limits<float>::infinity()) {
         const detail::WatertightRay<float>& w = r.wray[i];
         const double sz = w.sz;
-        double bound = std::min(sz * double(qlo[w.kz]), sz * double(qhi[w.kz])) * (1.0 - 1e-6);
+        double bound = std::min(sz * double(qlo[w.kz]), sz * double(qhi[w.kz])) * (1.0 - tolerance::float_relative);
         if (bound > 1e-30 && std::isfinite(bound) && double(r.solid_t[i]) < bound) continue;
       }
-      ++thread.stats.ray_tests;
+      ++worker.stats.ray_tests;
       any = true;
       float t = 0.0f;
       bool near = false;
@@ -81,7 +81,7 @@ inline bool test_triangle(const IndexData& data, const Frame& f, int x0, int y0,
         r.best[i] = tri;
       }
       if (near) {
-        if (t <= r.solid_t[i]) thread.unsure.push_back(EdgeBandHit{tri, t, static_cast<std::uint16_t>(i)});
+        if (t <= r.solid_t[i]) worker.edge_hits.push_back(EdgeBandHit{tri, t, static_cast<std::uint16_t>(i)});
       } else if (hit && (t < r.solid_t[i] || (t == r.solid_t[i] && (r.solid[i] == no_triangle ||
                                                                     data.tri_original[tri] < data.tri_original[r.solid[i]])))) {
         if (t < r.solid_t[i]) {
@@ -103,13 +103,13 @@ inline bool test_triangle(const IndexData& data, const Frame& f, int x0, int y0,
 // monotone along the walk; an estimate from the stop coordinate is corrected by the predicate
 // itself, so the answer is exactly the first slice where it holds. The predicate's per-ray parts
 // (stop coordinate and margin) are computed once, not per evaluation.
-[[nodiscard]] inline int finish_slice(const IndexData& data, const TileRays& r, int i, int walk, int from, double ea, int na) noexcept {
+[[nodiscard]] inline int finish_slice(const IndexData& data, const TileState& r, int i, int walk, int from, double ea, int na) noexcept {
   const int end = walk == 0 ? na - 1 : 0;
   if (r.dir_a[i] == 0.0f) return from;
   const float t_stop = std::min(r.solid_t[i], r.t_exit[i]);
   const double reach = double(t_stop) * (1.0 + 1e-5) * double(r.dir_a[i]);
   const double pos = ea + reach;
-  const double margin = 0.25 * data.delta - 1e-6 * std::fabs(reach);
+  const double margin = 0.25 * data.delta - tolerance::float_relative * std::fabs(reach);
   const auto done = [&](int k) {
     if (walk == 0 ? k + 1 >= na : k <= 0) return true;
     const double next_plane = walk == 0 ? r.lo_a + (k + 1) * data.h : r.lo_a + k * data.h;
@@ -138,8 +138,8 @@ inline bool test_triangle(const IndexData& data, const Frame& f, int x0, int y0,
   return s;
 }
 
-inline void write_tile(const Frame& f, const TileRays& r, int x0, int y0, int tw, int th, Scratch& scratch,
-                       Worker& thread) {
+inline void write_tile(const ViewSetup& f, const TileState& r, int x0, int y0, int tw, int th, Scratch& scratch,
+                       Worker& worker) {
   const int stride = r.stride;  // the tile's row pitch (kept in a register)
   const std::size_t width = static_cast<std::size_t>(f.width);
   for (int y = 0; y < th; ++y) {
@@ -149,21 +149,21 @@ inline void write_tile(const Frame& f, const TileRays& r, int x0, int y0, int tw
       scratch.pixel_t[p] = r.best_t[y * stride + x];
       scratch.pixel_solid_t[p] = r.solid_t[y * stride + x];
       const std::uint32_t tri = r.best[y * stride + x];
-      if (tri != no_triangle) thread.shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
+      if (tri != no_triangle) worker.shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
     }
   }
 }
 
 // The live rays of a tile as one bit mask per tile row, for both walks and for each.
 struct TileMasks {
-  Mask live[TileRays::max_tile] = {};     // unfinished rays, both walks
-  Mask walk[2][TileRays::max_tile] = {};  // [0]: toward +axis (and flat), [1]: toward -axis
+  Mask live[TileState::max_tile] = {};     // unfinished rays, both walks
+  Mask walk[2][TileState::max_tile] = {};  // [0]: toward +axis (and flat), [1]: toward -axis
 };
 
 // A tile whose pixels no triangle's rectangle can reach (beside the scene box's rectangle): every
 // pixel keeps its initial depth, written straight to the frame's buffers (no pixel state, no
 // winner to mark).
-[[nodiscard]] inline bool write_if_off_scene(const Frame& f, int x0, int y0, int x1, int y1, Scratch& scratch) {
+[[nodiscard]] inline bool write_if_off_scene(const ViewSetup& f, int x0, int y0, int x1, int y1, Scratch& scratch) {
   const int tw = x1 - x0, th = y1 - y0;
   const Rect& b = f.box_rect;
   if (!(b.x0 > b.x1 || (b.x0 != Rect::full && (b.x1 < x0 || b.x0 > x1 - 1 || b.y1 < y0 || b.y0 > y1 - 1)))) return false;
@@ -182,8 +182,8 @@ struct TileMasks {
 // Sets up every ray of the tile (directions, initial depths, box entry and exit, slopes across
 // the walk axis, depth-bound scales) and marks the rays that reach the scene box live. Returns
 // the sum of the live rays' directions (the tile's mean ray, unnormalized).
-CULLKIT_FORCEINLINE glm::dvec3 setup_rays(const IndexData& data, const Frame& f, int x0, int y0, int tw, int th,
-                                          TileRays& r, TileMasks& m) {
+CULLKIT_FORCEINLINE glm::dvec3 setup_rays(const IndexData& data, const ViewSetup& f, int x0, int y0, int tw, int th,
+                                          TileState& r, TileMasks& m) {
   r.any_dirty = true;
   r.beam = false;
   r.beam_eps = 0.0f;
@@ -255,21 +255,21 @@ CULLKIT_FORCEINLINE glm::dvec3 setup_rays(const IndexData& data, const Frame& f,
           leave = std::min(leave, std::max(t0, t1));
         }
       }
-      const double tmin = enter - 1e-9 * std::fabs(enter), tmax = leave + 1e-9 * std::fabs(leave);
+      const double tmin = enter - tolerance::box_crossing * std::fabs(enter), tmax = leave + tolerance::box_crossing * std::fabs(leave);
       if (!hit || tmin > tmax) continue;
       r.wray[i] = detail::WatertightRay<float>::make(direction);
-      r.t_exit[i] = static_cast<float>(tmax * (1.0 + 1e-6)) * (1.0f + 1e-6f);
+      r.t_exit[i] = static_cast<float>(tmax * (1.0 + tolerance::float_relative)) * (1.0f + tolerance::float_relative_f);
       const double da = d3[a];
-      r.flat[i] = std::fabs(da) < 1e-6;
+      r.flat[i] = std::fabs(da) < tolerance::flat_direction;
       // Slopes by the reciprocal the box test took (inv3[a] is 1 / da when not flat): within a
       // double rounding of the quotient, far inside the float rounding the beam allows for.
       r.slope_b[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[b] * inv3[a]);
       r.slope_c[i] = r.flat[i] ? 0.0f : static_cast<float>(d3[c] * inv3[a]);
-      m.live[y] |= TileRays::bit(x);
+      m.live[y] |= TileState::bit(x);
       const detail::WatertightRay<float>& w = r.wray[i];
       r.sz_lo[w.kz] = std::min(r.sz_lo[w.kz], w.sz);
       r.sz_hi[w.kz] = std::max(r.sz_hi[w.kz], w.sz);
-      m.walk[da >= 0.0 ? 0 : 1][y] |= TileRays::bit(x);
+      m.walk[da >= 0.0 ? 0 : 1][y] |= TileState::bit(x);
       cone_sum += glm::dvec3(d3[0], d3[1], d3[2]);
     }
   }
@@ -279,7 +279,7 @@ CULLKIT_FORCEINLINE glm::dvec3 setup_rays(const IndexData& data, const Frame& f,
 // Classes that may face some live ray of the tile into `active`: a class is skipped only when every
 // normal of its cone and every live ray direction make an angle below 90 degrees (a back face for
 // all of them). Also sets the tile's mean ray (the candidates' sort key).
-CULLKIT_FORCEINLINE void select_classes(const IndexData& data, TileRays& r, int tw, int th, const Mask* live,
+CULLKIT_FORCEINLINE void select_classes(const IndexData& data, TileState& r, int tw, int th, const Mask* live,
                                         const glm::dvec3& cone_sum, std::vector<std::uint16_t>& active) {
   const int stride = r.stride;
   active.clear();
@@ -292,9 +292,9 @@ CULLKIT_FORCEINLINE void select_classes(const IndexData& data, TileRays& r, int 
     cos_psi = 1.0;
     for (int y = 0; y < th; ++y)
       for (int x = 0; x < tw; ++x)
-        if (live[y] & (TileRays::bit(x))) cos_psi = std::min(cos_psi, glm::dot(axis, r.direction(y * stride + x)));
+        if (live[y] & (TileState::bit(x))) cos_psi = std::min(cos_psi, glm::dot(axis, r.direction(y * stride + x)));
   }
-  const double psi = std::acos(std::clamp(cos_psi, -1.0, 1.0)) + 2e-3;
+  const double psi = std::acos(std::clamp(cos_psi, -1.0, 1.0)) + tolerance::cone_angle;
   const bool can_skip = psi < 1.5707963267948966;
   const double sp = std::sin(psi), cp = std::cos(psi);
   for (std::size_t k = 0; k < data.class_axis.size(); ++k) {
@@ -305,7 +305,7 @@ CULLKIT_FORCEINLINE void select_classes(const IndexData& data, TileRays& r, int 
       const double cos_sum = ct * cp - st * sp;  // cos(theta + psi)
       if (cos_sum > 0.0) {
         const double sin_sum = st * cp + ct * sp;
-        skip = glm::dot(glm::dvec3(data.class_axis[k]), axis) > sin_sum + 1e-6;
+        skip = glm::dot(glm::dvec3(data.class_axis[k]), axis) > sin_sum + tolerance::cone_skip;
       }
     }
     if (!skip) active.push_back(static_cast<std::uint16_t>(k));
@@ -316,9 +316,9 @@ CULLKIT_FORCEINLINE void select_classes(const IndexData& data, TileRays& r, int 
 // the steps below share.
 struct TileWalk {
   const IndexData& data;
-  const Frame& f;
-  TileRays& r;
-  Worker& thread;
+  const ViewSetup& f;
+  TileState& r;
+  Worker& worker;
   int x0, y0, tw, th;
   Mask* live;  // the tile's live rays (both walks)
   Mask* mask;  // this walk's live rays
@@ -336,7 +336,7 @@ struct TileWalk {
 
 // The slopes of the walk's live rays (`full`: some ray runs parallel to the slices).
 CULLKIT_FORCEINLINE void update_slopes(TileWalk& w) {
-  const TileRays& r = w.r;
+  const TileState& r = w.r;
   const int stride = r.stride;
   w.slopes_stale = false;
   w.full = false;
@@ -347,7 +347,7 @@ CULLKIT_FORCEINLINE void update_slopes(TileWalk& w) {
   for (int y = 0; y < w.th; ++y) {
     Mask bits = w.mask[y];
     while (bits) {
-      const int x = TileRays::low_bit(bits);
+      const int x = TileState::low_bit(bits);
       bits &= bits - 1;
       const int i = y * stride + x;
       if (r.flat[i]) w.full = true;
@@ -377,8 +377,8 @@ CULLKIT_FORCEINLINE void beam_cells(const TileWalk& w, double s0, double s1, int
   }
   // Slopes were rounded to float: widen by their relative error over the slab's reach.
   const double reach = std::max(std::fabs(ends[0]), std::fabs(ends[1]));
-  const double wb = data.delta + tolerance::float_slope * reach * (1.0 + std::max(std::fabs(double(w.smin_b)), std::fabs(double(w.smax_b))));
-  const double wc = data.delta + tolerance::float_slope * reach * (1.0 + std::max(std::fabs(double(w.smin_c)), std::fabs(double(w.smax_c))));
+  const double wb = data.delta + tolerance::float_relative * reach * (1.0 + std::max(std::fabs(double(w.smin_b)), std::fabs(double(w.smax_b))));
+  const double wc = data.delta + tolerance::float_relative * reach * (1.0 + std::max(std::fabs(double(w.smin_c)), std::fabs(double(w.smax_c))));
   bmin -= wb;
   bmax += wb;
   cmin -= wc;
@@ -399,17 +399,17 @@ CULLKIT_FORCEINLINE void beam_cells(const TileWalk& w, double s0, double s1, int
 // outside the beam, off the live pixels or behind their hits is passed over whole.
 CULLKIT_FORCEINLINE void visit_cell(TileWalk& w, std::uint16_t k, std::uint32_t e, std::uint32_t e_end) {
   const IndexData& data = w.data;
-  const Frame& f = w.f;
-  TileRays& r = w.r;
-  Worker& thread = w.thread;
+  const ViewSetup& f = w.f;
+  TileState& r = w.r;
+  Worker& worker = w.worker;
   const std::uint32_t stamp = w.stamp;
   std::size_t met = w.met;
   auto visit = [&](std::uint32_t tri) {
-    if (thread.tri[tri].stamp == stamp) return;
-    thread.tri[tri].stamp = stamp;
+    if (worker.tri[tri].stamp == stamp) return;
+    worker.tri[tri].stamp = stamp;
     ++met;
     Candidate cand;
-    if (admit_triangle(data, f, tri, w.x0, w.y0, w.tw, w.th, w.live, r, thread, cand)) thread.cand.push_back(cand);
+    if (admit_triangle(data, f, tri, w.x0, w.y0, w.tw, w.th, w.live, r, worker, cand)) worker.candidates.push_back(cand);
   };
   const std::uint32_t tri_base = data.class_tri_begin[k];
   while (e < e_end) {
@@ -418,7 +418,7 @@ CULLKIT_FORCEINLINE void visit_cell(TileWalk& w, std::uint16_t k, std::uint32_t 
       const std::uint32_t j = e / static_cast<std::uint32_t>(data.chunk);
       part_end = std::min(e_end, (j + 1) * static_cast<std::uint32_t>(data.chunk));
       if (chunk_outside_beam(r, &data.chunk_box[6 * std::size_t{j}], f) ||
-          chunk_hidden(data, f, j, w.x0, w.y0, w.tw, w.th, w.live, r, thread)) {
+          chunk_hidden(data, f, j, w.x0, w.y0, w.tw, w.th, w.live, r, worker)) {
         e = part_end;
         continue;
       }
@@ -463,7 +463,7 @@ CULLKIT_FORCEINLINE void visit_slice(TileWalk& w, const std::vector<std::uint16_
         const std::uint32_t cell = a == 0          ? pos - shift
                                    : data.wide_ids ? data.cell_id[pos - shift]
                                                    : class_base + data.cell_id16[pos - shift];
-        ++w.thread.stats.cells_visited;
+        ++w.worker.stats.cells_visited;
         std::uint32_t e, e_end;
         if (data.cell_begin16.empty()) {
           e = data.cell_tri_begin[cell];
@@ -481,24 +481,24 @@ CULLKIT_FORCEINLINE void visit_slice(TileWalk& w, const std::vector<std::uint16_
 // Ray-tests the slice's candidates nearest first, so hits found early let behind_hits drop the
 // triangles behind them.
 CULLKIT_FORCEINLINE void test_candidates(TileWalk& w) {
-  Worker& thread = w.thread;
-  if (thread.cand.empty()) return;
-  std::sort(thread.cand.begin(), thread.cand.end(), [](const auto& p, const auto& q) {
+  Worker& worker = w.worker;
+  if (worker.candidates.empty()) return;
+  std::sort(worker.candidates.begin(), worker.candidates.end(), [](const auto& p, const auto& q) {
     return p.key != q.key ? p.key < q.key : p.tri < q.tri;
   });
-  for (const auto& cand : thread.cand)
-    if (test_triangle(w.data, w.f, w.x0, w.y0, cand, w.live, w.r, thread)) {
-      ++thread.tested_count;
-      thread.tested_bits[cand.tri / 64] |= std::uint64_t{1} << (cand.tri % 64);
+  for (const auto& cand : worker.candidates)
+    if (test_triangle(w.data, w.f, w.x0, w.y0, cand, w.live, w.r, worker)) {
+      ++worker.tested_count;
+      worker.tested_bits[cand.tri / 64] |= std::uint64_t{1} << (cand.tri % 64);
     }
-  thread.cand.clear();
+  worker.candidates.clear();
 }
 
 // After slice s: finishes the rays whose nearest hit lies before the next slice (with margins
 // that only keep rays unfinished longer). Nothing to do while no hit improved and no ray's
 // finishing slice is reached.
 CULLKIT_FORCEINLINE void finish_rays(TileWalk& w, int s) {
-  TileRays& r = w.r;
+  TileState& r = w.r;
   const int walk = w.walk, na = w.na, stride = r.stride;
   if (!r.any_dirty && (walk == 0 ? s < w.next_finish : s > w.next_finish)) return;
   r.any_dirty = false;
@@ -506,7 +506,7 @@ CULLKIT_FORCEINLINE void finish_rays(TileWalk& w, int s) {
   for (int y = 0; y < w.th; ++y) {
     Mask bits = w.mask[y];
     while (bits) {
-      const int x = TileRays::low_bit(bits);
+      const int x = TileState::low_bit(bits);
       bits &= bits - 1;
       const int i = y * stride + x;
       if (r.dirty[i]) {
@@ -515,8 +515,8 @@ CULLKIT_FORCEINLINE void finish_rays(TileWalk& w, int s) {
       }
       const bool done = walk == 0 ? s >= r.finish[i] : s <= r.finish[i];
       if (done) {
-        w.mask[y] &= ~TileRays::bit(x);
-        w.live[y] &= ~TileRays::bit(x);
+        w.mask[y] &= ~TileState::bit(x);
+        w.live[y] &= ~TileState::bit(x);
         w.slopes_stale = true;
       } else {
         next_finish = walk == 0 ? std::min(next_finish, r.finish[i]) : std::max(next_finish, r.finish[i]);
@@ -539,7 +539,7 @@ CULLKIT_FORCEINLINE void walk_slices(TileWalk& w, const std::vector<std::uint16_
     Mask unfinished = 0;  // any ray of this walk still live
     for (int y = 0; y < w.th; ++y) unfinished |= w.mask[y];
     if (!unfinished) break;
-    ++w.thread.stats.slices_walked;
+    ++w.worker.stats.slices_walked;
     // The part of the slab this walk's rays cross, inflated like the cells.
     double s0 = data.lo[w.a] + s * data.h - data.delta, s1 = data.lo[w.a] + (s + 1) * data.h + data.delta;
     if (w.walk == 0) s0 = std::max(s0, w.ea);
@@ -563,25 +563,25 @@ CULLKIT_FORCEINLINE void walk_slices(TileWalk& w, const std::vector<std::uint16_
 
 // Beside each pixel's first hit: the triangles within rounding of an edge in front of its solid
 // hit, and that solid hit itself, into the worker's extras and selected set.
-inline void collect_edge_band(const Frame& f, const TileRays& r, int x0, int y0, int tw, int th, Worker& thread) {
+inline void collect_edge_band(const ViewSetup& f, const TileState& r, int x0, int y0, int tw, int th, Worker& worker) {
   const int stride = r.stride;
   const auto global = [&](int i) {
     return static_cast<std::uint32_t>(y0 + i / stride) * static_cast<std::uint32_t>(f.width) +
            static_cast<std::uint32_t>(x0 + i % stride);
   };
-  const auto show = [&](std::uint32_t tri) { thread.shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64); };
-  for (const auto& u : thread.unsure) {
+  const auto show = [&](std::uint32_t tri) { worker.shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64); };
+  for (const auto& u : worker.edge_hits) {
     if (u.t <= r.solid_t[u.pixel] && u.tri != r.best[u.pixel]) {
-      thread.extra.push_back(Extra{u.tri, u.t, global(u.pixel)});
+      worker.extra.push_back(Extra{u.tri, u.t, global(u.pixel)});
       show(u.tri);
     }
   }
-  thread.unsure.clear();
+  worker.edge_hits.clear();
   for (int y = 0; y < th; ++y)
     for (int x = 0; x < tw; ++x) {
       const int i = y * stride + x;
       if (r.solid[i] != no_triangle && r.solid[i] != r.best[i]) {
-        thread.extra.push_back(Extra{r.solid[i], r.solid_t[i], global(i)});
+        worker.extra.push_back(Extra{r.solid[i], r.solid_t[i], global(i)});
         show(r.solid[i]);
       }
     }
@@ -590,8 +590,8 @@ inline void collect_edge_band(const Frame& f, const TileRays& r, int x0, int y0,
 // One screen tile (x0, y0)..(x1, y1) of the frame: its pixels' first hits, solid hits and edge-band
 // extras into the worker's records and the frame's per-pixel buffers. `r` is the worker's scratch
 // (any contents): every field read is set here first.
-inline void process_tile(const IndexData& data, const Frame& f, int x0, int y0, int x1, int y1, TileRays& r,
-                         Worker& thread, Scratch& scratch) {
+inline void process_tile(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
+                         Worker& worker, Scratch& scratch) {
   if (write_if_off_scene(f, x0, y0, x1, y1, scratch)) return;
   const int tw = x1 - x0, th = y1 - y0;
   r.stride = (tw + 3) & ~3;
@@ -600,28 +600,28 @@ inline void process_tile(const IndexData& data, const Frame& f, int x0, int y0, 
   bool any = false;
   for (int y = 0; y < th; ++y) any = any || m.live[y] != 0;
   if (!any) {
-    write_tile(f, r, x0, y0, tw, th, scratch, thread);
+    write_tile(f, r, x0, y0, tw, th, scratch, worker);
     return;
   }
   make_beam(r, tw, th, m.live);
-  auto& active = thread.active_classes;
+  auto& active = worker.active_classes;
   select_classes(data, r, tw, th, m.live, cone_sum, active);
-  if (++thread.stamp_value == 0) {
-    for (auto& t : thread.tri) t.stamp = 0u;
-    thread.stamp_value = 1;
+  if (++worker.stamp_value == 0) {
+    for (auto& t : worker.tri) t.stamp = 0u;
+    worker.stamp_value = 1;
   }
   const int a = f.axis, b = (a + 1) % 3, c = (a + 2) % 3;
   std::size_t met = 0;
   for (int walk = 0; walk < 2; ++walk) {
-    TileWalk w{data, f, r, thread, x0, y0, tw, th, m.live, m.walk[walk], walk, a, b, c, f.eye[a], f.eye[b], f.eye[c],
-               data.dims[a], data.dims[b], data.dims[c], thread.stamp_value};
+    TileWalk w{data, f, r, worker, x0, y0, tw, th, m.live, m.walk[walk], walk, a, b, c, f.eye[a], f.eye[b], f.eye[c],
+               data.dims[a], data.dims[b], data.dims[c], worker.stamp_value};
     w.met = met;
     walk_slices(w, active);
     met = w.met;
   }
-  thread.stats.triangles_met += met;
-  collect_edge_band(f, r, x0, y0, tw, th, thread);
-  write_tile(f, r, x0, y0, tw, th, scratch, thread);
+  worker.stats.triangles_met += met;
+  collect_edge_band(f, r, x0, y0, tw, th, worker);
+  write_tile(f, r, x0, y0, tw, th, scratch, worker);
 }
 
 }  // namespace cullkit::detail::nci

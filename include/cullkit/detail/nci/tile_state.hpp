@@ -1,4 +1,4 @@
-// cullkit/detail/nci/tile_state.hpp: TileRays, the per-pixel state of one screen tile while the
+// cullkit/detail/nci/tile_state.hpp: TileState, the per-pixel state of one screen tile while the
 // selection walks it (rays, hits, finishing slices, the tile's beam and depth bounds).
 #pragma once
 
@@ -14,10 +14,10 @@ namespace cullkit::detail::nci {
 // Per-pixel state of one screen tile of NormalClassIndex::select_visible (about 320 KB: kept in
 // NciContext, one per worker, made once and reused across calls; every field a tile reads is set
 // by that tile first).
-struct TileRays {
+struct TileState {
   // The largest tile edge (NciParams::tile_size is clamped to it; a multiple of 4, the make_beam
   // pre-test's width); pixel (x, y) of a tile is entry y * stride + x of every per-pixel array
-  // (below 4096: Unsure::pixel is 16-bit, Cand's rectangle 8-bit), bit x of its row's mask.
+  // (below 4096: EdgeBandHit::pixel is 16-bit, a Candidate's rectangle 8-bit), bit x of its row's mask.
   static constexpr int max_tile = 64;
   static constexpr int cap = max_tile * max_tile;
   // The current tile's row pitch: its width rounded up to 4 (rows packed: a tile smaller than

@@ -20,11 +20,10 @@ struct NciParams {
   int classes = 32;
   /// Cells along the scene box's longest axis (cubic cells). Finer: fewer triangles met per tile
   /// (not fewer tested: the screen rectangles already keep the tests down), more memory, and more
-  /// cells and slices to walk. Clamped to [1, 4096]. 32 (the default since session 5; 64 before):
-  /// against 64, bench_nci at 2 threads on six scenes x two views x 640x480 and 1024x768, minimum of
-  /// three alternating runs, the time ratio is 0.96 in geometric mean (0.85-1.07; sportsCar from
-  /// outside at 640x480 is the one loss above 3 %), with 1-37 % less memory and the same precision
-  /// within 0.06 (README, NormalClassIndex, round 7).
+  /// cells and slices to walk. Clamped to [1, 4096]. Why 32: against 64, bench_nci at 2 threads on
+  /// six scenes x two views x 640x480 and 1024x768, minimum of three alternating runs, the time
+  /// ratio is 0.96 in geometric mean (0.85-1.07; sportsCar from outside at 640x480 is the one loss
+  /// above 3 %), with 1-37 % less memory and the same precision within 0.06.
   int grid = 32;
   /// Worker threads for select_visible; 0: all hardware threads. Never changes the result. The
   /// threads come from the library's persistent pool (started on first use, never per call) or,
@@ -42,9 +41,9 @@ struct NciParams {
   /// (cell entry visits, screen-rectangle tests) once, so bigger tiles amortize it over more pixels;
   /// the answer (per-pixel triangle and depth, selected set) does not depend on it, the count of
   /// ray-tested triangles does (bigger tiles test a few more). Measured on six scenes, both views,
-  /// 2 threads, 2-core machine (README, NormalClassIndex, rounds 6 and 7):
-  ///  * with the old grid of 64 cells, 32 against 16 was 4.5-15 % faster on one thread at 640x480;
-  ///    64 against 32 was 0.97 (geometric mean of the time ratio) at 640x480 and 0.91 at 1024x768;
+  /// 2 threads, 2-core machine:
+  ///  * with a grid of 64 cells, 32 against 16 is 4.5-15 % faster on one thread at 640x480;
+  ///    64 against 32 is 0.97 (geometric mean of the time ratio) at 640x480 and 0.91 at 1024x768;
   ///  * with the grid of 32 cells, 64 against 32 at 640x480 is 0.95 (48: 0.955), one loss (fzk_haus
   ///    from outside, +8 %), and tests 0-12 % more triangles (fzk_haus 2.49 -> 2.78 tested per
   ///    visible triangle). Below 640x480 nothing was measured, so 32 stays there (more tiles to share
@@ -104,7 +103,7 @@ struct NciSelectStats {
   /// They are never ray-tested, but each costs a projection. When this is most of
   /// `triangles_met`, the view is sub-pixel dense (many triangles per pixel), where the method
   /// meets every front-facing triangle near the visible surface and casting one ray per pixel
-  /// through a BVH does less work (README, NormalClassIndex: "When it pays and when it does not").
+  /// through a BVH does less work.
   std::size_t triangles_no_pixel = 0;
   int axis = 0;                    ///< grid axis walked
 };

@@ -1,4 +1,4 @@
-// cullkit/detail/nci/view.hpp: Frame, what one select_visible call derives from its camera once (pixel rays, walk axis, screen projection of points), and the projections it serves.
+// cullkit/detail/nci/view.hpp: ViewSetup, what one select_visible call derives from its camera once (pixel rays, walk axis, screen projection of points), and the projections it serves.
 #pragma once
 
 #include <algorithm>
@@ -17,11 +17,12 @@
 #include "watertight.hpp"
 #include "context.hpp"
 #include "index_data.hpp"
+#include "tolerances.hpp"
 
 namespace cullkit::detail::nci {
 
 // ---------------------------------------------------------------- select
-struct Frame {
+struct ViewSetup {
   PixelRays rays;
   glm::dvec3 eye;
   glm::vec3 eye_f;
@@ -67,7 +68,7 @@ struct Frame {
 
 // A point's pixel-centre coordinates (pixel i has coordinate i): its projection from the eye onto
 // the target plane, in double; false when it is not strictly in front of the eye (or w <= 0).
-[[nodiscard]] inline bool project_point(const Frame& f, const glm::vec3& p, double& px, double& py) noexcept {
+[[nodiscard]] inline bool project_point(const ViewSetup& f, const glm::vec3& p, double& px, double& py) noexcept {
   const glm::dvec3 dx = glm::dvec3(p) - f.eye;
   if (near_eye(dx.x, dx.y, dx.z)) return false;  // no projection: callers test every ray
   // s = eye_side / pd > 0: in front of the eye (not behind it or beside it).
@@ -87,7 +88,7 @@ struct Frame {
 // bounding rectangle of their projections (the hull projects into the hull of the projected
 // points when every point is in front of the eye: the conditions checked are linear in the
 // point, so they hold on the whole hull), `full` when the projection cannot be trusted.
-[[nodiscard]] inline Rect project_rect(const Frame& f, const glm::vec3* p, int count) noexcept {
+[[nodiscard]] inline Rect project_rect(const ViewSetup& f, const glm::vec3* p, int count) noexcept {
   using Rect = Rect;
   if (!f.use_rect) return Rect{Rect::full, 0, 0, 0};
   double mnx = std::numeric_limits<double>::infinity(), mny = mnx, mxx = -mnx, mxy = -mnx;
@@ -101,7 +102,7 @@ struct Frame {
   }
   if (!(std::isfinite(mnx) && std::isfinite(mxx) && std::isfinite(mny) && std::isfinite(mxy)))
     return Rect{Rect::full, 0, 0, 0};
-  // A pixel centre can see the triangle only inside its projection; the margin (Frame::margin)
+  // A pixel centre can see the triangle only inside its projection; the margin (ViewSetup::margin)
   // covers the float rounding of the ray directions and the ray test's edge band. Clamped to the screen (in double
   // first: projected corners may be far off screen).
   const double m = f.margin;
@@ -115,15 +116,15 @@ struct Frame {
 
 // Which pixels may see the triangle: an empty rectangle for a back face (or one seen exactly
 // edge-on: the eye in its plane is never a hit), `full` when the projection cannot be trusted.
-[[nodiscard]] inline Rect screen_rect(const Frame& f, const glm::vec3& p0, const glm::vec3& p1,
+[[nodiscard]] inline Rect screen_rect(const ViewSetup& f, const glm::vec3& p0, const glm::vec3& p1,
                                                   const glm::vec3& p2) noexcept {
   if (!detail::faces_eye(p0, p1, p2, f.eye)) return Rect{0, 0, -1, -1};
   const glm::vec3 p[3] = {p0, p1, p2};
   return project_rect(f, p, 3);
 }
 
-[[nodiscard]] inline Frame make_frame(const IndexData& data, const Camera& camera) {
-  Frame f{PixelRays(camera), glm::dvec3(camera.eye), camera.eye, 2, glm::dmat4(camera.view_proj), false,
+[[nodiscard]] inline ViewSetup make_frame(const IndexData& data, const Camera& camera) {
+  ViewSetup f{PixelRays(camera), glm::dvec3(camera.eye), camera.eye, 2, glm::dmat4(camera.view_proj), false,
           glm::dvec4(0.0), nullptr, nullptr, camera.width, camera.height};
   const Ray center = f.rays.ray_at(0.5 * camera.width, 0.5 * camera.height);
   const glm::vec3 d = center.direction;
@@ -143,7 +144,7 @@ struct Frame {
     const glm::dvec4 h = inv[0] * u + inv[1] * v + far_h;
     const double mag = std::fabs(h.x) + std::fabs(h.y) + std::fabs(h.z);
     // A margin around PixelRays' threshold: pixels near the switch would be ambiguous.
-    if (std::fabs(h.w) > 1e-6 * mag && h.w > 0.0) ++uses_far;
+    if (std::fabs(h.w) > tolerance::target_plane_switch * mag && h.w > 0.0) ++uses_far;
     else if (!(std::fabs(h.w) > 1e-12 * mag)) ++uses_near;
   }
   if (uses_far == 5 || uses_near == 5) {
