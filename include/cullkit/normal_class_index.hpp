@@ -101,7 +101,7 @@ class NormalClassIndex {
   /// Builds the index. Triangles with an out-of-range index, a non-finite coordinate or zero area
   /// are skipped and counted in stats(); an empty or all-invalid mesh gives an index that selects
   /// nothing. pre: mesh.vertices != nullptr when vertex_count > 0, mesh.indices likewise.
-  explicit NormalClassIndex(MeshView<Vertex, Index> mesh, const NciParams& params = {})  {
+  explicit NormalClassIndex(MeshView<Vertex, Index> mesh, const NciParams& params = {}) {
     CULLKIT_ASSERT(mesh.vertices != nullptr || mesh.vertex_count == 0, "vertices present when vertex_count > 0");
     CULLKIT_ASSERT(mesh.indices != nullptr || mesh.index_count == 0, "indices present when index_count > 0");
     NciParams& p = data_.params = params;

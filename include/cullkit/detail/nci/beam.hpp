@@ -1,4 +1,5 @@
-// cullkit/detail/nci/beam.hpp: the beam of a tile: four planes through the eye holding every live ray of the tile, made from the live pixels' rectangle and re-made as it shrinks.
+// cullkit/detail/nci/beam.hpp: the beam of a tile: four planes through the eye holding every live
+// ray of the tile, made from the live pixels' rectangle and re-made as it shrinks.
 #pragma once
 
 #include <algorithm>

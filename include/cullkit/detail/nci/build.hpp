@@ -1,4 +1,5 @@
-// cullkit/detail/nci/build.hpp: the build of a NormalClassIndex from its valid triangles: grid, normal classes, per-class cells and grids, internal numbering, flat arrays and narrow forms.
+// cullkit/detail/nci/build.hpp: the build of a NormalClassIndex from its valid triangles: grid,
+// normal classes, per-class cells and grids, internal numbering, flat arrays and narrow forms.
 #pragma once
 
 #include <algorithm>

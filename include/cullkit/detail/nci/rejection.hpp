@@ -1,4 +1,6 @@
-// cullkit/detail/nci/rejection.hpp: the cheap tests that keep a triangle (or a chunk of cell entries) away from the ray test of a tile: beam planes, screen rectangles, live pixels, depth bounds, corner-ray planes and the 2D footprint.
+// cullkit/detail/nci/rejection.hpp: the cheap tests that keep a triangle (or a chunk of cell
+// entries) away from the ray test of a tile: beam planes, screen rectangles, live pixels, depth
+// bounds, corner-ray planes and the 2D footprint.
 #pragma once
 
 #include <algorithm>

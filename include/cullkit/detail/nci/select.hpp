@@ -1,4 +1,5 @@
-// cullkit/detail/nci/select.hpp: select_visible's pipeline: the frame, the tiles spread over the workers, and the merge of their answers.
+// cullkit/detail/nci/select.hpp: select_visible's pipeline: the frame, the tiles spread over the
+// workers, and the merge of their answers.
 #pragma once
 
 #include <algorithm>

@@ -1,4 +1,6 @@
-// cullkit/detail/nci/slice_walk.hpp: one screen tile of select_visible: its rays set up, the grid walked slice by slice outward from the eye, the admitted triangles ray-tested nearest first, rays finished as their hits come before the next slice.
+// cullkit/detail/nci/slice_walk.hpp: one screen tile of select_visible: its rays set up, the grid
+// walked slice by slice outward from the eye, the admitted triangles ray-tested nearest first, rays
+// finished as their hits come before the next slice.
 #pragma once
 
 #include <algorithm>

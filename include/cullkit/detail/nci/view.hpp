@@ -1,4 +1,5 @@
-// cullkit/detail/nci/view.hpp: ViewSetup, what one select_visible call derives from its camera once (pixel rays, walk axis, screen projection of points), and the projections it serves.
+// cullkit/detail/nci/view.hpp: ViewSetup, what one select_visible call derives from its camera once
+// (pixel rays, walk axis, screen projection of points), and the projections it serves.
 #pragma once
 
 #include <algorithm>
