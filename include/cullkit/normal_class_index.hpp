@@ -61,6 +61,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <type_traits>
@@ -104,16 +105,29 @@ class NormalClassIndex {
   explicit NormalClassIndex(MeshView<Vertex, Index> mesh, const NciParams& params = {}) {
     CULLKIT_ASSERT(mesh.vertices != nullptr || mesh.vertex_count == 0, "vertices present when vertex_count > 0");
     CULLKIT_ASSERT(mesh.indices != nullptr || mesh.index_count == 0, "indices present when index_count > 0");
-    NciParams& p = data_.params = params;
-    p.classes = std::clamp(p.classes, 1, 4096);
-    p.grid = std::clamp(p.grid, 1, 4096);
-    if (p.tile_size != 0) p.tile_size = std::clamp(p.tile_size, 2, detail::nci::TileState::max_tile);
-    const auto t0 = std::chrono::steady_clock::now();
-    std::vector<glm::vec3> normals;
-    gather(mesh, normals);
-    detail::nci::build(data_, normals);
-    data_.stats.build_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const Vertex* vertices = mesh.vertices;
+    construct(
+        [vertices](std::size_t i) { return glm::vec3(Traits::position(vertices[i])); }, mesh.vertex_count,
+        mesh.indices, mesh.index_count, params);
+  }
+
+  /// Builds the index from positions read through a pointer and a byte stride (an interleaved
+  /// vertex buffer: three floats at `positions.base + i * stride_bytes + offset_bytes`, any
+  /// alignment) and `index_count` indices (3 per triangle) of this index's `Index` type, which may
+  /// be 16 or 32 bits. Same skipping rules and answers as the MeshView constructor; `Vertex` is not
+  /// read. pre: positions.base != nullptr when vertex_count > 0, indices != nullptr when
+  /// index_count > 0.
+  NormalClassIndex(const StridedPositions& positions, std::size_t vertex_count, const Index* indices,
+                   std::size_t index_count, const NciParams& params = {}) {
+    CULLKIT_ASSERT(positions.base != nullptr || vertex_count == 0, "positions present when vertex_count > 0");
+    CULLKIT_ASSERT(indices != nullptr || index_count == 0, "indices present when index_count > 0");
+    construct(
+        [positions](std::size_t i) {
+          float q[3];  // memcpy: the buffer need not be float-aligned
+          std::memcpy(q, positions.base + i * positions.stride_bytes + positions.offset_bytes, sizeof q);
+          return glm::vec3(q[0], q[1], q[2]);
+        },
+        vertex_count, indices, index_count, params);
   }
 
   /// The triangles that are the first front-facing surface hit by the ray of some pixel centre
@@ -237,23 +251,42 @@ class NormalClassIndex {
   [[nodiscard]] Aabb bounds() const noexcept { return data_.box; }
 
  private:
+  // Clamps the parameters, gathers the triangles and builds; times the whole.
+  template <class Position>
+  void construct(const Position& position, std::size_t vertex_count, const Index* indices, std::size_t index_count,
+                 const NciParams& params) {
+    NciParams& p = data_.params = params;
+    p.classes = std::clamp(p.classes, 1, 4096);
+    p.grid = std::clamp(p.grid, 1, 4096);
+    if (p.tile_size != 0) p.tile_size = std::clamp(p.tile_size, 2, detail::nci::TileState::max_tile);
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<glm::vec3> normals;
+    gather(position, vertex_count, indices, index_count, normals);
+    detail::nci::build(data_, normals);
+    data_.stats.build_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+
   // The valid triangles into data_ (vertices deduplicated through a remap) and their unit
-  // normals; the skipped ones counted. The only step that reads the user's types.
-  void gather(const MeshView<Vertex, Index>& mesh, std::vector<glm::vec3>& normals) {
+  // normals; the skipped ones counted. `position(i)`: vertex i's position, for i < vertex_count.
+  // The only step that reads the user's types.
+  template <class Position>
+  void gather(const Position& position, std::size_t vertex_count, const Index* indices, std::size_t index_count,
+              std::vector<glm::vec3>& normals) {
     detail::nci::IndexData& data = data_;
-    data.stats.triangles_input = mesh.triangle_count();
+    data.stats.triangles_input = index_count / 3;
     detail::nci::report(data, 0.0f);
     std::vector<std::uint32_t> remap;
     for (std::size_t t = 0; t < data.stats.triangles_input; ++t) {
       std::size_t idx[3];
       bool in_range = true;
       for (int k = 0; k < 3; ++k) {
-        const auto i = mesh.indices[3 * t + static_cast<std::size_t>(k)];
+        const auto i = indices[3 * t + static_cast<std::size_t>(k)];
         if constexpr (std::is_signed_v<Index>) {
           if (i < 0) in_range = false;
         }
         idx[k] = static_cast<std::size_t>(i);
-        if (!in_range || idx[k] >= mesh.vertex_count) in_range = false;
+        if (!in_range || idx[k] >= vertex_count) in_range = false;
       }
       if (!in_range) {
         ++data.stats.skipped_out_of_range;
@@ -262,7 +295,7 @@ class NormalClassIndex {
       glm::vec3 p[3];
       bool finite = true;
       for (int k = 0; k < 3; ++k) {
-        p[k] = glm::vec3(Traits::position(mesh.vertices[idx[k]]));
+        p[k] = position(idx[k]);
         finite = finite && std::isfinite(p[k].x) && std::isfinite(p[k].y) && std::isfinite(p[k].z);
       }
       if (!finite) {
@@ -277,7 +310,7 @@ class NormalClassIndex {
         ++data.stats.skipped_degenerate;
         continue;
       }
-      if (remap.empty()) remap.assign(mesh.vertex_count, detail::nci::no_triangle);
+      if (remap.empty()) remap.assign(vertex_count, detail::nci::no_triangle);
       for (int k = 0; k < 3; ++k) {
         std::uint32_t& r = remap[idx[k]];
         if (r == detail::nci::no_triangle) {
