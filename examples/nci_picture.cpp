@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
   all.paste(heat, w + 4, h + 4);
   const std::string path = dir + "/nci_picture.png";
   const bool ok = all.write_png(path);
-  // Precision as DESIGN.md defines it: distinct triangles tested over those Embree sees first.
+  // Precision: distinct triangles tested over those Embree sees first.
   const std::size_t truly_visible = oracle::visible_triangles(truth).size();
   std::printf("%s: %zu triangles, %zu classes; camera %dx%d: %zu selected (Embree sees %zu), %zu tested (%.2f per "
               "triangle Embree sees), max %u per tile, %zu pixels missing; %s %s\n",

@@ -15,6 +15,8 @@
 
 #include <cullkit/normal_class_index.hpp>
 
+#include "../tests/nci/nci_touches_eye.hpp"
+
 namespace {
 
 struct Reader {
@@ -85,7 +87,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (std::uint32_t t : px.triangle)
     if (t != cullkit::NciPixels::miss && !std::binary_search(set.triangles.begin(), set.triangles.end(), t)) std::abort();
 
-  // Triangles the eye touches within float rounding (detail::touches_eye) on their front side
+  // Triangles the eye touches within float rounding (nci_test::touches_eye) on their front side
   // (exactly on the plane they are never hit): the float test is noise for them, and the index may
   // drop their hits where the exact geometry rules them out (documented), so pixels whose brute
   // force answer is one are not compared.
@@ -96,7 +98,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const glm::vec3& p1 = v[idx[static_cast<std::size_t>(3 * t + 1)]];
     const glm::vec3& p2 = v[idx[static_cast<std::size_t>(3 * t + 2)]];
     touching[static_cast<std::size_t>(t)] = cullkit::detail::faces_eye(p0, p1, p2, glm::dvec3(cam.eye)) &&
-                                            cullkit::detail::touches_eye(p0, p1, p2, glm::dvec3(cam.eye));
+                                            nci_test::touches_eye(p0, p1, p2, glm::dvec3(cam.eye));
   }
 
   // Brute force with the same float test and tie rule, over the triangles the index kept.

@@ -29,3 +29,15 @@
 #else
 #define CULLKIT_FORCEINLINE inline
 #endif
+
+// CULLKIT_HAS_SSE2: 1 where the SSE2 intrinsics of <emmintrin.h> may be used (x86-64 always has
+// them; 32-bit x86 when the compiler targets SSE2). Hot loops use them only as pre-tests or
+// as the same IEEE operations as their scalar form, so the answers are the same either way.
+// Define it to 0 before including cullkit to get the scalar code.
+#ifndef CULLKIT_HAS_SSE2
+#if defined(__SSE2__) || defined(_M_X64) || (defined(_M_IX86_FP) && _M_IX86_FP >= 2)
+#define CULLKIT_HAS_SSE2 1
+#else
+#define CULLKIT_HAS_SSE2 0
+#endif
+#endif

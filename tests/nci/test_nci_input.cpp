@@ -9,6 +9,7 @@
 
 #include "check.hpp"
 #include "nci_test_util.hpp"
+#include "nci_touches_eye.hpp"
 
 using namespace cullkit;
 
@@ -262,7 +263,7 @@ void test_eye_at_corner() {
   CHECK(hits > 1000);
 }
 
-// The eye touching a triangle within float rounding (detail::touches_eye; fuzz_nci regression
+// The eye touching a triangle within float rounding (nci_test::touches_eye; fuzz_nci regression
 // eye_on_edge_far_corner): the eye near a segment of one edge (off it by 1e-16 to 1e-7 of the
 // edge's length in half of the cases, 1e-5 to 0.1 in the other half), the edge's far end 1e3 to
 // 1e35 away. The float ray test is noise for such a triangle (it reported hits at depth 0 on rays
@@ -323,7 +324,7 @@ void test_eye_touching_triangle() {
     for (std::size_t t = 0; t < scene.triangle_count(); ++t) {
       glm::vec3 p[3] = {glm::vec3(0.0f), glm::vec3(0.0f), glm::vec3(0.0f)};
       CHECK(triangle_positions(scene.mesh(), t, p));
-      touches[t] = detail::faces_eye(p[0], p[1], p[2], glm::dvec3(eye)) && detail::touches_eye(p[0], p[1], p[2], glm::dvec3(eye));
+      touches[t] = detail::faces_eye(p[0], p[1], p[2], glm::dvec3(eye)) && nci_test::touches_eye(p[0], p[1], p[2], glm::dvec3(eye));
       any = any || touches[t];
     }
     (any ? touching : apart) += 1;

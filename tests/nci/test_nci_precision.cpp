@@ -1,9 +1,9 @@
-// NormalClassIndex precision target (project issue #6): at the default parameters, distinct triangles
+// NormalClassIndex precision target: at the default parameters, distinct triangles
 // ray-tested per truly visible triangle (truth: the Embree oracle, robust and front faces only) is at
 // most 3 on the two bench_nci views (outside from a raised diagonal, inside near the floor) of the
 // generated city and of every real scene present, and the selected set holds every oracle-visible
 // triangle up to explicit ties (a pixel where our own first hit lies at the oracle's distance).
-// The index before round 4 (per-ray depth reject) fails on fzk_haus: 1238 tested / 374 visible = 3.31.
+// Without the per-ray depth reject the index fails on fzk_haus: 1238 tested / 374 visible = 3.31.
 // Deterministic: fixed scenes, cameras and parameters; nothing random.
 #include <algorithm>
 #include <cstdio>

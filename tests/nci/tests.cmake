@@ -1,4 +1,4 @@
-# NormalClassIndex tests (issue #6).
+# NormalClassIndex tests.
 find_package(Threads REQUIRED)
 cullkit_add_test(test_nci_bruteforce SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_bruteforce.cpp
                  LIBS Threads::Threads)
@@ -13,3 +13,5 @@ cullkit_add_test(test_nci_precision SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_p
                  LIBS Threads::Threads)
 cullkit_add_test(test_nci_moving_narrow SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_moving_narrow.cpp EMBREE
                  LIBS Threads::Threads)
+cullkit_add_test(test_nci_warm_frames SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_warm_frames.cpp LIBS Threads::Threads)
+cullkit_add_test(test_nci_mesh_input SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_mesh_input.cpp LIBS Threads::Threads)

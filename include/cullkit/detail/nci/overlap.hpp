@@ -1,4 +1,4 @@
-// cullkit/detail/nci_overlap.hpp: exact triangle/box overlap by separating axes (the 13 axes of
+// cullkit/detail/nci/overlap.hpp: exact triangle/box overlap by separating axes (the 13 axes of
 // Akenine-Moeller's test), evaluated in double. The NormalClassIndex calls it with cells already
 // inflated, so float rounding in the caller's data can only add cells, never drop one.
 #pragma once

@@ -1,4 +1,4 @@
-// cullkit/detail/nci_kmeans.hpp: spherical k-means for the NormalClassIndex's normal classes.
+// cullkit/detail/nci/kmeans.hpp: spherical k-means for the NormalClassIndex's normal classes.
 // Deterministic (seeded splitmix64, no clock), linear in the number of normals: centres are fitted
 // on a seeded sample, and every normal is assigned through a cube-map table of nearest centres.
 #pragma once
@@ -11,22 +11,9 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
+#include "../splitmix64.hpp"
+
 namespace cullkit::detail {
-
-class SplitMix64 {
- public:
-  explicit SplitMix64(std::uint64_t seed) noexcept : state_(seed) {}
-  std::uint64_t next() noexcept {
-    std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  std::uint64_t below(std::uint64_t n) noexcept { return n == 0 ? 0 : next() % n; }
-
- private:
-  std::uint64_t state_;
-};
 
 /// Cube-map lookup from a unit vector to the nearest of a set of centres (nearest to the bin's
 /// centre direction, so an approximation of the true nearest: fine for classes, whose cones are

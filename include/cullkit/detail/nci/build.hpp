@@ -1,0 +1,486 @@
+// cullkit/detail/nci/build.hpp: the build of a NormalClassIndex from its valid triangles: grid,
+// normal classes, per-class cells and grids, internal numbering, flat arrays and narrow forms.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <array>
+#include <atomic>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+#include "kmeans.hpp"
+#include "overlap.hpp"
+#include "../worker_pool.hpp"
+#include "index_data.hpp"
+#include "tolerances.hpp"
+
+namespace cullkit::detail::nci {
+
+// ---------------------------------------------------------------- build
+inline void report(const IndexData& data, float f) {
+  if (data.params.progress) data.params.progress(f, data.params.progress_user);
+}
+
+// One class's cells and grids, with offsets local to the class.
+struct ClassGrids {
+  std::vector<std::uint32_t> cell_tri_begin{0};
+  std::vector<std::uint32_t> cell_tris;
+  std::vector<std::uint32_t> slice_rows[3];  // dims[a] + 1 entries: row ranges per slice
+  std::vector<std::uint16_t> row_coord[3];
+  std::vector<std::uint32_t> row_begin[3];   // one per row (no sentinel; the next row's begin ends it)
+  std::vector<std::uint16_t> cell_col[3];
+  std::vector<std::uint32_t> cell_id[3];
+};
+
+inline void build_class(const IndexData& data, const std::uint32_t* tris, std::size_t count, ClassGrids& out) {
+  struct Pair {
+    std::uint64_t key;
+    std::uint32_t place;  // Morton code of the centroid (clamped into the cell) within the cell
+    std::uint32_t tri;
+  };
+  std::vector<Pair> pairs;
+  pairs.reserve(count + count / 2);
+  const std::uint64_t ny = static_cast<std::uint64_t>(data.dims[1]), nz = static_cast<std::uint64_t>(data.dims[2]);
+  const double half[3] = {0.5 * data.h + data.delta, 0.5 * data.h + data.delta, 0.5 * data.h + data.delta};
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::uint32_t tri = tris[i];
+    double v[3][3];
+    double mn[3], mx[3];
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec3& p = data.vertices[data.tri_vertices[3 * tri + static_cast<std::uint32_t>(k)]];
+      for (int a = 0; a < 3; ++a) v[k][a] = p[a];
+    }
+    int c0[3], c1[3];
+    for (int a = 0; a < 3; ++a) {
+      mn[a] = std::min({v[0][a], v[1][a], v[2][a]});
+      mx[a] = std::max({v[0][a], v[1][a], v[2][a]});
+      c0[a] = data.cell_of(mn[a] - data.delta, a);
+      c1[a] = data.cell_of(mx[a] + data.delta, a);
+    }
+    const bool single = c0[0] == c1[0] && c0[1] == c1[1] && c0[2] == c1[2];
+    for (int x = c0[0]; x <= c1[0]; ++x) {
+      for (int y = c0[1]; y <= c1[1]; ++y) {
+        for (int z = c0[2]; z <= c1[2]; ++z) {
+          if (!single) {
+            const double center[3] = {data.lo[0] + (x + 0.5) * data.h, data.lo[1] + (y + 0.5) * data.h, data.lo[2] + (z + 0.5) * data.h};
+            if (!detail::triangle_box_overlap(center, half, v)) continue;
+          }
+          const std::uint64_t key = (static_cast<std::uint64_t>(x) * ny + static_cast<std::uint64_t>(y)) * nz +
+                                    static_cast<std::uint64_t>(z);
+          double u[3];
+          const int cell[3] = {x, y, z};
+          for (int a = 0; a < 3; ++a) {
+            const double cen = (v[0][a] + v[1][a] + v[2][a]) / 3.0;
+            u[a] = std::clamp((cen - (data.lo[a] + cell[a] * data.h)) / data.h, 0.0, 1.0);
+          }
+          pairs.push_back(Pair{key, detail::nci_morton(u), tri});
+        }
+      }
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(),
+            [](const Pair& a, const Pair& b) {
+              if (a.key != b.key) return a.key < b.key;
+              return a.place != b.place ? a.place < b.place : a.tri < b.tri;
+            });
+  // Cells in (x, y, z) order.
+  std::vector<std::uint64_t> cell_key;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    if (i == 0 || pairs[i].key != pairs[i - 1].key) {
+      if (i > 0) out.cell_tri_begin.push_back(static_cast<std::uint32_t>(out.cell_tris.size()));
+      cell_key.push_back(pairs[i].key);
+    }
+    out.cell_tris.push_back(pairs[i].tri);
+  }
+  if (!pairs.empty()) out.cell_tri_begin.push_back(static_cast<std::uint32_t>(out.cell_tris.size()));
+  pairs.clear();
+  pairs.shrink_to_fit();
+  const std::size_t cells = cell_key.size();
+  std::vector<std::array<std::uint16_t, 3>> coord(cells);
+  for (std::size_t i = 0; i < cells; ++i) {
+    const std::uint64_t k = cell_key[i];
+    coord[i][2] = static_cast<std::uint16_t>(k % nz);
+    coord[i][1] = static_cast<std::uint16_t>((k / nz) % ny);
+    coord[i][0] = static_cast<std::uint16_t>(k / nz / ny);
+  }
+  std::vector<std::uint32_t> order(cells);
+  for (int a = 0; a < 3; ++a) {
+    const int b = (a + 1) % 3, c = (a + 2) % 3;
+    for (std::size_t i = 0; i < cells; ++i) order[i] = static_cast<std::uint32_t>(i);
+    if (a != 0) {
+      std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
+        const auto& u = coord[p];
+        const auto& w = coord[q];
+        if (u[a] != w[a]) return u[a] < w[a];
+        if (u[b] != w[b]) return u[b] < w[b];
+        return u[c] < w[c];
+      });
+    }
+    auto& slice_rows = out.slice_rows[a];
+    slice_rows.assign(static_cast<std::size_t>(data.dims[a]) + 1, 0u);
+    std::size_t i = 0;
+    for (int s = 0; s < data.dims[a]; ++s) {
+      slice_rows[static_cast<std::size_t>(s)] = static_cast<std::uint32_t>(out.row_coord[a].size());
+      while (i < cells && coord[order[i]][a] == s) {
+        const std::uint16_t row = coord[order[i]][b];
+        out.row_coord[a].push_back(row);
+        out.row_begin[a].push_back(static_cast<std::uint32_t>(out.cell_col[a].size()));
+        while (i < cells && coord[order[i]][a] == s && coord[order[i]][b] == row) {
+          out.cell_col[a].push_back(coord[order[i]][c]);
+          out.cell_id[a].push_back(order[i]);
+          ++i;
+        }
+      }
+    }
+    slice_rows[static_cast<std::size_t>(data.dims[a])] = static_cast<std::uint32_t>(out.row_coord[a].size());
+  }
+}
+
+// The grid: cubic cells, `grid` along the longest axis.
+inline void make_grid(IndexData& data) {
+  const glm::dvec3 lo(data.box.min), hi(data.box.max);
+  const glm::dvec3 ext = hi - lo;
+  const double longest = std::max({ext.x, ext.y, ext.z});
+  data.h = longest > 0 ? longest / data.params.grid : 1.0;
+  for (int a = 0; a < 3; ++a) {
+    int d = std::max(1, static_cast<int>(std::ceil(ext[a] / data.h)));
+    while (lo[a] + d * data.h < hi[a]) ++d;
+    data.dims[a] = std::min(d, 65535);
+    data.stats.dims[a] = data.dims[a];
+  }
+  data.stats.cell_size = data.h;
+  data.lo = lo;
+  const double max_abs = std::max({std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z), std::fabs(hi.x),
+                                   std::fabs(hi.y), std::fabs(hi.z)});
+  data.delta = std::max(1e-3 * data.h, 64.0 * double(std::numeric_limits<float>::epsilon()) * max_abs);
+}
+
+// Normal classes (spherical k-means), then each class's axis as the mean of its members and the
+// cone around it. Returns each kept triangle's class (in gathering order); frees `normals`.
+inline std::vector<std::uint16_t> make_classes(IndexData& data, std::vector<glm::vec3>& normals) {
+  const std::size_t n = data.tri_original.size();
+  std::vector<std::uint16_t> class_of;  // kept triangle (input order) -> class
+  {
+    std::vector<std::uint32_t> cls;
+    detail::cluster_normals(normals, data.params.classes, data.params.seed, cls, data.class_axis);
+    class_of.assign(cls.begin(), cls.end());  // at most 4096 classes: 16 bits
+  }
+  const std::size_t classes = data.class_axis.size();
+  data.stats.classes = classes;
+  {
+    // Recompute each axis as the mean of its members and measure the cone around it.
+    std::vector<glm::dvec3> sum(classes, glm::dvec3(0.0));
+    for (std::size_t i = 0; i < n; ++i) sum[class_of[i]] += glm::dvec3(normals[i]);
+    for (std::size_t c = 0; c < classes; ++c) {
+      const double len = glm::length(sum[c]);
+      if (len > 1e-9) data.class_axis[c] = glm::vec3(sum[c] / len);
+    }
+    std::vector<double> min_dot(classes, 1.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double d = glm::dot(glm::dvec3(normals[i]), glm::dvec3(data.class_axis[class_of[i]]));
+      min_dot[class_of[i]] = std::min(min_dot[class_of[i]], d);
+    }
+    data.class_sin.resize(classes);
+    data.class_cos.resize(classes);
+    for (std::size_t c = 0; c < classes; ++c) {
+      // Half-angle plus a margin for the float normals and the float ray test.
+      const double angle = std::acos(std::clamp(min_dot[c], -1.0, 1.0)) + tolerance::cone_angle;
+      if (angle >= 1.5707963267948966) {
+        data.class_sin[c] = 2.0f;  // never skipped
+        data.class_cos[c] = 0.0f;
+      } else {
+        data.class_sin[c] = static_cast<float>(std::sin(angle));
+        data.class_cos[c] = static_cast<float>(std::cos(angle));
+      }
+    }
+  }
+  normals.clear();
+  normals.shrink_to_fit();
+  return class_of;
+}
+
+// Per class: cells by separating axes, then the three grids. Classes in parallel, merged in
+// class order so the index does not depend on the thread count.
+// `class_begin` and `by_class` list the kept triangles class by class.
+inline void build_class_grids(const IndexData& data, const std::vector<std::uint16_t>& class_of,
+                              std::vector<std::uint32_t>& class_begin, std::vector<std::uint32_t>& by_class,
+                              std::vector<ClassGrids>& parts) {
+  const std::size_t n = class_of.size(), classes = data.class_axis.size();
+  class_begin.assign(classes + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) ++class_begin[class_of[i] + 1];
+  for (std::size_t c = 0; c < classes; ++c) class_begin[c + 1] += class_begin[c];
+  by_class.resize(n);
+  {
+    std::vector<std::uint32_t> fill(class_begin.begin(), class_begin.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) by_class[fill[class_of[i]]++] = static_cast<std::uint32_t>(i);
+  }
+  parts.resize(classes);
+  std::atomic<std::size_t> next{0}, done{0};
+  const unsigned build_threads = detail::resolve_threads(data.params.build_threads, std::min<std::size_t>(classes, 64));
+  // Task 0 runs on the building thread (WorkerPool::run): the one that reports progress.
+  auto work = [&](bool reporter) {
+    for (;;) {
+      const std::size_t c = next.fetch_add(1, std::memory_order_relaxed);
+      if (c >= classes) break;
+      build_class(data, by_class.data() + class_begin[c], class_begin[c + 1] - class_begin[c], parts[c]);
+      const std::size_t d = done.fetch_add(1) + 1;
+      if (reporter) report(data, 0.2f + 0.7f * static_cast<float>(d) / static_cast<float>(classes));
+    }
+  };
+  using Work = decltype(work);
+  detail::WorkerPool::shared().run(build_threads, [](void* job, std::size_t task) { (*static_cast<Work*>(job))(task == 0); },
+                                   &work);
+}
+
+// Internal numbering (memory locality of the select walk): class by class, each class's
+// triangles in the order their first cell comes in its X grid, so a cell's triangles are
+// mostly one run of consecutive ids (and so are their vertices and per-thread records).
+// data.tri_original maps back to the mesh; cell lists are rewritten and sorted in the new ids.
+inline void renumber(IndexData& data, const std::vector<std::uint16_t>& class_of,
+                     const std::vector<std::uint32_t>& class_begin, const std::vector<std::uint32_t>& by_class,
+                     std::vector<ClassGrids>& parts) {
+  const std::size_t n = data.tri_original.size(), classes = data.class_axis.size();
+  {
+    std::vector<std::uint32_t> new_id(n, no_triangle), order;
+    order.reserve(n);
+    data.class_tri_begin.assign(classes + 1, 0u);
+    for (std::size_t c = 0; c < classes; ++c) {
+      data.class_tri_begin[c] = static_cast<std::uint32_t>(order.size());
+      for (std::uint32_t old : parts[c].cell_tris) {
+        if (new_id[old] == no_triangle) {
+          new_id[old] = static_cast<std::uint32_t>(order.size());
+          order.push_back(old);
+        }
+      }
+      for (std::uint32_t k = class_begin[c]; k < class_begin[c + 1]; ++k) {  // in no cell (never met)
+        if (new_id[by_class[k]] == no_triangle) {
+          new_id[by_class[k]] = static_cast<std::uint32_t>(order.size());
+          order.push_back(by_class[k]);
+        }
+      }
+      auto& p = parts[c];
+      for (auto& e : p.cell_tris) e = new_id[e];
+      for (std::size_t k = 0; k + 1 < p.cell_tri_begin.size(); ++k)
+        std::sort(p.cell_tris.begin() + p.cell_tri_begin[k], p.cell_tris.begin() + p.cell_tri_begin[k + 1]);
+    }
+    data.class_tri_begin[classes] = static_cast<std::uint32_t>(n);
+    // Triangles, their mesh numbers and vertices in the new order; vertices renumbered by first
+    // use and merged when their positions are bitwise equal (OBJ files often repeat a position
+    // per normal or texture coordinate).
+    std::vector<std::uint32_t> canon(data.vertices.size());
+    {
+      struct Key {
+        std::uint32_t bits[3];
+        std::uint32_t id;
+      };
+      std::vector<Key> keys(data.vertices.size());
+      for (std::size_t v = 0; v < data.vertices.size(); ++v) {
+        std::memcpy(keys[v].bits, &data.vertices[v], sizeof keys[v].bits);
+        keys[v].id = static_cast<std::uint32_t>(v);
+      }
+      std::sort(keys.begin(), keys.end(), [](const Key& x, const Key& y) {
+        if (x.bits[0] != y.bits[0]) return x.bits[0] < y.bits[0];
+        if (x.bits[1] != y.bits[1]) return x.bits[1] < y.bits[1];
+        if (x.bits[2] != y.bits[2]) return x.bits[2] < y.bits[2];
+        return x.id < y.id;
+      });
+      for (std::size_t v = 0; v < keys.size(); ++v) {
+        const bool same = v > 0 && std::memcmp(keys[v].bits, keys[v - 1].bits, sizeof keys[v].bits) == 0;
+        canon[keys[v].id] = same ? canon[keys[v - 1].id] : keys[v].id;
+      }
+    }
+    std::vector<std::uint32_t> vmap(data.vertices.size(), no_triangle);
+    std::vector<glm::vec3> vertices;
+    std::vector<std::uint32_t> tri_vertices(3 * n), tri_original(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint32_t old = order[k];
+      tri_original[k] = data.tri_original[old];
+      for (std::size_t j = 0; j < 3; ++j) {
+        const std::uint32_t v = canon[data.tri_vertices[3 * old + j]];
+        if (vmap[v] == no_triangle) {
+          vmap[v] = static_cast<std::uint32_t>(vertices.size());
+          vertices.push_back(data.vertices[v]);
+        }
+        tri_vertices[3 * k + j] = vmap[v];
+      }
+    }
+    data.class_of.assign(data.stats.triangles_input, skipped_class);
+    for (std::size_t i = 0; i < n; ++i) data.class_of[data.tri_original[i]] = class_of[i];
+    data.vertices = std::move(vertices);
+    data.tri_vertices = std::move(tri_vertices);
+    data.tri_original = std::move(tri_original);
+    data.wide_tris = false;
+    for (std::size_t c = 0; c < classes; ++c) data.wide_tris = data.wide_tris || data.class_tri_begin[c + 1] - data.class_tri_begin[c] > 65536;
+  }
+}
+
+// The classes' grids merged into the flat arrays, class after class (each part freed once
+// copied). Returns, per class, one past its last cell entry.
+inline std::vector<std::uint32_t> flatten(IndexData& data, std::vector<ClassGrids>& parts) {
+  const std::size_t classes = data.class_axis.size();
+  std::size_t total_cells = 0, total_entries = 0, total_rows = 0, total_grid_cells = 0, total_slices = 0;
+  data.wide_ids = false;
+  for (const auto& p : parts) {
+    total_cells += p.cell_tri_begin.size() - 1;
+    data.wide_ids = data.wide_ids || p.cell_tri_begin.size() - 1 > 65536;
+    total_entries += p.cell_tris.size();
+    for (int a = 0; a < 3; ++a) {
+      total_rows += p.row_coord[a].size();
+      total_grid_cells += p.cell_col[a].size();
+      total_slices += p.slice_rows[a].size();
+    }
+  }
+  data.stats.cells = total_cells;
+  data.stats.cell_entries = total_entries;
+  data.cell_tri_begin.reserve(total_cells + 1);
+  if (data.wide_tris) data.cell_tris.reserve(total_entries);
+  else data.cell_tris16.reserve(total_entries);
+  data.slice_rows.reserve(total_slices);
+  data.row_coord.reserve(total_rows);
+  data.row_begin.reserve(total_rows + 1);
+  data.cell_col.reserve(total_grid_cells);
+  if (data.wide_ids) data.cell_id.reserve(total_grid_cells - total_cells);
+  else data.cell_id16.reserve(total_grid_cells - total_cells);
+  data.class_cell_base.reserve(classes);
+  data.grid_base.reserve(classes * 3);
+  data.grid_shift.reserve(classes * 3);
+  data.cell_tri_begin.push_back(0);
+  std::vector<std::uint32_t> class_entry_end;  // per class: one past its last cell entry
+  class_entry_end.reserve(classes);
+  for (std::size_t c = 0; c < classes; ++c) {
+    auto& p = parts[c];
+    const std::uint32_t cell_base = static_cast<std::uint32_t>(data.cell_tri_begin.size() - 1);
+    data.class_cell_base.push_back(data.wide_ids ? 0u : cell_base);
+    const std::uint32_t entry_base = static_cast<std::uint32_t>(data.wide_tris ? data.cell_tris.size() : data.cell_tris16.size());
+    for (std::size_t k = 1; k < p.cell_tri_begin.size(); ++k) data.cell_tri_begin.push_back(entry_base + p.cell_tri_begin[k]);
+    if (data.wide_tris) {
+      data.cell_tris.insert(data.cell_tris.end(), p.cell_tris.begin(), p.cell_tris.end());
+    } else {
+      for (std::uint32_t t : p.cell_tris) data.cell_tris16.push_back(static_cast<std::uint16_t>(t - data.class_tri_begin[c]));
+    }
+    class_entry_end.push_back(static_cast<std::uint32_t>(data.wide_tris ? data.cell_tris.size() : data.cell_tris16.size()));
+    for (int a = 0; a < 3; ++a) {
+      data.grid_base.push_back(static_cast<std::uint32_t>(data.slice_rows.size()));
+      const std::uint32_t row_base = static_cast<std::uint32_t>(data.row_coord.size());
+      const std::uint32_t col_base = static_cast<std::uint32_t>(data.cell_col.size());
+      for (std::uint32_t s : p.slice_rows[a]) data.slice_rows.push_back(row_base + s);
+      data.row_coord.insert(data.row_coord.end(), p.row_coord[a].begin(), p.row_coord[a].end());
+      for (std::uint32_t b : p.row_begin[a]) data.row_begin.push_back(col_base + b);
+      data.cell_col.insert(data.cell_col.end(), p.cell_col[a].begin(), p.cell_col[a].end());
+      if (a == 0) {
+        // The X grid lists the class's cells in id order: the id is the position, shifted.
+        data.grid_shift.push_back(col_base - cell_base);
+      } else {
+        // Y and Z grids: the class's own cell number, in 16 bits when every class has at most
+        // 65536 cells (2 bytes per grid cell saved), else the global cell in 32 bits.
+        if (data.wide_ids) {
+          data.grid_shift.push_back(col_base - static_cast<std::uint32_t>(data.cell_id.size()));
+          for (std::uint32_t id : p.cell_id[a]) data.cell_id.push_back(cell_base + id);
+        } else {
+          data.grid_shift.push_back(col_base - static_cast<std::uint32_t>(data.cell_id16.size()));
+          for (std::uint32_t id : p.cell_id[a]) data.cell_id16.push_back(static_cast<std::uint16_t>(id));
+        }
+      }
+    }
+    p = ClassGrids{};
+  }
+  data.row_begin.push_back(static_cast<std::uint32_t>(data.cell_col.size()));
+  return class_entry_end;
+}
+
+// Chunk boxes when cells are crowded (mean entries per cell >= data.chunk_min_mean): one box
+// per data.chunk consecutive entries (chunks cut the entry array at fixed positions, so a chunk
+// may span two cells: its box bounds both parts). A tile skips a chunk lying wholly outside
+// its beam instead of meeting its triangles one by one.
+inline void make_chunk_boxes(IndexData& data, const std::vector<std::uint32_t>& class_entry_end) {
+  const std::size_t classes = data.class_axis.size(), total_cells = data.stats.cells, total_entries = data.stats.cell_entries;
+  if (total_cells > 0 && total_entries >= data.chunk_min_mean * total_cells) {
+    const std::size_t chunks = (total_entries + data.chunk - 1) / data.chunk;
+    data.chunk_box.assign(6 * chunks, 0.0f);
+    std::size_t e = 0;
+    for (std::size_t c = 0; c < classes; ++c) {
+      const std::size_t e_end = class_entry_end[c];
+      for (; e < e_end; ++e) {
+        const std::uint32_t tri = data.entry_triangle(static_cast<std::uint32_t>(e), static_cast<std::uint32_t>(c));
+        float* box = &data.chunk_box[6 * (e / data.chunk)];
+        for (int k = 0; k < 3; ++k) {
+          const glm::vec3& q = data.vertices[data.tri_vertices[3 * tri + static_cast<std::uint32_t>(k)]];
+          for (int a = 0; a < 3; ++a) {
+            if (e % data.chunk == 0 && k == 0) {
+              box[a] = q[a];
+              box[3 + a] = q[a];
+            }
+            box[a] = std::min(box[a], q[a]);
+            box[3 + a] = std::max(box[3 + a], q[a]);
+          }
+        }
+      }
+    }
+  }
+}
+
+// Narrow forms: 16-bit vertex ids when there are at most 65536 vertices; cell entry ranges
+// in 16 bits relative to their class when every class has at most 65535 entries (one extra
+// end per class: class k's cells c read ranges at c + k and c + k + 1).
+inline void narrow_forms(IndexData& data) {
+  const std::size_t classes = data.class_axis.size(), total_cells = data.stats.cells;
+  if (data.vertices.size() <= 65536) {
+    data.tri_vertices16.assign(data.tri_vertices.begin(), data.tri_vertices.end());
+    std::vector<std::uint32_t>().swap(data.tri_vertices);
+  }
+  {
+    bool narrow = !data.wide_ids;  // data.class_cell_base holds each class's first cell
+    for (std::size_t c = 0; c < classes && narrow; ++c) {
+      const std::uint32_t first = data.class_cell_base[c];
+      const std::uint32_t last = c + 1 < classes ? data.class_cell_base[c + 1] : static_cast<std::uint32_t>(total_cells);
+      narrow = data.cell_tri_begin[last] - data.cell_tri_begin[first] <= 65535u;
+    }
+    if (narrow) {
+      data.class_entry_base.resize(classes);
+      data.cell_begin16.reserve(total_cells + classes);
+      for (std::size_t c = 0; c < classes; ++c) {
+        const std::uint32_t first = data.class_cell_base[c];
+        const std::uint32_t last = c + 1 < classes ? data.class_cell_base[c + 1] : static_cast<std::uint32_t>(total_cells);
+        data.class_entry_base[c] = data.cell_tri_begin[first];
+        for (std::uint32_t cell = first; cell <= last; ++cell)
+          data.cell_begin16.push_back(static_cast<std::uint16_t>(data.cell_tri_begin[cell] - data.cell_tri_begin[first]));
+      }
+      std::vector<std::uint32_t>().swap(data.cell_tri_begin);
+    }
+  }
+}
+
+// Builds the index from the valid triangles `gather` left in `data` (vertices, tri_vertices,
+// tri_original, box, the skip counts) and their unit normals: the steps above, in order.
+inline void build(IndexData& data, std::vector<glm::vec3>& normals) {
+  data.stats.triangles_indexed = data.tri_original.size();
+  report(data, 0.1f);
+  if (data.tri_original.empty()) {
+    data.class_of.assign(data.stats.triangles_input, skipped_class);
+    report(data, 1.0f);
+    return;
+  }
+  make_grid(data);
+  const std::vector<std::uint16_t> class_of = make_classes(data, normals);
+  report(data, 0.2f);
+  std::vector<std::uint32_t> class_begin, by_class;
+  std::vector<ClassGrids> parts;
+  build_class_grids(data, class_of, class_begin, by_class, parts);
+  renumber(data, class_of, class_begin, by_class, parts);
+  const std::vector<std::uint32_t> class_entry_end = flatten(data, parts);
+  make_chunk_boxes(data, class_entry_end);
+  narrow_forms(data);
+  data.vertices.shrink_to_fit();
+  data.tri_vertices.shrink_to_fit();
+  data.tri_original.shrink_to_fit();
+  data.class_of.shrink_to_fit();
+  report(data, 1.0f);
+}
+}  // namespace cullkit::detail::nci
