@@ -259,19 +259,18 @@ class AdaptiveBinaryTree {
     }
   }
 
-  /// Repairing refit: `refit(objects)`, then every subtree one of whose root's children grew past
-  /// `params.rebuild_ratio` times its surface area at its last (re)build is rebuilt in place from
-  /// the current bounds (the topmost such subtrees; their objects are re-split among their
-  /// children). Returns the number of subtrees rebuilt (also in `stats().subtrees_rebuilt`, with
+  /// Repairing refit: `refit(objects)`, then `repair(params.rebuild_threshold)`: the topmost
+  /// subtrees whose root's children have come to overlap (see AbtRefitParams) are rebuilt in place
+  /// from the current bounds (their objects are re-split among their children). Returns the number of subtrees rebuilt (also in `stats().subtrees_rebuilt`, with
   /// their object count in `stats().objects_rebuilt`).
   /// Unlike the plain refit, `order()` may be permuted inside each rebuilt subtree's range (a
   /// triangle tree's reordered index buffer must then be rebuilt with `reorder_indices`; the
   /// return value says whether). Cost: O(n) plus O(m log m) for the m objects rebuilt; allocates
-  /// O(m) while it runs. Measured in bench_abt (random walks, 300 frames): `refit_quality` stays
-  /// near the ratio instead of growing without bound.
+  /// O(m) while it runs. Measured (AbtRefitParams): the tree's node area stays within a small
+  /// factor of a fresh build's instead of growing without bound.
   std::uint32_t refit(const Object* objects, const AbtRefitParams& params) {
     refit(objects);
-    return repair(params.rebuild_ratio);
+    return repair(params.rebuild_threshold);
   }
 
   /// `refit` through a getter: `get_bounds(i)` for the input indices of the build (same as
@@ -285,7 +284,7 @@ class AdaptiveBinaryTree {
   template <class Getter, class = std::enable_if_t<is_bounds_getter_v<std::decay_t<Getter>>>>
   std::uint32_t refit(Getter&& get_bounds, const AbtRefitParams& params) {
     refit_from_getter(get_bounds);
-    return repair(params.rebuild_ratio);
+    return repair(params.rebuild_threshold);
   }
 
   /// `refit` through a getter: `get_bounds(i)` for the input indices of the build.
@@ -319,27 +318,29 @@ class AdaptiveBinaryTree {
     refitted_ = true;
   }
 
-  /// The repair step of the repairing refit, on the current bounds: rebuilds the topmost subtrees
-  /// one of whose root's children has grown past `rebuild_ratio` times its area at its last
-  /// (re)build. Returns the number of subtrees rebuilt. `rebuild_ratio` <= 1 or NaN: nothing.
-  std::uint32_t repair(double rebuild_ratio) {
+  /// The repair step of the repairing refit, on the current bounds. For an inner node, the split
+  /// ratio is (area of the left child + area of the right child) / own area: about 1.3 for a
+  /// good split of evenly spread objects, towards 2 as moving objects make the children overlap.
+  /// The topmost nodes whose split ratio has gone the fraction `rebuild_threshold` of the way from
+  /// its value when they were built towards 2 are rebuilt with their subtrees. The test is local to each node, so the loss allowed at
+  /// one level does not compound with the levels above. Returns the number of subtrees rebuilt.
+  /// `rebuild_threshold` outside (0, 1) or NaN: nothing.
+  std::uint32_t repair(double rebuild_threshold) {
     stats_.subtrees_rebuilt = 0;
     stats_.objects_rebuilt = 0;
-    if (!(rebuild_ratio > 1.0) || nodes_.empty()) return 0;
+    if (!(rebuild_threshold > 0.0 && rebuild_threshold < 1.0) || nodes_.empty()) return 0;
     struct Visit {
       std::uint32_t node, depth;
     };
     std::vector<Visit> roots, stack;
     stack.push_back(Visit{0, 0});
-    const auto grown = [&](std::uint32_t k) {
-      return detail::abt_measured_area(nodes_[k].bounds) > rebuild_ratio * ref_area_[k] + 1e-30;
-    };
     while (!stack.empty()) {
       const Visit v = stack.back();
       stack.pop_back();
       const AbtNode& node = nodes_[v.node];
       if (node.is_leaf()) continue;
-      if (grown(node.left) || grown(node.left + 1)) {
+      const double ref = ref_split_[v.node];
+      if (split_ratio(v.node) > ref + rebuild_threshold * (2.0 - ref)) {
         roots.push_back(v);
         continue;
       }
@@ -348,7 +349,8 @@ class AdaptiveBinaryTree {
     }
     if (roots.empty()) return 0;
     std::vector<AbtNode> raw = nodes_;
-    std::vector<double> raw_ref = ref_area_;
+    std::vector<double> raw_ref = ref_split_;
+    const double fresh = std::numeric_limits<double>::quiet_NaN();  // measured after the layout
     std::vector<detail::AbtBuildItem> items;
     for (const Visit& v : roots) {
       const std::uint32_t b = nodes_[v.node].begin, e = nodes_[v.node].end;
@@ -362,10 +364,9 @@ class AdaptiveBinaryTree {
         nd.begin += b;
         nd.end += b;
       }
-      const std::size_t first_new = raw.size();
       detail::abt_stitch(raw, v.node, sub);
-      raw_ref[v.node] = detail::abt_measured_area(sub[0].bounds);
-      for (std::size_t k = first_new; k < raw.size(); ++k) raw_ref.push_back(detail::abt_measured_area(raw[k].bounds));
+      raw_ref[v.node] = fresh;
+      raw_ref.resize(raw.size(), fresh);
       for (std::uint32_t i = b; i < e; ++i) {
         order_[i] = items[i - b].index;
         bounds_[i] = items[i - b].box;
@@ -376,19 +377,19 @@ class AdaptiveBinaryTree {
     }
     std::vector<std::uint32_t> from;
     detail::abt_relayout(raw, nodes_, from, stats_);
-    ref_area_.resize(nodes_.size());
-    build_area_ = 0.0;
+    ref_split_.resize(nodes_.size());
     for (std::size_t k = 0; k < nodes_.size(); ++k) {
-      ref_area_[k] = raw_ref[from[k]];
-      build_area_ += ref_area_[k];
+      const double r = raw_ref[from[k]];
+      ref_split_[k] = std::isnan(r) ? split_ratio(static_cast<std::uint32_t>(k)) : r;
     }
     return stats_.subtrees_rebuilt;
   }
 
-  /// Sum of node surface areas now over the sum when each node was (re)built: 1 right after a
-  /// build, growing as objects move apart from their build-time neighbours. A rebuild (or the
-  /// repairing refit) is worth it when this passes about 1.5 to 2 (culling cost grows roughly with
-  /// it). Boxes that are `is_unbounded` are left out of both sums. 1 for an empty tree.
+  /// Sum of node surface areas now over the sum at the last full build: 1 right after a build,
+  /// growing as objects move apart from their build-time neighbours (repairs bring it back down).
+  /// A rebuild (or the repairing refit) is worth it when this passes about 1.5 to 2 (culling cost
+  /// grows roughly with it). Boxes that are `is_unbounded` are left out of both sums. 1 for an
+  /// empty tree.
   [[nodiscard]] double refit_quality() const noexcept {
     if (!(build_area_ > 0.0)) return 1.0;
     return total_area() / build_area_;
@@ -644,6 +645,16 @@ class AdaptiveBinaryTree {
     }
   }
 
+  // (area of the children) / (own area) of an inner node; 0 for leaves and for nodes without a
+  // measurable area (flat, or unbounded).
+  [[nodiscard]] double split_ratio(std::uint32_t k) const noexcept {
+    const AbtNode& node = nodes_[k];
+    if (node.is_leaf()) return 0.0;
+    const double own = detail::abt_measured_area(node.bounds);
+    if (!(own > 0.0)) return 0.0;
+    return (detail::abt_measured_area(nodes_[node.left].bounds) + detail::abt_measured_area(nodes_[node.left + 1].bounds)) / own;
+  }
+
   [[nodiscard]] double total_area() const noexcept {
     double sum = 0.0;
     for (const AbtNode& node : nodes_) sum += detail::abt_measured_area(node.bounds);
@@ -657,7 +668,7 @@ class AdaptiveBinaryTree {
     nodes_.clear();
     order_.clear();
     bounds_.clear();
-    ref_area_.clear();
+    ref_split_.clear();
     leaf_boxes_.assign(bounds_);
     stats_ = AbtStats{};
     refitted_ = false;
@@ -712,12 +723,9 @@ class AdaptiveBinaryTree {
       bounds_[i] = items[i].box;
     }
     leaf_boxes_.assign(bounds_);
-    ref_area_.resize(nodes_.size());
-    build_area_ = 0.0;
-    for (std::size_t k = 0; k < nodes_.size(); ++k) {
-      ref_area_[k] = detail::abt_measured_area(nodes_[k].bounds);
-      build_area_ += ref_area_[k];
-    }
+    ref_split_.resize(nodes_.size());
+    for (std::size_t k = 0; k < nodes_.size(); ++k) ref_split_[k] = split_ratio(static_cast<std::uint32_t>(k));
+    build_area_ = total_area();
     if (params.progress) params.progress(1.0f);
   }
 
@@ -725,7 +733,7 @@ class AdaptiveBinaryTree {
   std::vector<std::uint32_t> order_;
   std::vector<Aabb> bounds_;
   detail::AbtLeafBoxes leaf_boxes_;  // bounds_ again, as padded SoA for the leaf tests
-  std::vector<double> ref_area_;     // per node: surface area when it was last (re)built
+  std::vector<double> ref_split_;    // per node: split_ratio when it was last (re)built
   detail::AbtBuildContext build_context_;  // the build's split settings, for repairs
   std::size_t input_count_ = 0;
   AbtStats stats_;
