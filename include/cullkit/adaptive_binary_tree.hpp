@@ -168,10 +168,7 @@ class AdaptiveBinaryTree {
     CULLKIT_ASSERT(frusta != nullptr || view_count == 0, "frusta points to view_count frusta");
     if (frusta == nullptr || view_count == 0 || nodes_.empty()) return;
     const auto views = static_cast<std::uint32_t>(std::min<std::size_t>(view_count, 32));
-    walk_views(frusta, views, [&](std::uint32_t b, std::uint32_t e, std::uint32_t bits) {
-      append_range(out, b, e);
-      view_bits.insert(view_bits.end(), e - b, bits);
-    });
+    walk_views(frusta, views, out, view_bits);
   }
 
   /// Frustum and occlusion culling: clears `out`, then appends, in front-to-back order from
@@ -536,9 +533,9 @@ class AdaptiveBinaryTree {
   }
 
   // The multi-view walk: each stack entry carries the views that may still meet the node and,
-  // per view, the planes it straddles. `emit(begin, end, view_bits)`.
-  template <class Emit>
-  void walk_views(const Frustum* frusta, std::uint32_t views, Emit&& emit) const {
+  // per view, the planes it straddles. A node inside every view still alive is one range.
+  void walk_views(const Frustum* frusta, std::uint32_t views, std::vector<std::uint32_t>& out,
+                  std::vector<std::uint32_t>& view_bits) const {
     struct Entry {
       std::uint32_t node;
       std::uint32_t alive;
@@ -552,14 +549,14 @@ class AdaptiveBinaryTree {
     for (std::uint32_t v = 0; v < views; ++v) root.masks[v] = frusta[v].active_mask();
     const AbtNode* nodes = nodes_.data();
     while (top > 0) {
-      Entry& entry = stack[--top];
-      const AbtNode& node = nodes[entry.node];
-      std::uint32_t alive = entry.alive;
+      --top;
+      const AbtNode& node = nodes[stack[top].node];
+      std::uint32_t alive = stack[top].alive;
       std::uint32_t straddling = 0;
       PlaneMask masks[32];
       for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
         const int v = detail::abt_lowest_bit(rest);
-        std::uint32_t m = entry.masks[v];
+        std::uint32_t m = stack[top].masks[v];
         if (detail::abt_node_outside(&frusta[v].plane(0), m, node.bounds, node.sphere)) {
           alive &= ~(std::uint32_t{1} << v);
           continue;
@@ -569,15 +566,16 @@ class AdaptiveBinaryTree {
       }
       if (alive == 0) continue;
       if (straddling == 0) {
-        emit(node.begin, node.end, alive);
+        out.insert(out.end(), order_.begin() + node.begin, order_.begin() + node.end);
+        view_bits.resize(view_bits.size() + node.count(), alive);
         continue;
       }
       if (node.is_leaf() || node.count() <= scan_below_) {
-        views_leaf(frusta, alive, straddling, masks, node.begin, node.end, emit);
+        views_leaf(frusta, alive, straddling, masks, node.begin, node.end, out, view_bits);
         continue;
       }
       const std::uint32_t left = node.left;
-      Entry& r = stack[top++];
+      Entry& r = stack[top++];  // reuses the popped slot: everything needed was read above
       r.node = left + 1;
       r.alive = alive;
       Entry& l = stack[top++];
@@ -590,24 +588,38 @@ class AdaptiveBinaryTree {
     }
   }
 
-  template <class Emit>
+  // Objects of a straddling leaf (or small subtree), 16 at a time: per view a mask of the lanes
+  // not outside it, then one output entry per lane that some view keeps.
   void views_leaf(const Frustum* frusta, std::uint32_t alive, std::uint32_t straddling, const PlaneMask* masks,
-                  std::uint32_t begin, std::uint32_t end, Emit& emit) const {
+                  std::uint32_t begin, std::uint32_t end, std::vector<std::uint32_t>& out,
+                  std::vector<std::uint32_t>& view_bits) const {
     constexpr std::uint32_t lanes = detail::AbtLeafBoxes::lanes;
-    const std::uint32_t whole = alive & ~straddling;  // views the node is inside of
+    constexpr std::uint32_t all_lanes = (std::uint32_t{1} << lanes) - 1u;
+    std::uint32_t visible[32];
+    for (std::uint32_t rest = alive & ~straddling; rest != 0; rest &= rest - 1u)
+      visible[detail::abt_lowest_bit(rest)] = all_lanes;  // views the node is inside of
     for (std::uint32_t base = begin; base < end; base += lanes) {
-      std::uint32_t bits[lanes];
-      for (std::uint32_t i = 0; i < lanes; ++i) bits[i] = whole;
+      std::uint32_t any = 0;
       for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) {
         const int v = detail::abt_lowest_bit(rest);
-        std::uint32_t out = 0, cross = 0;
-        leaf_boxes_.classify_lanes(&frusta[v].plane(0), masks[v], base, out, cross);
-        const std::uint32_t bit = std::uint32_t{1} << v;
-        for (std::uint32_t i = 0; i < lanes; ++i) bits[i] |= ((out >> i) & 1u) ? 0u : bit;
+        std::uint32_t outside = 0, cross = 0;
+        leaf_boxes_.classify_lanes(&frusta[v].plane(0), masks[v], base, outside, cross);
+        visible[v] = ~outside & all_lanes;
+        any |= visible[v];
       }
+      if (alive != straddling) any = all_lanes;
       const std::uint32_t count = end - base < lanes ? end - base : lanes;
-      for (std::uint32_t i = 0; i < count; ++i)
-        if (bits[i] != 0) emit(base + i, base + i + 1, bits[i]);
+      if (count < lanes) any &= (std::uint32_t{1} << count) - 1u;
+      for (; any != 0; any &= any - 1u) {
+        const int i = detail::abt_lowest_bit(any);
+        std::uint32_t bits = 0;
+        for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
+          const int v = detail::abt_lowest_bit(rest);
+          bits |= ((visible[v] >> i) & 1u) << v;
+        }
+        out.push_back(order_[base + std::uint32_t(i)]);
+        view_bits.push_back(bits);
+      }
     }
   }
 
