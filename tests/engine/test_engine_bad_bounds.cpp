@@ -2,7 +2,6 @@
 // container (frustum, convex volume, several views, occlusion, moving objects), at the build and
 // after a refit; a valid refit brings them back under culling; transform_bounds of bad input is
 // such a box. Oracle: the brute-force frustum of abt_oracle.hpp, and "always present" for the bad.
-// On the code before this change, `always_reported` fails: the skybox is never returned.
 #include <algorithm>
 #include <limits>
 #include <vector>

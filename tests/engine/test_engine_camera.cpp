@@ -1,8 +1,6 @@
 // make_camera, camera_is_consistent, transform_bounds and the frustum's plane names.
 // Oracles: the eye that built the matrix (glm::lookAt), the 8 corners moved one by one in double,
 // and points in front of / behind the eye for the near and far planes.
-// On the code before this change: make_camera and transform_bounds do not exist, and
-// `plane_names` fails (under reversed-Z, near_plane held the dropped plane or the far one).
 #include <cmath>
 #include <limits>
 

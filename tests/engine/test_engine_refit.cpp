@@ -2,8 +2,7 @@
 // 300 frames of random motion: a plain refit's quality (node area over area at build) grows
 // without bound; the repairing refit keeps it bounded, the tree valid, and every cull exact
 // against brute force. Both from_getter spellings build the same tree; cull_with_occlusion takes
-// its parameters without a stats pointer. On the code before this change the repairing overload
-// and from_getter(getter, count) do not exist (and the plain refit's quality passes 3 here).
+// its parameters without a stats pointer.
 #include <algorithm>
 #include <vector>
 

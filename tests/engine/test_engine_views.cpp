@@ -3,7 +3,7 @@
 // Oracles: every box tested corner by corner in double against the planes (volumes, views); for
 // casters, the exact test "the box swept along the light meets the view" (a 1-D interval problem
 // over the planes of the Minkowski sum of the frustum and the box), and sampled casters for
-// infinite frusta. On the code before this change none of these functions exist.
+// infinite frusta.
 #include <algorithm>
 #include <array>
 #include <cmath>
