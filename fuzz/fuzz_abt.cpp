@@ -1,7 +1,9 @@
 // libFuzzer target for AdaptiveBinaryTree: bytes -> build parameters, a view-projection matrix and
 // boxes (raw floats, so NaN, inf, huge and inverted values all pass through; or small integers,
 // so realistic scenes are reached too). Builds, validates, culls and checks against a brute-force
-// oracle in double; refits with moved boxes and checks again; exercises the occlusion overload and
+// oracle in double (objects without valid bounds must always be reported); cull_views and the
+// ConvexVolume cull must agree with it; refits (plain and repairing) with moved boxes and checks
+// again; exercises the occlusion overload and
 // the traversals. Any violation calls __builtin_trap().
 #include <cmath>
 #include <cstddef>
@@ -80,11 +82,22 @@ void check_cull(const AdaptiveBinaryTree<Aabb>& tree, const std::vector<Aabb>& b
   tree.cull(f, out);
   std::vector<std::uint8_t> mark(boxes.size(), 0);
   for (const std::uint32_t i : out) {
-    FUZZ_REQUIRE(i < boxes.size() && !mark[i] && is_valid(boxes[i]));
+    FUZZ_REQUIRE(i < boxes.size() && !mark[i]);
     mark[i] = 1;
   }
+  // Objects without valid bounds are always reported.
   for (std::size_t i = 0; i < boxes.size(); ++i)
-    if (is_valid(boxes[i]) && oracle.meets(boxes[i])) FUZZ_REQUIRE(mark[i]);
+    if (!is_valid(boxes[i]) || oracle.meets(boxes[i])) FUZZ_REQUIRE(mark[i]);
+  // Two copies of the view in one cull_views walk: the same set, both bits on every entry; and
+  // the frustum as a ConvexVolume: the same set.
+  const Frustum pair[2] = {f, f};
+  std::vector<std::uint32_t> multi, bits, vol;
+  tree.cull_views(pair, 2, multi, bits);
+  FUZZ_REQUIRE(multi.size() == out.size() && bits.size() == multi.size());
+  for (std::size_t j = 0; j < multi.size(); ++j) FUZZ_REQUIRE(multi[j] < boxes.size() && mark[multi[j]] && bits[j] == 3u);
+  tree.cull(ConvexVolume(f), vol);
+  FUZZ_REQUIRE(vol.size() == out.size());
+  for (const std::uint32_t i : vol) FUZZ_REQUIRE(i < boxes.size() && mark[i]);
 }
 
 struct HalfSpace {
@@ -135,7 +148,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   FUZZ_REQUIRE(tree.validate());
   std::size_t valid = 0;
   for (const Aabb& b : boxes) valid += is_valid(b) ? 1 : 0;
-  FUZZ_REQUIRE(tree.size() == valid && tree.stats().skipped == boxes.size() - valid);
+  FUZZ_REQUIRE(tree.size() == boxes.size() && tree.stats().skipped == 0 &&
+               tree.stats().unbounded == boxes.size() - valid);
 
   const Frustum f = Frustum::from_matrix(m, depth);
   const Oracle oracle(m, depth);
@@ -147,26 +161,33 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   tree.cull(f, occ, out);
   std::vector<std::uint8_t> mark(boxes.size(), 0);
   for (const std::uint32_t i : out) {
-    FUZZ_REQUIRE(i < boxes.size() && !mark[i] && !occ.is_occluded(boxes[i]));
+    FUZZ_REQUIRE(i < boxes.size() && !mark[i] && (!is_valid(boxes[i]) || !occ.is_occluded(boxes[i])));
     mark[i] = 1;
   }
   for (std::size_t i = 0; i < boxes.size(); ++i)
-    if (is_valid(boxes[i]) && oracle.meets(boxes[i]) && !occ.is_occluded(boxes[i])) FUZZ_REQUIRE(mark[i]);
+    if (!is_valid(boxes[i]) || (oracle.meets(boxes[i]) && !occ.is_occluded(boxes[i]))) FUZZ_REQUIRE(mark[i]);
 
   std::size_t visits = 0;
   tree.traverse_front_to_back(glm::vec3(m[3]), [&](std::uint32_t, const AbtNode&) { ++visits; });
   FUZZ_REQUIRE(visits == tree.nodes().size());
 
-  // Refit with every box moved by a shared offset (some new boxes may be bad: they keep the old).
+  // Refit with every box moved by a shared offset (some new boxes may be bad: reported always),
+  // then a repairing refit with the boxes scattered by their index.
   const glm::vec3 shift(float(static_cast<std::int8_t>(flags)) * 0.5f, 1.0f, -2.0f);
   std::vector<Aabb> moved = boxes;
   for (Aabb& b : moved) b = Aabb{b.min + shift, b.max + shift};
   tree.refit(moved.data());
   FUZZ_REQUIRE(tree.validate());
-  for (std::size_t k = 0; k < tree.size(); ++k) moved[tree.order()[k]] = tree.object_bounds()[k];
-  for (std::size_t i = 0; i < boxes.size(); ++i)
-    if (!is_valid(boxes[i])) moved[i] = boxes[i];  // skipped at build: stays out
   check_cull(tree, moved, f, oracle);
   FUZZ_REQUIRE(!(tree.refit_quality() < 0.0));
+  for (std::size_t i = 0; i < moved.size(); ++i) {
+    const glm::vec3 d(float(i % 7) * 3.0f - 9.0f, float(i % 5) * -2.0f, float(i % 3) * 4.0f);
+    moved[i] = Aabb{moved[i].min + d, moved[i].max + d};
+  }
+  AbtRefitParams rp;
+  rp.rebuild_threshold = double(flags % 10) / 10.0;
+  tree.refit(moved.data(), rp);
+  FUZZ_REQUIRE(tree.validate() && tree.size() == boxes.size());
+  check_cull(tree, moved, f, oracle);
   return 0;
 }

@@ -19,6 +19,12 @@
 //
 // Conventions: boxes are closed (touching counts as meeting); all answers are conservative: an
 // object is left out only when its box is certainly outside a frustum plane despite float rounding.
+// An object whose bounds are NaN, infinite or inverted (at the build or at a refit) is held with
+// `unbounded_box()` and reported by every cull, whatever the view: a skybox with infinite bounds is
+// drawn, and a transform that was NaN for one frame is forgotten at the next valid refit.
+//
+// Views beyond one frustum: `cull(ConvexVolume)` (portals, shadow casters, user planes) and
+// `cull_views` (up to 32 frusta in one walk, a bit per view: stereo eyes, shadow cascades).
 //
 // Thread safety: a built tree is immutable except through `refit`; concurrent `const` queries are
 // safe. The build may use worker threads (`AbtParams::threads`); its result never depends on them.
@@ -29,108 +35,26 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <limits>
 #include <mutex>
-#include <thread>
 #include <type_traits>
 #include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
+#include "abt_params.hpp"
 #include "config.hpp"
+#include "detail/abt_build.hpp"
 #include "detail/abt_leaf.hpp"
 #include "detail/abt_split.hpp"
 #include "geometry/aabb.hpp"
+#include "geometry/convex_volume.hpp"
 #include "geometry/frustum.hpp"
 #include "geometry/sphere.hpp"
 #include "traits.hpp"
 
 namespace cullkit {
-
-/// How split-plane candidates are generated.
-enum class AbtCandidates : std::uint8_t {
-  /// `candidates` evenly spaced planes per axis across the node's centroid range (binning). One
-  /// cheap pass per axis. The default: in bench_abt it builds faster and culls as well or better.
-  binning,
-  /// `candidates` planes per axis through the centroids of objects drawn at random (the seed's
-  /// "random sampling"), with a seeded splitmix64 stream per node: same input and seed, same tree.
-  sampling,
-};
-
-/// Build parameters. Every field has a documented default; `AbtParams{}` is a sound choice.
-struct AbtParams {
-  /// A node with at most this many objects becomes a leaf. Default 16. Culling answers per object
-  /// whatever the leaf size; smaller leaves give finer draw ranges and traversals but more nodes
-  /// (about 2n / max_leaf_size, 60 bytes each) and a slower build. Measured on 60k boxes at 38%
-  /// visible (time over the SoA scan's): leaves of 4: 0.47, 8: 0.34, 16: 0.25 without `scan_below`;
-  /// 16 with scans below 64: 0.20. 0 is treated as 1.
-  std::uint32_t max_leaf_size = 16;
-  /// Deepest level (the root is level 0); a node there becomes a leaf whatever its size.
-  /// Default 48; values above `AdaptiveBinaryTree::depth_limit` (64) are clamped to it.
-  std::uint32_t max_depth = 48;
-  /// Candidate generator. Default `binning` (see AbtCandidates).
-  AbtCandidates candidates = AbtCandidates::binning;
-  /// Candidate planes per axis and node. Default 16. More is slower to build, rarely better.
-  std::uint32_t candidate_count = 16;
-  /// Weight of f1, which prefers the longest axis of the node's box (0 on it, up to 1). Default 1.
-  float weight_axis = 1.0f;
-  /// Weight of f2 = |V_left - V_right| / (V_left + V_right) of the children's tight boxes. Default 1.
-  float weight_volume = 1.0f;
-  /// Weight of f3 = |n_left - n_right| / n, balance of object counts. Default 1.
-  float weight_count = 1.0f;
-  /// Weight of f4 = (objects whose box straddles the plane) / n. Default 1. 0 also skips counting.
-  float weight_straddle = 1.0f;
-  /// Nodes with more objects than this score their candidates on an evenly strided subset of about
-  /// this many objects (the split itself is always exact). Default 8192; raise it for slightly
-  /// better top levels at a higher build cost. Values below 64 are treated as 64.
-  std::uint32_t score_sample_limit = 8192;
-  /// Seed of the sampling generator (unused by binning). Default 0x5eed.
-  std::uint64_t seed = 0x5eedu;
-  /// Worker threads for the build: 0 or 1 build on the calling thread only (default 0). With N > 1,
-  /// subtrees are built by up to N threads (the caller included). The tree is identical either way.
-  unsigned threads = 0;
-  /// Subtrees smaller than this are never handed to another thread. Default 4096 objects.
-  std::uint32_t parallel_grain = 4096;
-  /// `cull` tests the objects of a straddling subtree of at most this many objects directly
-  /// (16 at a time, vectorized, one contiguous range) instead of descending into it. Default 64
-  /// (see `max_leaf_size` for measurements). 0 descends to the leaves. Results are the same
-  /// either way; only speed changes.
-  std::uint32_t scan_below = 64;
-  /// Optional progress report, called with a fraction in [0, 1] (non-decreasing, 1 at the end) a
-  /// few dozen times over a build of at least `progress_min_objects` objects. It may be called from
-  /// any build thread, but never concurrently. Default: none.
-  std::function<void(float)> progress;
-  /// Smallest build that reports progress. Default 65536 objects.
-  std::uint32_t progress_min_objects = 65536;
-};
-
-/// Build statistics (`AdaptiveBinaryTree::stats`).
-struct AbtStats {
-  std::uint32_t nodes = 0;    ///< nodes in `nodes()`
-  std::uint32_t leaves = 0;   ///< leaf nodes
-  std::uint32_t depth = 0;    ///< deepest level (root = 0; 0 also for an empty tree)
-  std::uint32_t objects = 0;  ///< objects held (= size())
-  std::uint32_t skipped = 0;  ///< objects left out: NaN, infinite or inverted bounds (or beyond 2^32 - 2)
-  std::uint32_t max_leaf_objects = 0;     ///< largest leaf (above max_leaf_size only for inseparable objects)
-  std::uint32_t refit_invalid = 0;        ///< at the last refit: held objects whose new bounds were bad
-};
-
-/// A read-only node. Node 0 is the root; inner nodes have two children, `left` and `left + 1`.
-struct AbtNode {
-  Aabb bounds;            ///< tight box of every object in the subtree
-  Sphere sphere;          ///< `bounding_sphere(bounds)`
-  std::uint32_t begin;    ///< the subtree's objects are `order()[begin, end)`
-  std::uint32_t end;
-  std::uint32_t left;     ///< left child index (right child = left + 1); 0 for a leaf
-  std::uint8_t axis;      ///< inner nodes: split axis (0 x, 1 y, 2 z)
-  float split;            ///< inner nodes: objects with centroid[axis] < split went left (at build)
-
-  [[nodiscard]] bool is_leaf() const noexcept { return left == 0; }
-  [[nodiscard]] std::uint32_t right() const noexcept { return left + 1; }
-  [[nodiscard]] std::uint32_t count() const noexcept { return end - begin; }
-};
 
 /// An adaptive binary tree over objects with bounds (see the file comment).
 ///
@@ -149,7 +73,8 @@ class AdaptiveBinaryTree {
   AdaptiveBinaryTree() = default;
 
   /// Builds over `objects[0, count)`. Objects whose bounds are not `is_valid` (NaN, infinite,
-  /// inverted) are skipped, counted in `stats().skipped`, and never returned.
+  /// inverted) are held with `unbounded_box()`, counted in `stats().unbounded`, and reported by
+  /// every cull. Only objects beyond the first 2^32 - 2 are skipped (`stats().skipped`).
   /// pre: `objects` points to `count` objects (may be null when count is 0).
   /// Cost: O(n log n) time, O(n) memory; allocates. Thread safety: reads `objects` only.
   AdaptiveBinaryTree(const Object* objects, std::size_t count, const AbtParams& params = {}) {
@@ -174,59 +99,76 @@ class AdaptiveBinaryTree {
     return tree;
   }
 
+  /// `from_getter` with the data first and the count second, as in the constructor's
+  /// `(objects, count)`. Both spellings build the same tree.
+  template <class Getter, class = std::enable_if_t<is_bounds_getter_v<std::decay_t<Getter>>>>
+  [[nodiscard]] static AdaptiveBinaryTree from_getter(Getter&& get_bounds, std::size_t count,
+                                                      const AbtParams& params = {}) {
+    AdaptiveBinaryTree tree;
+    tree.build(get_bounds, count, params);
+    return tree;
+  }
+
   // ---------------------------------------------------------------------------------------------
   // Queries
   // ---------------------------------------------------------------------------------------------
 
   /// Clears `out`, then appends the input index of every held object whose box may meet the
   /// frustum, each once, grouped by subtree (not sorted). Never leaves out an object whose box
-  /// meets the frustum. Cost: O(visible + boundary nodes). Allocation: only growth of `out`.
-  /// Thread safety: concurrent calls on one tree are safe (with distinct `out`).
+  /// meets the frustum; objects without valid bounds are always in. A frustum whose planes were
+  /// all dropped (a NaN or singular matrix) keeps everything. Cost: O(visible + boundary nodes).
+  /// Allocation: only growth of `out`. Thread safety: concurrent calls on one tree are safe (with
+  /// distinct `out`).
   void cull(const Frustum& frustum, std::vector<std::uint32_t>& out) const {
     out.clear();
-    cull(frustum, [&](std::uint32_t b, std::uint32_t e, Containment) {
-      if (e - b == 1) out.push_back(order_[b]);
-      else out.insert(out.end(), order_.begin() + b, order_.begin() + e);
+    walk(&frustum.plane(0), frustum.active_mask(), [&](std::uint32_t b, std::uint32_t e, Containment) {
+      append_range(out, b, e);
     });
   }
 
   /// Visitor form of `cull`: `visitor(begin, end, containment)` receives ranges of `order()`
   /// positions, disjoint, together covering every object that may meet the frustum. `inside`
   /// ranges (whole subtrees, or single objects) are certainly inside; `intersecting` ones are
-  /// single objects that may straddle the boundary. The visitor may return `bool`: false stops the
-  /// walk at once (early exit); a `void` visitor sees everything. No allocation.
+  /// single objects that may straddle the boundary (or have no valid bounds). The visitor may
+  /// return `bool`: false stops the walk at once (early exit); a `void` visitor sees everything.
+  /// No allocation.
   template <class Visitor, class = std::enable_if_t<!std::is_same_v<std::decay_t<Visitor>, std::vector<std::uint32_t>>>>
   void cull(const Frustum& frustum, Visitor&& visitor) const {
-    if (nodes_.empty()) return;
-    struct Entry {
-      std::uint32_t node;
-      PlaneMask mask;
-    };
-    Entry stack[depth_limit + 2];
-    std::uint32_t top = 0;
-    stack[top++] = Entry{0, frustum.active_mask()};
-    const AbtNode* nodes = nodes_.data();
-    while (top > 0) {
-      const Entry entry = stack[--top];
-      const AbtNode& node = nodes[entry.node];
-      PlaneMask mask = entry.mask;
-      if (node_outside(frustum, node, mask)) continue;
-      if (mask == 0) {
-        if (!call(visitor, node.begin, node.end, Containment::inside)) return;
-        continue;
-      }
-      if (node.is_leaf() || node.count() <= scan_below_) {
-        // A leaf, or a small subtree (its objects are contiguous too): objects one by one, only
-        // the planes the node straddles, several objects per step.
-        const bool go_on = leaf_boxes_.test(frustum, mask, node.begin, node.end, [&](std::uint32_t i, Containment c) {
-          return call(visitor, i, i + 1, c);
-        });
-        if (!go_on) return;
-        continue;
-      }
-      stack[top++] = Entry{node.left + 1, mask};
-      stack[top++] = Entry{node.left, mask};
-    }
+    walk(&frustum.plane(0), frustum.active_mask(), visitor);
+  }
+
+  /// The same as `cull(Frustum, out)` for a convex volume of up to 32 planes (a frustum narrowed by
+  /// a portal, a shadow-caster volume, a view with user clip planes). A volume without planes keeps
+  /// everything. Same cost, allocation and thread safety.
+  void cull(const ConvexVolume& volume, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    walk(volume.plane_count() > 0 ? &volume.plane(0) : nullptr, volume.full_mask(),
+         [&](std::uint32_t b, std::uint32_t e, Containment) { append_range(out, b, e); });
+  }
+
+  /// Visitor form of `cull(ConvexVolume, out)`, with the rules of the frustum visitor form.
+  template <class Visitor, class = std::enable_if_t<!std::is_same_v<std::decay_t<Visitor>, std::vector<std::uint32_t>>>>
+  void cull(const ConvexVolume& volume, Visitor&& visitor) const {
+    walk(volume.plane_count() > 0 ? &volume.plane(0) : nullptr, volume.full_mask(), visitor);
+  }
+
+  /// Up to 32 views in one walk. Clears `out` and `view_bits`, then appends every held object that
+  /// may meet some frustum of `frusta[0, view_count)`, once, with `view_bits[i]` (parallel to
+  /// `out`) holding bit v set when `out[i]` may meet `frusta[v]`; a bit is never clear for a view
+  /// the object's box meets. Objects without valid bounds carry every view's bit.
+  /// pre: `view_count <= 32` (views beyond the 32nd are ignored) and `frusta` points to them.
+  /// Cost: one walk whose nodes are tested against the views still alive at them; for two
+  /// overlapping eyes well under two separate culls (see bench_views). Allocation: growth of `out`
+  /// and `view_bits` only. Thread safety: as `cull`.
+  void cull_views(const Frustum* frusta, std::size_t view_count, std::vector<std::uint32_t>& out,
+                  std::vector<std::uint32_t>& view_bits) const {
+    out.clear();
+    view_bits.clear();
+    CULLKIT_ASSERT(view_count <= 32, "view_count <= 32");
+    CULLKIT_ASSERT(frusta != nullptr || view_count == 0, "frusta points to view_count frusta");
+    if (frusta == nullptr || view_count == 0 || nodes_.empty()) return;
+    const auto views = static_cast<std::uint32_t>(std::min<std::size_t>(view_count, 32));
+    walk_views(frusta, views, out, view_bits);
   }
 
   /// Frustum and occlusion culling: clears `out`, then appends, in front-to-back order from
@@ -236,16 +178,19 @@ class AdaptiveBinaryTree {
   /// each object is tested on its own (frustum, then occlusion).
   /// `Occlusion` needs `const glm::vec3& eye() const` and `bool is_occluded(const Aabb&) const`
   /// (cullkit::OcclusionTree has both); `is_occluded` must only say true for boxes that are
-  /// entirely hidden. Cost: one occlusion query per visited node and per tested object.
+  /// entirely hidden. Boxes that are `is_unbounded` (objects without valid bounds and their
+  /// ancestors) are never queried: such objects are always reported.
+  /// Cost: one occlusion query per visited node and per tested object.
   /// Allocation: only growth of `out`.
   template <class Occlusion>
   void cull(const Frustum& frustum, const Occlusion& occlusion, std::vector<std::uint32_t>& out) const {
     out.clear();
     if (nodes_.empty()) return;
     const glm::vec3 eye = occlusion.eye();
+    const Plane* planes = &frustum.plane(0);
     struct Entry {
       std::uint32_t node;
-      PlaneMask mask;
+      std::uint32_t mask;
     };
     Entry stack[depth_limit + 2];
     std::uint32_t top = 0;
@@ -253,14 +198,14 @@ class AdaptiveBinaryTree {
     while (top > 0) {
       const Entry entry = stack[--top];
       const AbtNode& node = nodes_[entry.node];
-      PlaneMask mask = entry.mask;
-      if (node_outside(frustum, node, mask)) continue;
-      if (occlusion.is_occluded(node.bounds)) continue;
+      std::uint32_t mask = entry.mask;
+      if (detail::abt_node_outside(planes, mask, node.bounds, node.sphere)) continue;
+      if (!is_unbounded(node.bounds) && occlusion.is_occluded(node.bounds)) continue;
       if (node.is_leaf()) {
         for (std::uint32_t i = node.begin; i < node.end; ++i) {
-          PlaneMask m = mask;
-          if (m != 0 && frustum.classify(bounds_[i], m) == Containment::outside) continue;
-          if (node.count() > 1 && occlusion.is_occluded(bounds_[i])) continue;
+          std::uint32_t m = mask;
+          if (m != 0 && detail::abt_box_outside(planes, m, bounds_[i])) continue;
+          if (node.count() > 1 && !is_unbounded(bounds_[i]) && occlusion.is_occluded(bounds_[i])) continue;
           out.push_back(order_[i]);
         }
         continue;
@@ -296,8 +241,12 @@ class AdaptiveBinaryTree {
   /// After objects moved: re-reads every held object's bounds from `objects` (the same array layout
   /// as at build, at least as long) and recomputes every node's box and sphere bottom-up. The
   /// topology and `order()` are kept; split planes keep their build-time values. An object whose
-  /// new bounds are not valid keeps its previous bounds and is counted in `stats().refit_invalid`.
-  /// Objects skipped at build stay out. Cost: O(n), no allocation. Not thread-safe with queries.
+  /// new bounds are not valid gets `unbounded_box()` (reported by every cull until a later refit
+  /// gives it valid bounds) and is counted in `stats().refit_invalid` and `stats().unbounded`; an
+  /// object that had no valid bounds and now has them is culled by them from now on.
+  /// Cost: O(n), no allocation. Not thread-safe with queries. The tree's quality falls as objects
+  /// move away from their build-time neighbours (`refit_quality`); the repairing overload below
+  /// bounds that loss.
   void refit(const Object* objects) {
     static_assert(require_bounds_traits<Object, Traits>::value, "");
     if constexpr (has_bounds_traits_v<Object, Traits>) {
@@ -307,11 +256,32 @@ class AdaptiveBinaryTree {
     }
   }
 
+  /// Repairing refit: `refit(objects)`, then `repair(params.rebuild_threshold)`: the topmost
+  /// subtrees whose root's children have come to overlap (see AbtRefitParams) are rebuilt in place
+  /// from the current bounds (their objects are re-split among their children). Returns the number of subtrees rebuilt (also in `stats().subtrees_rebuilt`, with
+  /// their object count in `stats().objects_rebuilt`).
+  /// Unlike the plain refit, `order()` may be permuted inside each rebuilt subtree's range (a
+  /// triangle tree's reordered index buffer must then be rebuilt with `reorder_indices`; the
+  /// return value says whether). Cost: O(n) plus O(m log m) for the m objects rebuilt; allocates
+  /// O(m) while it runs. Measured (AbtRefitParams): the tree's node area stays within a small
+  /// factor of a fresh build's instead of growing without bound.
+  std::uint32_t refit(const Object* objects, const AbtRefitParams& params) {
+    refit(objects);
+    return repair(params.rebuild_threshold);
+  }
+
   /// `refit` through a getter: `get_bounds(i)` for the input indices of the build (same as
   /// `refit_from_getter`; chosen when the argument is callable with a std::uint32_t).
   template <class Getter, class = std::enable_if_t<is_bounds_getter_v<std::decay_t<Getter>>>>
   void refit(Getter&& get_bounds) {
     refit_from_getter(get_bounds);
+  }
+
+  /// Repairing refit through a getter (see `refit(objects, params)`).
+  template <class Getter, class = std::enable_if_t<is_bounds_getter_v<std::decay_t<Getter>>>>
+  std::uint32_t refit(Getter&& get_bounds, const AbtRefitParams& params) {
+    refit_from_getter(get_bounds);
+    return repair(params.rebuild_threshold);
   }
 
   /// `refit` through a getter: `get_bounds(i)` for the input indices of the build.
@@ -321,14 +291,15 @@ class AdaptiveBinaryTree {
                   "cullkit: refit_from_getter needs a callable get_bounds(std::uint32_t) returning cullkit::Aabb");
     stats_.refit_invalid = 0;
     for (std::size_t i = 0; i < order_.size(); ++i) {
-      const Aabb b = get_bounds(order_[i]);
-      if (is_valid(b)) {
-        bounds_[i] = b;
-        leaf_boxes_.set(static_cast<std::uint32_t>(i), b);
-      } else {
+      Aabb b = get_bounds(order_[i]);
+      if (!is_valid(b)) {
         ++stats_.refit_invalid;
+        b = unbounded_box();
       }
+      bounds_[i] = b;
+      leaf_boxes_.set(static_cast<std::uint32_t>(i), b);
     }
+    stats_.unbounded = stats_.refit_invalid;
     // Children always follow their parent in the array, so a reverse sweep is bottom-up.
     for (std::size_t k = nodes_.size(); k-- > 0;) {
       AbtNode& node = nodes_[k];
@@ -344,9 +315,78 @@ class AdaptiveBinaryTree {
     refitted_ = true;
   }
 
-  /// Sum of node surface areas now over the sum at build: 1 right after a build, growing as
-  /// objects move apart from their build-time neighbours. A rebuild is worth it when this passes
-  /// about 1.5 to 2 (culling cost grows roughly with it). 1 for an empty tree.
+  /// The repair step of the repairing refit, on the current bounds. For an inner node, the split
+  /// ratio is (area of the left child + area of the right child) / own area: about 1.3 for a
+  /// good split of evenly spread objects, towards 2 as moving objects make the children overlap.
+  /// The topmost nodes whose split ratio has gone the fraction `rebuild_threshold` of the way from
+  /// its value when they were built towards 2 are rebuilt with their subtrees. The test is local to each node, so the loss allowed at
+  /// one level does not compound with the levels above. Returns the number of subtrees rebuilt.
+  /// `rebuild_threshold` outside (0, 1) or NaN: nothing.
+  std::uint32_t repair(double rebuild_threshold) {
+    stats_.subtrees_rebuilt = 0;
+    stats_.objects_rebuilt = 0;
+    if (!(rebuild_threshold > 0.0 && rebuild_threshold < 1.0) || nodes_.empty()) return 0;
+    struct Visit {
+      std::uint32_t node, depth;
+    };
+    std::vector<Visit> roots, stack;
+    stack.push_back(Visit{0, 0});
+    while (!stack.empty()) {
+      const Visit v = stack.back();
+      stack.pop_back();
+      const AbtNode& node = nodes_[v.node];
+      if (node.is_leaf()) continue;
+      const double ref = ref_split_[v.node];
+      if (split_ratio(v.node) > ref + rebuild_threshold * (2.0 - ref)) {
+        roots.push_back(v);
+        continue;
+      }
+      stack.push_back(Visit{node.left + 1, v.depth + 1});
+      stack.push_back(Visit{node.left, v.depth + 1});
+    }
+    if (roots.empty()) return 0;
+    std::vector<AbtNode> raw = nodes_;
+    std::vector<double> raw_ref = ref_split_;
+    const double fresh = std::numeric_limits<double>::quiet_NaN();  // measured after the layout
+    std::vector<detail::AbtBuildItem> items;
+    for (const Visit& v : roots) {
+      const std::uint32_t b = nodes_[v.node].begin, e = nodes_[v.node].end;
+      items.clear();
+      for (std::uint32_t i = b; i < e; ++i)
+        items.push_back(detail::AbtBuildItem{bounds_[i], detail::abt_centroid(bounds_[i]), order_[i]});
+      detail::AbtBuildContext ctx = build_context_;
+      ctx.items = items.data();
+      std::vector<AbtNode> sub = detail::abt_build_raw(ctx, 0, e - b, v.depth, 1, 0);
+      for (AbtNode& nd : sub) {
+        nd.begin += b;
+        nd.end += b;
+      }
+      detail::abt_stitch(raw, v.node, sub);
+      raw_ref[v.node] = fresh;
+      raw_ref.resize(raw.size(), fresh);
+      for (std::uint32_t i = b; i < e; ++i) {
+        order_[i] = items[i - b].index;
+        bounds_[i] = items[i - b].box;
+        leaf_boxes_.set(i, bounds_[i]);
+      }
+      ++stats_.subtrees_rebuilt;
+      stats_.objects_rebuilt += e - b;
+    }
+    std::vector<std::uint32_t> from;
+    detail::abt_relayout(raw, nodes_, from, stats_);
+    ref_split_.resize(nodes_.size());
+    for (std::size_t k = 0; k < nodes_.size(); ++k) {
+      const double r = raw_ref[from[k]];
+      ref_split_[k] = std::isnan(r) ? split_ratio(static_cast<std::uint32_t>(k)) : r;
+    }
+    return stats_.subtrees_rebuilt;
+  }
+
+  /// Sum of node surface areas now over the sum at the last full build: 1 right after a build,
+  /// growing as objects move apart from their build-time neighbours (repairs bring it back down).
+  /// A rebuild (or the repairing refit) is worth it when this passes about 1.5 to 2 (culling cost
+  /// grows roughly with it). Boxes that are `is_unbounded` are left out of both sums. 1 for an
+  /// empty tree.
   [[nodiscard]] double refit_quality() const noexcept {
     if (!(build_area_ > 0.0)) return 1.0;
     return total_area() / build_area_;
@@ -362,7 +402,7 @@ class AdaptiveBinaryTree {
   [[nodiscard]] const std::vector<std::uint32_t>& order() const noexcept { return order_; }
   /// Bounds of the object at each position of `order()` (as of the build or the last refit).
   [[nodiscard]] const std::vector<Aabb>& object_bounds() const noexcept { return bounds_; }
-  /// Objects held (skipped ones excluded).
+  /// Objects held (including those without valid bounds; skipped ones excluded).
   [[nodiscard]] std::size_t size() const noexcept { return order_.size(); }
   [[nodiscard]] bool empty() const noexcept { return order_.empty(); }
   /// Number of objects given to the build (held + skipped).
@@ -371,7 +411,8 @@ class AdaptiveBinaryTree {
 
   /// Writes into `out` the index buffer of `mesh` permuted to the tree's order, for a tree built
   /// over the mesh's triangles (see `make_triangle_tree`): the triangles of the node range
-  /// [begin, end) are `out[3 * begin, 3 * end)`. Skipped triangles are left out. Allocates `out`.
+  /// [begin, end) are `out[3 * begin, 3 * end)`. Every held triangle is written (a bad one too, as
+  /// the caller gave it). Allocates `out`.
   /// pre: the tree was built over exactly this mesh's triangles.
   template <class Vertex, class Index>
   void reorder_indices(const MeshView<Vertex, Index>& mesh, std::vector<Index>& out) const {
@@ -451,13 +492,135 @@ class AdaptiveBinaryTree {
     }
   }
 
-  // The node test of every top-down walk, in the seed's order: the sphere first (cheap; it may
-  // settle the whole subtree), then the box. Clears from `mask` the planes the node is inside of.
-  static bool node_outside(const Frustum& frustum, const AbtNode& node, PlaneMask& mask) noexcept {
-    if (mask == 0) return false;
-    const Containment c = frustum.classify(node.sphere, mask);
-    if (c == Containment::outside) return true;
-    return c != Containment::inside && frustum.classify(node.bounds, mask) == Containment::outside;
+  void append_range(std::vector<std::uint32_t>& out, std::uint32_t b, std::uint32_t e) const {
+    if (e - b == 1) out.push_back(order_[b]);
+    else out.insert(out.end(), order_.begin() + b, order_.begin() + e);
+  }
+
+  // The top-down walk of every single-view cull: nodes by sphere then box with a mask of the
+  // planes still straddled; a node inside every plane is one `inside` range; a leaf or a small
+  // subtree that straddles tests its objects 16 at a time from the SoA copy.
+  template <class Visitor>
+  void walk(const Plane* planes, std::uint32_t plane_mask, Visitor&& visitor) const {
+    if (nodes_.empty()) return;
+    struct Entry {
+      std::uint32_t node;
+      std::uint32_t mask;
+    };
+    Entry stack[depth_limit + 2];
+    std::uint32_t top = 0;
+    stack[top++] = Entry{0, plane_mask};
+    const AbtNode* nodes = nodes_.data();
+    while (top > 0) {
+      const Entry entry = stack[--top];
+      const AbtNode& node = nodes[entry.node];
+      std::uint32_t mask = entry.mask;
+      if (detail::abt_node_outside(planes, mask, node.bounds, node.sphere)) continue;
+      if (mask == 0) {
+        if (!call(visitor, node.begin, node.end, Containment::inside)) return;
+        continue;
+      }
+      if (node.is_leaf() || node.count() <= scan_below_) {
+        const bool go_on = leaf_boxes_.test(planes, mask, node.begin, node.end, [&](std::uint32_t i, Containment c) {
+          return call(visitor, i, i + 1, c);
+        });
+        if (!go_on) return;
+        continue;
+      }
+      stack[top++] = Entry{node.left + 1, mask};
+      stack[top++] = Entry{node.left, mask};
+    }
+  }
+
+  // The multi-view walk: each stack entry carries the views that may still meet the node and,
+  // per view, the planes it straddles. A node inside every view still alive is one range.
+  void walk_views(const Frustum* frusta, std::uint32_t views, std::vector<std::uint32_t>& out,
+                  std::vector<std::uint32_t>& view_bits) const {
+    struct Entry {
+      std::uint32_t node;
+      std::uint32_t alive;
+      PlaneMask masks[32];
+    };
+    Entry stack[depth_limit + 2];
+    std::uint32_t top = 0;
+    Entry& root = stack[top++];
+    root.node = 0;
+    root.alive = views >= 32 ? ~std::uint32_t{0} : ((std::uint32_t{1} << views) - 1u);
+    for (std::uint32_t v = 0; v < views; ++v) root.masks[v] = frusta[v].active_mask();
+    const AbtNode* nodes = nodes_.data();
+    while (top > 0) {
+      --top;
+      const AbtNode& node = nodes[stack[top].node];
+      std::uint32_t alive = stack[top].alive;
+      std::uint32_t straddling = 0;
+      PlaneMask masks[32];
+      for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
+        const int v = detail::abt_lowest_bit(rest);
+        std::uint32_t m = stack[top].masks[v];
+        if (detail::abt_node_outside(&frusta[v].plane(0), m, node.bounds, node.sphere)) {
+          alive &= ~(std::uint32_t{1} << v);
+          continue;
+        }
+        masks[v] = static_cast<PlaneMask>(m);
+        if (m != 0) straddling |= std::uint32_t{1} << v;
+      }
+      if (alive == 0) continue;
+      if (straddling == 0) {
+        out.insert(out.end(), order_.begin() + node.begin, order_.begin() + node.end);
+        view_bits.resize(view_bits.size() + node.count(), alive);
+        continue;
+      }
+      if (node.is_leaf() || node.count() <= scan_below_) {
+        views_leaf(frusta, alive, straddling, masks, node.begin, node.end, out, view_bits);
+        continue;
+      }
+      const std::uint32_t left = node.left;
+      Entry& r = stack[top++];  // reuses the popped slot: everything needed was read above
+      r.node = left + 1;
+      r.alive = alive;
+      Entry& l = stack[top++];
+      l.node = left;
+      l.alive = alive;
+      for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
+        const int v = detail::abt_lowest_bit(rest);
+        r.masks[v] = l.masks[v] = masks[v];
+      }
+    }
+  }
+
+  // Objects of a straddling leaf (or small subtree), 16 at a time: per view a mask of the lanes
+  // not outside it, then one output entry per lane that some view keeps.
+  void views_leaf(const Frustum* frusta, std::uint32_t alive, std::uint32_t straddling, const PlaneMask* masks,
+                  std::uint32_t begin, std::uint32_t end, std::vector<std::uint32_t>& out,
+                  std::vector<std::uint32_t>& view_bits) const {
+    constexpr std::uint32_t lanes = detail::AbtLeafBoxes::lanes;
+    constexpr std::uint32_t all_lanes = (std::uint32_t{1} << lanes) - 1u;
+    std::uint32_t visible[32];
+    for (std::uint32_t rest = alive & ~straddling; rest != 0; rest &= rest - 1u)
+      visible[detail::abt_lowest_bit(rest)] = all_lanes;  // views the node is inside of
+    for (std::uint32_t base = begin; base < end; base += lanes) {
+      std::uint32_t any = 0;
+      for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) {
+        const int v = detail::abt_lowest_bit(rest);
+        std::uint32_t outside = 0, cross = 0;
+        leaf_boxes_.classify_lanes(&frusta[v].plane(0), masks[v], base, outside, cross);
+        visible[v] = ~outside & all_lanes;
+        any |= visible[v];
+      }
+      if (alive != straddling) any = all_lanes;
+      const std::uint32_t count = end - base < lanes ? end - base : lanes;
+      if (count < lanes) any &= (std::uint32_t{1} << count) - 1u;
+      for (; any != 0; any &= any - 1u) {
+        const int i = detail::abt_lowest_bit(any);
+        std::uint32_t bits = 0;
+        for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
+          const int v = detail::abt_lowest_bit(rest);
+          bits |= ((visible[v] >> i) & 1u) << v;
+        }
+        out.push_back(order_[base + std::uint32_t(i)]);
+        view_bits.push_back(bits);
+      }
+    }
   }
 
   static bool near_is_left(const AbtNode& node, const glm::vec3& eye) noexcept {
@@ -494,130 +657,30 @@ class AdaptiveBinaryTree {
     }
   }
 
+  // (area of the children) / (own area) of an inner node; 0 for leaves and for nodes without a
+  // measurable area (flat, or unbounded).
+  [[nodiscard]] double split_ratio(std::uint32_t k) const noexcept {
+    const AbtNode& node = nodes_[k];
+    if (node.is_leaf()) return 0.0;
+    const double own = detail::abt_measured_area(node.bounds);
+    if (!(own > 0.0)) return 0.0;
+    return (detail::abt_measured_area(nodes_[node.left].bounds) + detail::abt_measured_area(nodes_[node.left + 1].bounds)) / own;
+  }
+
   [[nodiscard]] double total_area() const noexcept {
     double sum = 0.0;
-    for (const AbtNode& node : nodes_) sum += detail::abt_area(node.bounds);
+    for (const AbtNode& node : nodes_) sum += detail::abt_measured_area(node.bounds);
     return sum;
   }
 
-  // ---- build ----------------------------------------------------------------------------------
-
-  struct Task {
-    std::uint32_t node;  // index in the top-level node array (a placeholder until stitched)
-    std::uint32_t begin, end, depth;
-    Aabb box, centroids;
-  };
-
-  // Bounds of items [begin, end) and of their centroids.
-  static void range_bounds(const detail::AbtBuildItem* items, std::uint32_t begin, std::uint32_t end, Aabb& box,
-                           Aabb& centroids) {
-    box = Aabb::empty();
-    centroids = Aabb::empty();
-    for (std::uint32_t i = begin; i < end; ++i) {
-      box = merge(box, items[i].box);
-      centroids = merge(centroids, items[i].centroid);
-    }
-  }
-
-  struct BuildContext {
-    detail::AbtBuildItem* items = nullptr;
-    detail::AbtSplitConfig cfg{};
-    std::uint32_t leaf_size = 4;
-    std::uint32_t max_depth = 48;
-    std::uint32_t grain = 0;  // > 0: defer subtrees below this size as tasks (top-level pass)
-    std::vector<Task>* tasks = nullptr;
-    // progress
-    const std::function<void(float)>* progress = nullptr;
-    std::atomic<std::uint32_t>* done = nullptr;
-    std::mutex* progress_mutex = nullptr;
-    float* progress_last = nullptr;
-    std::uint32_t total = 0;
-  };
-
-  static void report_leaf(const BuildContext& ctx, std::uint32_t count) {
-    if (ctx.progress == nullptr) return;
-    const std::uint32_t before = ctx.done->fetch_add(count);
-    const std::uint32_t step = std::max<std::uint32_t>(1u, ctx.total / 50u);
-    if ((before + count) / step == before / step) return;
-    std::lock_guard<std::mutex> lock(*ctx.progress_mutex);
-    const float f = std::min(0.999f, float(double(ctx.done->load()) / double(ctx.total)));
-    if (f > *ctx.progress_last) {
-      *ctx.progress_last = f;
-      (*ctx.progress)(f);
-    }
-  }
-
-  // Builds the subtree of `nodes[node]` over items [begin, end). Children are appended as pairs.
-  // `box` and `centroids` are the bounds of the items and of their centroids (from the parent's
-  // partition pass, so each level reads the items twice: once to score, once to partition).
-  static void build_node(std::vector<AbtNode>& nodes, std::uint32_t node, std::uint32_t begin, std::uint32_t end,
-                         std::uint32_t depth, const Aabb& box, const Aabb& centroids, const BuildContext& ctx,
-                         detail::AbtSplitScratch& scratch) {
-    detail::AbtBuildItem* items = ctx.items;
-    {
-      AbtNode& n = nodes[node];
-      n.bounds = box;
-      n.sphere = bounding_sphere(box);
-      n.begin = begin;
-      n.end = end;
-      n.left = 0;
-      n.axis = 0;
-      n.split = 0.0f;
-    }
-    const std::uint32_t count = end - begin;
-    if (ctx.grain > 0 && count < ctx.grain) {
-      ctx.tasks->push_back(Task{node, begin, end, depth, box, centroids});
-      return;
-    }
-    if (count <= ctx.leaf_size || depth >= ctx.max_depth) {
-      report_leaf(ctx, count);
-      return;
-    }
-    const std::uint64_t key = (std::uint64_t{begin} << 32) ^ std::uint64_t{end} ^ (std::uint64_t{depth} << 58);
-    const detail::AbtSplit split = detail::abt_find_split(items, begin, end, box, centroids, ctx.cfg, key, scratch);
-    if (!split.found) {
-      report_leaf(ctx, count);
-      return;
-    }
-    const int axis = split.axis;
-    const float pos = split.position;
-    // Partition (centroid < pos goes left), gathering both children's bounds on the way.
-    Aabb lbox = Aabb::empty(), lcen = Aabb::empty(), rbox = Aabb::empty(), rcen = Aabb::empty();
-    std::uint32_t i = begin, j = end;
-    for (;;) {
-      while (i < j && items[i].centroid[axis] < pos) {
-        lbox = merge(lbox, items[i].box);
-        lcen = merge(lcen, items[i].centroid);
-        ++i;
-      }
-      while (i < j && !(items[j - 1].centroid[axis] < pos)) {
-        rbox = merge(rbox, items[j - 1].box);
-        rcen = merge(rcen, items[j - 1].centroid);
-        --j;
-      }
-      if (i >= j) break;
-      std::swap(items[i], items[j - 1]);  // now items[i] goes left, items[j - 1] right
-    }
-    const std::uint32_t m = i;
-    if (m == begin || m == end) {  // rounding left one side empty: nothing separates
-      report_leaf(ctx, count);
-      return;
-    }
-    const auto left = static_cast<std::uint32_t>(nodes.size());
-    nodes[node].left = left;
-    nodes[node].axis = static_cast<std::uint8_t>(axis);
-    nodes[node].split = pos;
-    nodes.emplace_back();
-    nodes.emplace_back();
-    build_node(nodes, left, begin, m, depth + 1, lbox, lcen, ctx, scratch);
-    build_node(nodes, left + 1, m, end, depth + 1, rbox, rcen, ctx, scratch);
-  }
-
+  // Builds from scratch: every object becomes a build item (objects without valid bounds with
+  // `unbounded_box()`), the builder fills a raw node array, the canonical layout is taken.
   template <class Getter>
   void build(Getter&& get_bounds, std::size_t count, const AbtParams& params) {
     nodes_.clear();
     order_.clear();
     bounds_.clear();
+    ref_split_.clear();
     leaf_boxes_.assign(bounds_);
     stats_ = AbtStats{};
     refitted_ = false;
@@ -628,32 +691,28 @@ class AdaptiveBinaryTree {
     std::vector<detail::AbtBuildItem> items;
     items.reserve(usable);
     for (std::size_t i = 0; i < usable; ++i) {
-      const Aabb b = get_bounds(static_cast<std::uint32_t>(i));
-      if (!is_valid(b)) continue;
+      Aabb b = get_bounds(static_cast<std::uint32_t>(i));
+      if (!is_valid(b)) {
+        b = unbounded_box();
+        ++stats_.unbounded;
+      }
       items.push_back(detail::AbtBuildItem{b, detail::abt_centroid(b), static_cast<std::uint32_t>(i)});
     }
-    stats_.skipped = static_cast<std::uint32_t>(count - items.size());
+    stats_.skipped = static_cast<std::uint32_t>(count - usable);
     const auto n = static_cast<std::uint32_t>(items.size());
+    scan_below_ = params.scan_below;
+    build_context_ = detail::AbtBuildContext{};
+    build_context_.cfg = detail::abt_split_config(params);
+    build_context_.leaf_size = std::max<std::uint32_t>(1u, params.max_leaf_size);
+    build_context_.max_depth = std::min(params.max_depth, depth_limit);
     if (n == 0) {
       if (params.progress) params.progress(1.0f);
       build_area_ = 0.0;
       return;
     }
 
-    BuildContext ctx;
+    detail::AbtBuildContext ctx = build_context_;
     ctx.items = items.data();
-    ctx.cfg.weights[0] = params.weight_axis;
-    ctx.cfg.weights[1] = params.weight_volume;
-    ctx.cfg.weights[2] = params.weight_count;
-    ctx.cfg.weights[3] = params.weight_straddle;
-    for (float& w : ctx.cfg.weights) w = std::isfinite(w) && w > 0.0f ? w : 0.0f;  // bad weight: off
-    ctx.cfg.candidates = std::clamp<std::uint32_t>(params.candidate_count, 1u, 1024u);
-    ctx.cfg.sampling = params.candidates == AbtCandidates::sampling;
-    ctx.cfg.seed = params.seed;
-    scan_below_ = params.scan_below;
-    ctx.cfg.sample_limit = params.score_sample_limit;
-    ctx.leaf_size = std::max<std::uint32_t>(1u, params.max_leaf_size);
-    ctx.max_depth = std::min(params.max_depth, depth_limit);
     std::atomic<std::uint32_t> done{0};
     std::mutex progress_mutex;
     float progress_last = 0.0f;
@@ -664,90 +723,10 @@ class AdaptiveBinaryTree {
       ctx.progress_last = &progress_last;
       ctx.total = n;
     }
-
-    std::vector<AbtNode> raw(1);
-    raw.reserve(2 * (n / ctx.leaf_size + 1));
-    detail::AbtSplitScratch scratch;
-    scratch.reserve(ctx.cfg.candidates);
-    Aabb root_box, root_centroids;
-    range_bounds(items.data(), 0, n, root_box, root_centroids);
-    const unsigned threads = params.threads;
     const std::uint32_t grain = std::max<std::uint32_t>(params.parallel_grain, 2u * ctx.leaf_size + 2u);
-    if (threads <= 1 || n < 2 * grain) {
-      build_node(raw, 0, 0, n, 0, root_box, root_centroids, ctx, scratch);
-    } else {
-      // Top levels on this thread, deferring subtrees smaller than the grain; then the deferred
-      // subtrees on a pool, each into its own array; then stitched. Split choices depend only on a
-      // node's own objects and key, so the tree is the same as a serial build (made identical in
-      // layout by the canonical renumbering below).
-      std::vector<Task> tasks;
-      ctx.grain = grain;
-      ctx.tasks = &tasks;
-      build_node(raw, 0, 0, n, 0, root_box, root_centroids, ctx, scratch);
-      ctx.grain = 0;
-      ctx.tasks = nullptr;
-      std::vector<std::vector<AbtNode>> local(tasks.size());
-      std::atomic<std::size_t> next{0};
-      auto worker = [&]() {
-        detail::AbtSplitScratch s;
-        s.reserve(ctx.cfg.candidates);
-        for (;;) {
-          const std::size_t t = next.fetch_add(1);
-          if (t >= tasks.size()) return;
-          std::vector<AbtNode>& sub = local[t];
-          sub.resize(1);
-          build_node(sub, 0, tasks[t].begin, tasks[t].end, tasks[t].depth, tasks[t].box, tasks[t].centroids, ctx, s);
-        }
-      };
-      std::vector<std::thread> pool;
-      const unsigned extra = std::min<unsigned>(threads - 1, static_cast<unsigned>(tasks.size()));
-      pool.reserve(extra);
-      for (unsigned t = 0; t < extra; ++t) pool.emplace_back(worker);
-      worker();
-      for (std::thread& th : pool) th.join();
-      for (std::size_t t = 0; t < tasks.size(); ++t) {
-        const std::vector<AbtNode>& sub = local[t];
-        const auto offset = static_cast<std::uint32_t>(raw.size()) - 1u;  // sub[1] lands at raw.size()
-        AbtNode root = sub[0];
-        if (!root.is_leaf()) root.left += offset;
-        raw[tasks[t].node] = root;
-        for (std::size_t k = 1; k < sub.size(); ++k) {
-          AbtNode nd = sub[k];
-          if (!nd.is_leaf()) nd.left += offset;
-          raw.push_back(nd);
-        }
-      }
-    }
-
-    // Canonical layout: pre-order, each inner node's children allocated as a pair when the node
-    // is visited, left subtree before right. Identical for every thread count.
-    nodes_.resize(raw.size());
-    {
-      struct Move {
-        std::uint32_t from, to, depth;
-      };
-      std::vector<Move> stack;
-      stack.push_back(Move{0, 0, 0});
-      std::uint32_t next = 1;
-      while (!stack.empty()) {
-        const Move mv = stack.back();
-        stack.pop_back();
-        AbtNode nd = raw[mv.from];
-        stats_.depth = std::max(stats_.depth, mv.depth);
-        if (nd.is_leaf()) {
-          ++stats_.leaves;
-          stats_.max_leaf_objects = std::max(stats_.max_leaf_objects, nd.count());
-        } else {
-          const std::uint32_t l = next;
-          next += 2;
-          stack.push_back(Move{nd.left + 1, l + 1, mv.depth + 1});
-          stack.push_back(Move{nd.left, l, mv.depth + 1});
-          nd.left = l;
-        }
-        nodes_[mv.to] = nd;
-      }
-    }
-    stats_.nodes = static_cast<std::uint32_t>(nodes_.size());
+    const std::vector<AbtNode> raw = detail::abt_build_raw(ctx, 0, n, 0, params.threads, grain);
+    std::vector<std::uint32_t> from;
+    detail::abt_relayout(raw, nodes_, from, stats_);
     stats_.objects = n;
     order_.resize(n);
     bounds_.resize(n);
@@ -756,6 +735,8 @@ class AdaptiveBinaryTree {
       bounds_[i] = items[i].box;
     }
     leaf_boxes_.assign(bounds_);
+    ref_split_.resize(nodes_.size());
+    for (std::size_t k = 0; k < nodes_.size(); ++k) ref_split_[k] = split_ratio(static_cast<std::uint32_t>(k));
     build_area_ = total_area();
     if (params.progress) params.progress(1.0f);
   }
@@ -764,6 +745,8 @@ class AdaptiveBinaryTree {
   std::vector<std::uint32_t> order_;
   std::vector<Aabb> bounds_;
   detail::AbtLeafBoxes leaf_boxes_;  // bounds_ again, as padded SoA for the leaf tests
+  std::vector<double> ref_split_;    // per node: split_ratio when it was last (re)built
+  detail::AbtBuildContext build_context_;  // the build's split settings, for repairs
   std::size_t input_count_ = 0;
   AbtStats stats_;
   double build_area_ = 0.0;
@@ -772,8 +755,9 @@ class AdaptiveBinaryTree {
 };
 
 /// Builds a tree whose objects are the triangles of `mesh` (object i = triangle i, bounds = the
-/// box of its corners). Triangles with an index out of range or a non-finite corner are skipped
-/// and counted; degenerate (zero-area) triangles are kept. Pair with `reorder_indices` to draw
+/// box of its corners). Triangles with an index out of range or a non-finite corner get no valid
+/// bounds: they are held with `unbounded_box()`, counted in `stats().unbounded` and reported by
+/// every cull; degenerate (zero-area) triangles are kept as they are. Pair with `reorder_indices` to draw
 /// visible ranges directly. `VTraits` reads vertex positions (default `VertexTraits<Vertex>`).
 template <class Vertex, class Index = std::uint32_t, class VTraits = VertexTraits<Vertex>>
 [[nodiscard]] AdaptiveBinaryTree<Aabb> make_triangle_tree(const MeshView<Vertex, Index>& mesh,

@@ -7,4 +7,6 @@
 #include "geometry/convex_volume.hpp"
 #include "geometry/frustum.hpp"
 #include "geometry/plane.hpp"
+#include "geometry/shadow_caster_volume.hpp"
 #include "geometry/sphere.hpp"
+#include "geometry/transform_bounds.hpp"

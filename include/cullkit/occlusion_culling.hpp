@@ -1,7 +1,7 @@
 // cullkit/occlusion_culling.hpp: frustum + occlusion culling of a whole scene for a renderer, with
 // the occlusion tree grown on the fly from the major occluders found visible (front to back).
 //
-// Seed: 基于主要遮挡物的动态可见性算法, §3.4.2 (Algorithm 2 and its two refinements), DESIGN.md §7.
+// Seed: 基于主要遮挡物的动态可见性算法, §3.4.2 (Algorithm 2 and its two refinements).
 // The AdaptiveBinaryTree is walked front to back from the occlusion tree's eye. Each node's box is
 // tested against the frustum, then against the occlusion tree; a hidden node drops its subtree. At
 // a leaf each object is tested on its own; a visible object is reported and, if the caller's
@@ -52,6 +52,9 @@ struct OcclusionCullStats {
   std::uint64_t clear_subtrees = 0;      ///< nodes found clear (refinement 1)
   std::uint64_t objects_visible = 0;     ///< objects written to `out`
   std::uint64_t occluder_calls = 0;      ///< occluder-source calls (visible objects offered)
+  /// Objects reported because their bounds are NaN, infinite or inverted (never queried, never
+  /// offered as occluders).
+  std::uint64_t unbounded = 0;
 };
 
 /// An occluder source that inserts an object's bounds as a solid box occluder when its flag is set.
@@ -100,8 +103,9 @@ void cull_with_occlusion(const AdaptiveBinaryTree<Object, Traits>& abt, const Fr
   stack[top++] = Item{0, OcclusionTree::whole_tree, false, false};
 
   // Returns false if the box is hidden; updates `start` and `clear` for what lies inside it.
+  // Unbounded boxes (objects without valid bounds, and their ancestors) are never queried.
   const auto occlusion_pass = [&](const Aabb& box, std::uint32_t& start, bool& clear) {
-    if (clear) return true;
+    if (clear || is_unbounded(box)) return true;
     ++st.occlusion_queries;
     const OcclusionQueryResult r = tree.query(box, params.start_at_parent_node ? start : OcclusionTree::whole_tree,
                                               params.skip_clear_subtrees);
@@ -149,7 +153,8 @@ void cull_with_occlusion(const AdaptiveBinaryTree<Object, Traits>& abt, const Fr
       if (node.count() > 1 && !occlusion_pass(b, start, clear)) continue;
       out.push_back(order[pos]);
       ++st.objects_visible;
-      if (params.grow) {
+      if (is_unbounded(b)) ++st.unbounded;
+      if (params.grow && !is_unbounded(b)) {
         ++st.occluder_calls;
         occluders(order[pos], tree);
       }
@@ -157,13 +162,31 @@ void cull_with_occlusion(const AdaptiveBinaryTree<Object, Traits>& abt, const Fr
   }
 }
 
+/// The same with the parameters before the statistics, so that parameters need no `nullptr`:
+/// `cull_with_occlusion(abt, frustum, tree, occluders, out, params)` or `(..., out, params, &stats)`.
+template <class Object, class Traits, class OccluderSource>
+void cull_with_occlusion(const AdaptiveBinaryTree<Object, Traits>& abt, const Frustum& frustum, OcclusionTree& tree,
+                         OccluderSource&& occluders, std::vector<std::uint32_t>& out,
+                         const OcclusionCullParams& params, OcclusionCullStats* stats = nullptr) {
+  cull_with_occlusion(abt, frustum, tree, occluders, out, stats, params);
+}
+
 /// Moving objects, tested last against the finished tree (seed §2.4 (4)): appends to `out` the
-/// index i of every `bounds[i]` that may meet the frustum and is not hidden. Invalid boxes are kept
-/// (visible). No allocation beyond `out`; `tree` is not changed.
+/// index i of every `bounds[i]` that may meet the frustum and is not hidden. Boxes that are not
+/// `is_valid` (NaN, infinite, inverted) are always appended, without an occlusion query, and
+/// counted in `stats->unbounded`. No allocation beyond `out`; `tree` is not changed.
 inline void cull_moving(const Frustum& frustum, const OcclusionTree& tree, const Aabb* bounds, std::size_t count,
                         std::vector<std::uint32_t>& out, OcclusionCullStats* stats = nullptr) {
   for (std::size_t i = 0; i < count; ++i) {
-    if (is_valid(bounds[i]) && frustum.classify(bounds[i]) == Containment::outside) {
+    if (!is_valid(bounds[i])) {
+      out.push_back(static_cast<std::uint32_t>(i));
+      if (stats) {
+        ++stats->unbounded;
+        ++stats->objects_visible;
+      }
+      continue;
+    }
+    if (frustum.classify(bounds[i]) == Containment::outside) {
       if (stats) ++stats->frustum_rejected;
       continue;
     }

@@ -39,11 +39,12 @@ bool naive_vs_tree(const Tree& tree, const std::vector<Aabb>& boxes, const abt_t
   tree.cull(f, out);
   std::vector<std::uint8_t> mark(boxes.size(), 0);
   for (const std::uint32_t i : out) {
-    if (i >= boxes.size() || mark[i] || !is_valid(boxes[i])) return false;
+    if (i >= boxes.size() || mark[i]) return false;
     mark[i] = 1;
   }
+  // Objects without valid bounds are always reported.
   for (std::size_t i = 0; i < boxes.size(); ++i)
-    if (is_valid(boxes[i]) && oracle.meets(boxes[i]) && !mark[i]) return false;
+    if ((!is_valid(boxes[i]) || oracle.meets(boxes[i])) && !mark[i]) return false;
   return true;
 }
 
@@ -84,12 +85,14 @@ void empty_and_one() {
   const Camera at = support::make_camera(glm::vec3(0, 0, 20), glm::vec3(1.5f, 2.5f, 3.5f), 60, 64, 64, 0.1f, 100);
   t1.cull(frustum_of(at), out);
   CHECK(out.size() == 1);
-  // Only invalid objects: an empty tree that counted them.
+  // Only invalid objects: all held (with the unbounded box), counted, reported by any view.
   const Aabb bad[3] = {{glm::vec3(kNaN), glm::vec3(1)}, {glm::vec3(0), glm::vec3(kInf)}, {glm::vec3(1), glm::vec3(0)}};
   const Tree tb(bad, 3);
-  CHECK(tb.empty() && tb.stats().skipped == 3 && tb.validate() && tb.input_count() == 3);
+  CHECK(tb.size() == 3 && tb.stats().unbounded == 3 && tb.stats().skipped == 0 && tb.validate() && tb.input_count() == 3);
   tb.cull(Frustum{}, out);
-  CHECK(out.empty());
+  CHECK(out.size() == 3);
+  tb.cull(frustum_of(away), out);
+  CHECK(out.size() == 3);
 }
 
 void identical_and_flat() {
@@ -138,7 +141,8 @@ void bad_and_huge() {
     p.candidates = cand;
     const Tree t(boxes.data(), boxes.size(), p);
     CHECK(t.validate());
-    CHECK_MSG(t.stats().skipped == bad && t.size() == boxes.size() - bad, "skipped %u of %zu bad", t.stats().skipped, bad);
+    CHECK_MSG(t.stats().unbounded == bad && t.stats().skipped == 0 && t.size() == boxes.size(), "unbounded %u of %zu bad",
+              t.stats().unbounded, bad);
     for (int k = 0; k < 300; ++k)
       CHECK_MSG(naive_vs_tree(t, boxes, abt_test::random_view(rng, Aabb{glm::vec3(-120), glm::vec3(120)}, k)),
                 "bad+huge, candidates %d, view %d (seed 99)", int(cand), k);
@@ -242,17 +246,18 @@ void getters_traits_triangles() {
   city.indices.push_back(0);  // a trailing partial triangle is ignored
   const MeshView<glm::vec3> mesh = city.mesh();
   const Tree tri = make_triangle_tree(mesh);
-  CHECK_MSG(tri.validate() && tri.size() == good && tri.stats().skipped == 2, "size %zu of %zu, skipped %u",
-            tri.size(), good, tri.stats().skipped);
+  CHECK_MSG(tri.validate() && tri.size() == good + 2 && tri.stats().unbounded == 2, "size %zu of %zu, unbounded %u",
+            tri.size(), good + 2, tri.stats().unbounded);
   std::vector<std::uint32_t> reordered;
   tri.reorder_indices(mesh, reordered);
-  CHECK(reordered.size() == 3 * good);
+  CHECK(reordered.size() == 3 * (good + 2));
   bool ranges_ok = true;
   for (const AbtNode& n : tri.nodes()) {
     for (std::uint32_t i = n.begin; i < n.end; ++i) {
       const std::uint32_t t = tri.order()[i];
       for (int c = 0; c < 3; ++c) ranges_ok &= reordered[3 * i + c] == city.indices[3 * t + c];
-      // The range's triangles lie inside the node's box.
+      // The range's triangles lie inside the node's box (the two bad ones have no position).
+      if (t >= good) continue;
       for (int c = 0; c < 3; ++c) ranges_ok &= contains(n.bounds, city.positions[reordered[3 * i + c]]);
     }
   }
@@ -262,7 +267,7 @@ void getters_traits_triangles() {
   for (const glm::vec3& p : city.positions) v4.emplace_back(p, 1.0f);
   std::vector<std::int16_t> i16 = {0, 1, 2, 2, 1, -3, 3, 4, 5};
   const Tree t16 = make_triangle_tree(MeshView<glm::vec4, std::int16_t>{v4.data(), v4.size(), i16.data(), i16.size()});
-  CHECK(t16.size() == 2 && t16.stats().skipped == 1 && t16.validate());
+  CHECK(t16.size() == 3 && t16.stats().unbounded == 1 && t16.validate());
 }
 
 void refit_tests() {
@@ -280,7 +285,7 @@ void refit_tests() {
       const glm::vec3 d(rng.uniform(-10, 10), rng.uniform(-10, 10), rng.uniform(-10, 10));
       b = Aabb{b.min + d, b.max + d};
     }
-    if (step == 3) boxes[17].min.x = kNaN;  // keeps its previous bounds, counted
+    if (step == 3) boxes[17].min.x = kNaN;  // held unbounded, counted, reported by every view
     t.refit(boxes.data());
     CHECK_MSG(t.validate(), "validate after refit step %d", step);
     CHECK(t.stats().refit_invalid == (step == 3 ? 1u : 0u));
@@ -288,29 +293,35 @@ void refit_tests() {
     CHECK_MSG(q > 1.0 && q >= last_quality * 0.98, "refit quality %f after step %d", q, step);
     last_quality = q;
     if (step == 3) {
-      // Documented: a bad new box leaves the object at its previous bounds.
       const auto pos = static_cast<std::size_t>(std::find(t.order().begin(), t.order().end(), 17u) - t.order().begin());
-      CHECK(pos < t.size() && is_valid(t.object_bounds()[pos]));
-      boxes[17] = t.object_bounds()[pos];
+      CHECK(pos < t.size() && is_unbounded(t.object_bounds()[pos]) && t.stats().unbounded == 1);
     }
     for (int k = 0; k < 120; ++k)
       CHECK_MSG(naive_vs_tree(t, boxes, abt_test::random_view(rng, region, k)),
                 "refit step %d view %d (seed %llu)", step, k, static_cast<unsigned long long>(seed));
+    if (step == 3) boxes[17].min.x = boxes[17].max.x - 1.0f;  // valid again at the next refit
   }
   std::printf("refit: quality after 4 random moves of up to 10 units: %.3f\n", last_quality);
-  // Getter refit on a tree with skipped objects: skipped ones stay out.
+  // An object NaN at the build (a transform not ready at load) is reported while it has no
+  // bounds, and culled by its bounds after the first refit that gives it valid ones.
   std::vector<Aabb> with_bad = boxes;
   with_bad[3].max.y = kNaN;
   Tree tb(with_bad.data(), with_bad.size());
+  CHECK(tb.validate() && tb.size() == boxes.size() && tb.stats().unbounded == 1);
+  const Frustum far_away = frustum_of(support::make_camera(glm::vec3(5000), glm::vec3(6000), 60, 64, 64, 0.1f, 100));
+  std::vector<std::uint32_t> out;
+  tb.cull(far_away, out);
+  CHECK(out.size() == 1 && out[0] == 3u);
   with_bad[3] = Aabb{glm::vec3(0), glm::vec3(1)};
   tb.refit_from_getter([&](std::uint32_t i) { return with_bad[i]; });
-  CHECK(tb.validate() && tb.size() == boxes.size() - 1);
+  CHECK(tb.validate() && tb.size() == boxes.size() && tb.stats().unbounded == 0);
+  tb.cull(far_away, out);
+  CHECK(out.empty());
   // The `refit(getter)` spelling; moving everything far away is seen by the refitted tree.
   tb.refit([&](std::uint32_t i) { return Aabb{with_bad[i].min + 1000.0f, with_bad[i].max + 1000.0f}; });
   CHECK(tb.validate() && tb.nodes()[0].bounds.min.x > 800.0f);
-  std::vector<std::uint32_t> out;
   tb.cull(Frustum{}, out);
-  CHECK(std::find(out.begin(), out.end(), 3u) == out.end());
+  CHECK(std::find(out.begin(), out.end(), 3u) != out.end() && out.size() == boxes.size());
 }
 
 // The BSP order: for two objects met one after the other in a front-to-back walk, at the split of

@@ -16,6 +16,7 @@
 #include <glm/ext/matrix_double4x4.hpp>
 #include <glm/matrix.hpp>
 
+#include "../config.hpp"
 #include "frustum.hpp"
 
 namespace cullkit {
@@ -148,6 +149,60 @@ class PixelRays {
   int width_, height_;
   glm::dvec4 col_x_, col_y_, far_, near_;
 };
+
+/// The centre of projection of `view_proj` (column vectors, GLM layout): the point whose clip-space
+/// x, y and w are all zero, computed in double. For a perspective matrix this is the eye that the
+/// matrix was built from (within the matrix's own float rounding). An orthographic, singular or
+/// non-finite matrix has no finite centre: the answer is NaN in every component.
+/// Cost: a few dozen flops; no allocation.
+[[nodiscard]] inline glm::vec3 projection_centre(const glm::mat4& view_proj) noexcept {
+  double m[4][4];
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) m[r][c] = static_cast<double>(view_proj[c][r]);
+  double h[4];
+  detail::projection_centre(m, h);
+  const double scale = std::fabs(h[0]) + std::fabs(h[1]) + std::fabs(h[2]);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  if (!(std::fabs(h[3]) > 1e-12 * scale) || !std::isfinite(scale)) return glm::vec3(nan);
+  const glm::vec3 eye(static_cast<float>(h[0] / h[3]), static_cast<float>(h[1] / h[3]), static_cast<float>(h[2] / h[3]));
+  if (!std::isfinite(eye.x) || !std::isfinite(eye.y) || !std::isfinite(eye.z)) return glm::vec3(nan);
+  return eye;
+}
+
+/// A Camera whose eye is the centre of projection of `view_proj`, so the eye and the matrix can
+/// never disagree (an eye a few centimetres off the matrix's centre makes pixel rays miss what the
+/// matrix shows). `view_proj` should be a perspective projection times a view matrix; `depth` its
+/// depth range. For a matrix without a finite centre (orthographic, singular, NaN) the eye is NaN:
+/// the frustum of such a camera keeps everything, and `camera_is_consistent` says false.
+/// Cost: O(1), no allocation.
+[[nodiscard]] inline Camera make_camera(const glm::mat4& view_proj, int width, int height,
+                                        DepthRange depth = DepthRange::negative_one_to_one) noexcept {
+  return Camera{projection_centre(view_proj), view_proj, width, height, depth};
+}
+
+/// True when `camera.eye` is the centre of projection of `camera.view_proj` within
+/// `relative_tolerance` times max(1, largest coordinate of the centre), and the pixel grid is not
+/// empty. False for a matrix without a finite centre. Use it where a caller supplies both an eye
+/// and a matrix (the default tolerance is far above float rounding of a consistent pair and far
+/// below a centimetre for scenes within a kilometre of the origin).
+[[nodiscard]] inline bool camera_is_consistent(const Camera& camera, float relative_tolerance = 1e-5f) noexcept {
+  const glm::vec3 c = projection_centre(camera.view_proj);
+  if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z)) return false;
+  if (camera.width <= 0 || camera.height <= 0) return false;
+  const float scale = std::fmax(1.0f, std::fmax(std::fabs(c.x), std::fmax(std::fabs(c.y), std::fabs(c.z))));
+  const float tol = relative_tolerance * scale;
+  return std::fabs(camera.eye.x - c.x) <= tol && std::fabs(camera.eye.y - c.y) <= tol &&
+         std::fabs(camera.eye.z - c.z) <= tol;
+}
+
+/// Debug-build check of a caller-assembled camera: `CULLKIT_ASSERT(camera_is_consistent(camera))`.
+/// Compiles to nothing where CULLKIT_ASSERT does (NDEBUG with the default hook).
+inline void check_camera(const Camera& camera, float relative_tolerance = 1e-5f) noexcept {
+  (void)camera;
+  (void)relative_tolerance;
+  CULLKIT_ASSERT(camera_is_consistent(camera, relative_tolerance),
+                 "camera.eye is the centre of projection of camera.view_proj (use make_camera)");
+}
 
 /// The frustum of a camera (convenience for `Frustum::from_matrix(camera.view_proj, camera.depth)`).
 [[nodiscard]] inline Frustum frustum_of(const Camera& camera) noexcept {

@@ -14,6 +14,25 @@
 
 namespace cullkit {
 
+namespace detail {
+/// The centre of projection of a matrix whose rows are m[row][col]: the homogeneous point where
+/// the x, y and w rows all vanish, as (x, y, z, w) in double. w is 0 (up to rounding) for an
+/// orthographic projection, and everything is 0 for a singular matrix.
+inline void projection_centre(const double m[4][4], double out[4]) noexcept {
+  const double* a = m[0];
+  const double* b = m[1];
+  const double* c = m[3];
+  // The generalised cross product of three 4-vectors: cofactors of the 3x4 matrix [a; b; c].
+  const auto det3 = [&](int i, int j, int k) {
+    return a[i] * (b[j] * c[k] - b[k] * c[j]) - a[j] * (b[i] * c[k] - b[k] * c[i]) + a[k] * (b[i] * c[j] - b[j] * c[i]);
+  };
+  out[0] = det3(1, 2, 3);
+  out[1] = -det3(0, 2, 3);
+  out[2] = det3(0, 1, 3);
+  out[3] = -det3(0, 1, 2);
+}
+}  // namespace detail
+
 /// How normalized device depth maps: OpenGL's [-1, 1], or Direct3D/Vulkan/Metal's [0, 1].
 /// Reversed-Z (near at 1, far at 0) needs no flag of its own: its planes come out of the same rows.
 enum class DepthRange { negative_one_to_one, zero_to_one };
@@ -23,9 +42,15 @@ using PlaneMask = std::uint8_t;
 
 /// A convex view volume: up to six planes whose normals point inward.
 ///
-/// Plane order is left, right, bottom, top, near, far. A plane that could not be extracted (the
-/// far plane of an infinite projection, a matrix with NaN) is *dropped*: its bit is absent from
-/// `active_mask()` and it never rejects anything. Every query is conservative: `outside` is only
+/// Plane order is left, right, bottom, top, near, far, and the names are true for every depth
+/// convention: `near_plane` is the plane nearest the centre of projection (the eye) and
+/// `far_plane` the one across the volume from it, also under reversed-Z, where the depth rows
+/// come out the other way round. (For an orthographic matrix there is no eye: the planes keep the
+/// order of the depth rows, NDC depth -1 or 0 near.) A plane that could not be extracted (the far
+/// plane of an infinite projection, a matrix with NaN) is *dropped*: its bit is absent from
+/// `active_mask()` and it never rejects anything. A matrix with NaN or a singular one drops every
+/// plane: the frustum then holds all of space, and every cull with it keeps everything (the
+/// library's answer for a degenerate camera). Every query is conservative: `outside` is only
 /// returned when float rounding cannot have moved the shape across a plane.
 ///
 /// Cost: `classify(Aabb)` tests two corners per active plane (the one farthest along the normal to
@@ -84,6 +109,7 @@ class Frustum {
       f.planes_[i] = p;
       f.mask_ = static_cast<PlaneMask>(f.mask_ | (1u << i));
     }
+    f.name_depth_planes(m);
     return f;
   }
 
@@ -167,6 +193,31 @@ class Frustum {
   }
 
  private:
+  // Reversed-Z puts NDC depth 1 on the near plane, so the rows extracted as "near" and "far" are
+  // the other way round: swap them when the eye (the centre of projection) is on the inside of
+  // the "near" one, or when only the "far" one exists and the eye is on its outside. A centre at
+  // infinity (orthographic) or undefined leaves the order as extracted.
+  void name_depth_planes(const double m[4][4]) noexcept {
+    double c[4];
+    detail::projection_centre(m, c);
+    const double scale = std::fabs(c[0]) + std::fabs(c[1]) + std::fabs(c[2]);
+    if (!(std::fabs(c[3]) > 1e-12 * scale) || !std::isfinite(scale)) return;
+    const double eye[3] = {c[0] / c[3], c[1] / c[3], c[2] / c[3]};
+    const auto side = [&](int i) {
+      const Plane& p = planes_[i];
+      return double(p.normal.x) * eye[0] + double(p.normal.y) * eye[1] + double(p.normal.z) * eye[2] + double(p.d);
+    };
+    const bool has_near = has_plane(near_plane), has_far = has_plane(far_plane);
+    const bool swap = has_near ? side(near_plane) > 0.0 : (has_far && side(far_plane) < 0.0);
+    if (!swap) return;
+    const Plane t = planes_[near_plane];
+    planes_[near_plane] = planes_[far_plane];
+    planes_[far_plane] = t;
+    const unsigned nb = (mask_ >> near_plane) & 1u, fb = (mask_ >> far_plane) & 1u;
+    mask_ = static_cast<PlaneMask>((mask_ & ~((1u << near_plane) | (1u << far_plane))) | (nb << far_plane) |
+                                   (fb << near_plane));
+  }
+
   Plane planes_[max_planes] = {};
   PlaneMask mask_ = 0;
 };

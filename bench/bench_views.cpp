@@ -1,0 +1,212 @@
+// bench/bench_views.cpp: what a renderer's frame asks of the AdaptiveBinaryTree beyond one view.
+//
+//  stereo_*   two eyes 6.4 cm apart: one cull_views call (reference) against two AdaptiveBinaryTree
+//             culls and two Bullet btDbvt k-DOP culls, on the same boxes, in this process.
+//  cascades_* four shadow-cascade-like frusta (nested depth slices of one view): the same race.
+//  casters_*  the shadow-caster volume of a view culled through cull(ConvexVolume), against the
+//             view frustum alone (what it costs to keep the off-screen casters).
+//  refit_*    one frame of motion: plain refit (reference), repairing refit, full rebuild; the
+//             quality each keeps after 300 frames is printed to stderr.
+// Scenes: a generated city (object boxes and triangle boxes) and 60,000 random boxes.
+// CSV on stdout (race.hpp), a summary on stderr. CULLKIT_BENCH_SMOKE=1 for a smoke run.
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+#include <BulletCollision/BroadphaseCollision/btDbvt.h>
+
+#include <glm/ext/matrix_clip_space.hpp>
+#include <glm/ext/matrix_transform.hpp>
+
+#include <cullkit/cullkit.hpp>
+#include <cullkit_support/scene.hpp>
+
+#include "race.hpp"
+
+using namespace cullkit;
+
+namespace {
+
+class DbvtPeer {
+ public:
+  explicit DbvtPeer(const std::vector<Aabb>& boxes) {
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      const btDbvtVolume v = btDbvtVolume::FromMM(btVector3(boxes[i].min.x, boxes[i].min.y, boxes[i].min.z),
+                                                  btVector3(boxes[i].max.x, boxes[i].max.y, boxes[i].max.z));
+      tree_.insert(v, reinterpret_cast<void*>(static_cast<std::uintptr_t>(i)));
+    }
+    tree_.optimizeTopDown();
+  }
+  void cull(const Frustum& f, std::vector<std::uint32_t>& out) {
+    btVector3 normals[6];
+    btScalar offsets[6];
+    int count = 0;
+    for (int p = 0; p < Frustum::max_planes; ++p) {
+      if (!f.has_plane(p)) continue;
+      normals[count] = btVector3(f.plane(p).normal.x, f.plane(p).normal.y, f.plane(p).normal.z);
+      offsets[count] = f.plane(p).d;
+      ++count;
+    }
+    struct Collect : btDbvt::ICollide {
+      std::vector<std::uint32_t>* out;
+      void Process(const btDbvtNode* n) override {
+        out->push_back(static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(n->data)));
+      }
+    } collect;
+    collect.out = &out;
+    out.clear();
+    btDbvt::collideKDOP(tree_.m_root, normals, offsets, count, collect);
+  }
+
+ private:
+  btDbvt tree_;
+};
+
+std::vector<Aabb> random_boxes(std::size_t n) {
+  support::Rng rng(60000);
+  std::vector<Aabb> boxes(n);
+  for (auto& b : boxes) {
+    const glm::vec3 c(rng.uniform(-500, 500), rng.uniform(0, 50), rng.uniform(-500, 500));
+    const glm::vec3 h(rng.uniform(0.5f, 5), rng.uniform(0.5f, 10), rng.uniform(0.5f, 5));
+    b = Aabb{c - h, c + h};
+  }
+  return boxes;
+}
+
+std::vector<Aabb> triangle_boxes(const support::Scene& s) {
+  std::vector<Aabb> out;
+  for (std::size_t t = 0; t < s.triangle_count(); ++t) {
+    glm::vec3 p[3] = {};
+    if (triangle_positions(s.mesh(), t, p)) out.push_back(merge(merge(Aabb{p[0], p[0]}, p[1]), p[2]));
+  }
+  return out;
+}
+
+glm::mat4 view_matrix(const glm::vec3& eye, const glm::vec3& target) {
+  return glm::lookAtRH(eye, target, glm::vec3(0, 1, 0));
+}
+
+struct Summary {
+  std::string name;
+  double views_vs_two, views_vs_dbvt;
+};
+std::vector<Summary> summaries;
+
+void views_race(const std::string& name, const std::vector<Aabb>& boxes, const std::vector<Frustum>& frusta) {
+  const AdaptiveBinaryTree<Aabb> abt(boxes.data(), boxes.size());
+  DbvtPeer dbvt(boxes);
+  std::vector<std::uint32_t> out, bits;
+  std::vector<std::vector<std::uint32_t>> sep(frusta.size()), bt(frusta.size());
+  abt.cull_views(frusta.data(), frusta.size(), out, bits);
+  std::size_t single_total = 0;
+  for (std::size_t v = 0; v < frusta.size(); ++v) {
+    abt.cull(frusta[v], sep[v]);
+    single_total += sep[v].size();
+  }
+  std::fprintf(stderr, "%s: %zu boxes, %zu views: union %zu, per-view total %zu\n", name.c_str(), boxes.size(),
+               frusta.size(), out.size(), single_total);
+  const auto r = cullkit_bench::race(
+      name, {{"cullkit_cull_views", [&] { abt.cull_views(frusta.data(), frusta.size(), out, bits); }},
+             {"cullkit_cull_separately", [&] {
+                for (std::size_t v = 0; v < frusta.size(); ++v) abt.cull(frusta[v], sep[v]);
+              }},
+             {"bullet_btdbvt_separately", [&] {
+                for (std::size_t v = 0; v < frusta.size(); ++v) dbvt.cull(frusta[v], bt[v]);
+              }}});
+  summaries.push_back(Summary{name, r[0].median_ns / r[1].median_ns, r[0].median_ns / r[2].median_ns});
+}
+
+void stereo_and_cascades(const std::string& scene, const std::vector<Aabb>& boxes, const glm::vec3& eye,
+                         const glm::vec3& target) {
+  const glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(90.0f), 1.0f, 0.1f, 600.0f);
+  const glm::vec3 fwd = glm::normalize(target - eye);
+  const glm::vec3 right = glm::normalize(glm::cross(fwd, glm::vec3(0, 1, 0)));
+  std::vector<Frustum> stereo;
+  for (float s : {-0.032f, 0.032f})
+    stereo.push_back(Frustum::from_matrix(proj * view_matrix(eye + right * s, target + right * s), DepthRange::zero_to_one));
+  views_race("stereo_" + scene, boxes, stereo);
+  std::vector<Frustum> cascades;
+  const float splits[5] = {0.1f, 20.0f, 60.0f, 180.0f, 600.0f};
+  for (int c = 0; c < 4; ++c) {
+    const glm::mat4 p = glm::perspectiveRH_ZO(glm::radians(70.0f), 16.0f / 9.0f, splits[c], splits[c + 1]);
+    cascades.push_back(Frustum::from_matrix(p * view_matrix(eye, target), DepthRange::zero_to_one));
+  }
+  views_race("cascades_" + scene, boxes, cascades);
+
+  // Shadow casters of the first eye for a low sun: the volume against the frustum alone.
+  const AdaptiveBinaryTree<Aabb> abt(boxes.data(), boxes.size());
+  const glm::vec3 sun = glm::normalize(glm::vec3(0.6f, -0.5f, 0.3f));
+  const ConvexVolume casters = shadow_caster_volume(stereo[0], sun);
+  std::vector<std::uint32_t> o1, o2;
+  abt.cull(stereo[0], o1);
+  abt.cull(casters, o2);
+  std::fprintf(stderr, "casters_%s: view %zu objects, caster volume (%zu planes) %zu objects\n", scene.c_str(),
+               o1.size(), casters.plane_count(), o2.size());
+  cullkit_bench::race("casters_" + scene, {{"cullkit_cull_view", [&] { abt.cull(stereo[0], o1); }},
+                                           {"cullkit_cull_caster_volume", [&] { abt.cull(casters, o2); }}});
+}
+
+void refit_race(std::size_t count) {
+  support::Rng rng(77);
+  std::vector<Aabb> boxes(count);
+  std::vector<glm::vec3> vel(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const glm::vec3 c(rng.uniform(-100, 100), rng.uniform(-100, 100), rng.uniform(-100, 100));
+    const glm::vec3 h(rng.uniform(0, 1.5f), rng.uniform(0, 1.5f), rng.uniform(0, 1.5f));
+    boxes[i] = Aabb{c - h, c + h};
+    vel[i] = glm::vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+  }
+  const auto step = [&] {
+    for (std::size_t i = 0; i < count; ++i) {
+      const glm::vec3 c = boxes[i].center() + vel[i];
+      for (int a = 0; a < 3; ++a)
+        if (std::fabs(c[a]) > 100.0f) vel[i][a] = -vel[i][a];
+      boxes[i] = Aabb{boxes[i].min + vel[i], boxes[i].max + vel[i]};
+    }
+  };
+  AdaptiveBinaryTree<Aabb> plain(boxes.data(), boxes.size()), repaired(boxes.data(), boxes.size());
+  const int frames = cullkit_bench::smoke() ? 3 : 300;
+  for (int f = 0; f < frames; ++f) {
+    step();
+    plain.refit(boxes.data());
+    repaired.refit(boxes.data(), AbtRefitParams{});
+  }
+  std::fprintf(stderr, "refit_%zu: after %d frames quality plain %.2f, repairing %.2f\n", count, frames,
+               plain.refit_quality(), repaired.refit_quality());
+  // Timed: the plain refit and the rebuild on the current boxes; the repairing contestant also
+  // moves the objects one more frame per repetition (an O(n) loop), so that it has work to repair.
+  cullkit_bench::race("refit_" + std::to_string(count),
+                      {{"cullkit_refit_plain", [&] { plain.refit(boxes.data()); }},
+                       {"cullkit_refit_repairing", [&] {
+                          step();
+                          repaired.refit(boxes.data(), AbtRefitParams{});
+                        }},
+                       {"cullkit_rebuild", [&] {
+                          const AdaptiveBinaryTree<Aabb> fresh(boxes.data(), boxes.size());
+                          cullkit_bench::keep(fresh);
+                        }}},
+                      15);
+}
+}  // namespace
+
+int main() {
+  const support::Scene city = support::make_city(1, 26);
+  const std::vector<Aabb> objects = city.object_bounds();
+  const std::vector<Aabb> tris = triangle_boxes(city);
+  const std::vector<Aabb> random = random_boxes(60000);
+  stereo_and_cascades("city_objects", objects, glm::vec3(-300, 1.7f, -310), glm::vec3(300, 1.7f, 250));
+  stereo_and_cascades("city_triangles", tris, glm::vec3(-300, 1.7f, -310), glm::vec3(300, 1.7f, 250));
+  stereo_and_cascades("random_60k", random, glm::vec3(-520, 30, -520), glm::vec3(0, 10, 0));
+  stereo_and_cascades("random_60k_overhead", random, glm::vec3(0, 400, 0.1f), glm::vec3(0, 0, 0));
+  refit_race(cullkit_bench::smoke() ? 2000 : 20000);
+  std::fprintf(stderr, "\nsummary (median time ratios, same run):\n");
+  for (const Summary& s : summaries)
+    std::fprintf(stderr, "  %-34s cull_views / separate culls %.3f   cull_views / btDbvt %.3f\n", s.name.c_str(),
+                 s.views_vs_two, s.views_vs_dbvt);
+  return 0;
+}

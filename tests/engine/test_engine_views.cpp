@@ -1,0 +1,257 @@
+// Views beyond one frustum: AdaptiveBinaryTree::cull(ConvexVolume) and cull_views against brute
+// force, and shadow_caster_volume against the exact set of casters.
+// Oracles: every box tested corner by corner in double against the planes (volumes, views); for
+// casters, the exact test "the box swept along the light meets the view" (a 1-D interval problem
+// over the planes of the Minkowski sum of the frustum and the box), and sampled casters for
+// infinite frusta.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <check.hpp>
+#include <cullkit/cullkit.hpp>
+#include <cullkit_support/scene.hpp>
+#include <glm/matrix.hpp>
+
+#include "../abt/abt_oracle.hpp"
+
+using namespace cullkit;
+
+namespace {
+
+glm::vec3 random_unit(support::Rng& rng) {
+  for (;;) {
+    const glm::vec3 v(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    const float l = glm::length(v);
+    if (l > 0.1f && l <= 1.0f) return v / l;
+  }
+}
+
+// Box meets the volume's planes (double, all 8 corners): not all corners strictly outside one plane.
+bool volume_meets(const ConvexVolume& v, const Aabb& b) {
+  for (std::size_t i = 0; i < v.plane_count(); ++i) {
+    const Plane& p = v.plane(i);
+    bool out = true;
+    for (int c = 0; c < 8 && out; ++c) {
+      const glm::vec3 q = corner(b, c);
+      out = double(p.normal.x) * q.x + double(p.normal.y) * q.y + double(p.normal.z) * q.z + double(p.d) < 0.0;
+    }
+    if (out) return false;
+  }
+  return true;
+}
+
+void volume_cull() {
+  support::Rng rng(21);
+  const std::vector<Aabb> boxes = abt_test::random_boxes(rng, 5000, 100.0f, 3.0f);
+  const AdaptiveBinaryTree<Aabb> tree(boxes.data(), boxes.size());
+  std::vector<std::uint32_t> out;
+  std::size_t kept_total = 0, truly_total = 0;
+  for (int k = 0; k < 150; ++k) {
+    ConvexVolume v;
+    const int planes = 1 + k % 32;
+    const glm::vec3 centre(rng.uniform(-60, 60), rng.uniform(-60, 60), rng.uniform(-60, 60));
+    for (int i = 0; i < planes; ++i) {
+      const glm::vec3 n = random_unit(rng);
+      v.add_plane(Plane{n, -glm::dot(n, centre) + rng.uniform(5, 80)});
+    }
+    tree.cull(v, out);
+    std::vector<std::uint8_t> mark(boxes.size(), 0);
+    bool dup = false;
+    for (std::uint32_t i : out) {
+      dup = dup || mark[i];
+      mark[i] = 1;
+    }
+    std::size_t missed = 0, truly = 0;
+    for (std::uint32_t i = 0; i < boxes.size(); ++i) {
+      if (!volume_meets(v, boxes[i])) continue;
+      ++truly;
+      missed += !mark[i];
+    }
+    CHECK_MSG(missed == 0 && !dup, "volume %d (%d planes): %zu missed", k, planes, missed);
+    kept_total += out.size();
+    truly_total += truly;
+  }
+  // Non-vacuity: the volumes cut (some objects kept, many not).
+  CHECK(truly_total > 0 && kept_total < 150 * boxes.size() / 2);
+  std::printf("volume cull: %zu kept, %zu meet (brute force), over 150 volumes\n", kept_total, truly_total);
+  tree.cull(ConvexVolume{}, out);
+  CHECK(out.size() == boxes.size());
+}
+
+void views_cull() {
+  support::Rng rng(22);
+  const std::vector<Aabb> boxes = abt_test::random_boxes(rng, 6000, 100.0f, 3.0f);
+  const AdaptiveBinaryTree<Aabb> tree(boxes.data(), boxes.size());
+  std::vector<std::uint32_t> out, bits;
+  std::size_t wrong = 0, missing = 0, extra_bits = 0, total_bits = 0;
+  for (int k = 0; k < 60; ++k) {
+    const int n = k < 20 ? 2 : 1 + rng.range(0, 31);
+    std::vector<Frustum> fr;
+    std::vector<abt_test::OracleFrustum> oracles;
+    for (int v = 0; v < n; ++v) {
+      const abt_test::View view = abt_test::random_view(rng, Aabb{glm::vec3(-130), glm::vec3(130)}, k * 32 + v);
+      fr.push_back(Frustum::from_matrix(view.view_proj, view.depth));
+      oracles.emplace_back(view.view_proj, view.depth);
+    }
+    tree.cull_views(fr.data(), fr.size(), out, bits);
+    CHECK(out.size() == bits.size());
+    std::vector<std::uint32_t> got(boxes.size(), 0);
+    std::vector<std::uint8_t> seen(boxes.size(), 0);
+    for (std::size_t j = 0; j < out.size(); ++j) {
+      wrong += seen[out[j]] || bits[j] == 0;
+      seen[out[j]] = 1;
+      got[out[j]] = bits[j];
+    }
+    for (std::uint32_t i = 0; i < boxes.size(); ++i) {
+      for (int v = 0; v < n; ++v) {
+        const bool meets = oracles[std::size_t(v)].meets(boxes[i]);
+        const bool bit = (got[i] >> v) & 1u;
+        missing += meets && !bit;
+        extra_bits += !meets && bit;
+        total_bits += bit;
+      }
+    }
+    // Each view's bits are exactly what a single cull of that view reports.
+    for (int v = 0; v < n; ++v) {
+      std::vector<std::uint32_t> single;
+      tree.cull(fr[std::size_t(v)], single);
+      std::size_t same = 0;
+      for (std::uint32_t i : single) same += (got[i] >> v) & 1u;
+      std::size_t with_bit = 0;
+      for (std::uint32_t i = 0; i < boxes.size(); ++i) with_bit += (got[i] >> v) & 1u;
+      CHECK_MSG(same == single.size() && with_bit == single.size(), "set %d view %d: bits differ from a single cull", k, v);
+    }
+  }
+  CHECK_MSG(missing == 0 && wrong == 0, "%zu missing bits, %zu wrong entries", missing, wrong);
+  CHECK(total_bits > 0);
+  std::printf("cull_views: %zu bits set, %zu beyond the brute force (rounding slack)\n", total_bits, extra_bits);
+  const Frustum none[1] = {};
+  tree.cull_views(none, 0, out, bits);
+  CHECK(out.empty() && bits.empty());
+}
+
+// Exact caster test for a finite frustum given by its 8 corners: does the box swept along `d`
+// (t >= 0) meet the frustum? Equivalently: does the ray {t d} meet F - B (Minkowski)?
+struct ExactCasters {
+  std::array<glm::dvec3, 8> corners;
+  std::vector<glm::dvec3> normals;
+
+  explicit ExactCasters(const glm::mat4& view_proj, DepthRange depth) {
+    const glm::dmat4 inv = glm::inverse(glm::dmat4(view_proj));
+    const double z0 = depth == DepthRange::zero_to_one ? 0.0 : -1.0;
+    for (int i = 0; i < 8; ++i) {
+      const glm::dvec4 h = inv * glm::dvec4((i & 1) ? 1.0 : -1.0, (i & 2) ? 1.0 : -1.0, (i & 4) ? 1.0 : z0, 1.0);
+      corners[std::size_t(i)] = glm::dvec3(h) / h.w;
+    }
+    std::vector<glm::dvec3> edges;
+    for (int i = 0; i < 8; ++i)
+      for (int b = 1; b < 8; b <<= 1)
+        if (!(i & b)) edges.push_back(corners[std::size_t(i | b)] - corners[std::size_t(i)]);
+    const glm::dvec3 axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (const auto& a : axes) normals.push_back(a);
+    for (std::size_t i = 0; i < edges.size(); ++i) {
+      for (std::size_t j = i + 1; j < edges.size(); ++j) normals.push_back(glm::cross(edges[i], edges[j]));
+      for (const auto& a : axes) normals.push_back(glm::cross(edges[i], a));
+    }
+  }
+
+  bool caster(const Aabb& b, const glm::dvec3& d) const {
+    double lo = 0.0, hi = std::numeric_limits<double>::infinity();
+    for (const glm::dvec3& n0 : normals) {
+      for (double s : {1.0, -1.0}) {
+        const glm::dvec3 n = n0 * s;
+        if (glm::dot(n, n) < 1e-18) continue;
+        // Ray point t d must satisfy n.(t d) <= h_F(n) + h_{-B}(n).
+        double hf = -1e300;
+        for (const auto& c : corners) hf = std::max(hf, glm::dot(n, c));
+        double hb = -1e300;
+        for (int k = 0; k < 8; ++k) hb = std::max(hb, -glm::dot(n, glm::dvec3(corner(b, k))));
+        const double rhs = hf + hb, a = glm::dot(n, d);
+        const double eps = 1e-9 * (std::fabs(hf) + std::fabs(hb) + 1.0);
+        if (std::fabs(a) < 1e-15) {
+          if (rhs < -eps) return false;
+        } else if (a > 0) {
+          hi = std::min(hi, (rhs + eps) / a);
+        } else {
+          lo = std::max(lo, (rhs + eps) / a);
+        }
+      }
+    }
+    return lo <= hi;
+  }
+};
+
+void shadow_casters() {
+  support::Rng rng(23);
+  std::size_t exact_total = 0, kept_total = 0, missed = 0, view_only = 0;
+  for (int k = 0; k < 24; ++k) {
+    const glm::vec3 eye(rng.uniform(-20, 20), rng.uniform(2, 20), rng.uniform(-20, 20));
+    const glm::vec3 target = eye + glm::vec3(rng.uniform(-1, 1), rng.uniform(-0.5f, 0.2f), rng.uniform(-1, 1)) * 10.0f;
+    const DepthRange depth = k % 2 ? DepthRange::zero_to_one : DepthRange::negative_one_to_one;
+    const Camera cam = support::make_camera(eye, target, rng.uniform(40, 90), 64, 64, 0.5f, rng.uniform(30, 80), depth,
+                                            depth == DepthRange::zero_to_one && k % 4 == 1);
+    glm::vec3 light = random_unit(rng);
+    if (light.y > 0) light.y = -light.y;
+    const Frustum view = frustum_of(cam);
+    const ConvexVolume vol = shadow_caster_volume(view, light);
+    const ExactCasters exact(cam.view_proj, depth);
+    const glm::dvec3 d(light);
+    for (int i = 0; i < 1500; ++i) {
+      const glm::vec3 c(rng.uniform(-120, 120), rng.uniform(-5, 60), rng.uniform(-120, 120));
+      const glm::vec3 h(rng.uniform(0.1f, 4), rng.uniform(0.1f, 4), rng.uniform(0.1f, 4));
+      const Aabb b{c - h, c + h};
+      const bool is_caster = exact.caster(b, d);
+      const bool kept = vol.classify(b) != Containment::outside;
+      exact_total += is_caster;
+      kept_total += kept;
+      missed += is_caster && !kept;
+      view_only += is_caster && view.classify(b) == Containment::outside;
+    }
+  }
+  CHECK_MSG(missed == 0, "%zu casters left out", missed);
+  CHECK(view_only > 0);  // non-vacuity: casters outside the view exist and were kept
+  std::printf("shadow casters: exact %zu, kept %zu (tightness %.3f), %zu casters outside the view\n", exact_total,
+              kept_total, double(kept_total) / double(std::max<std::size_t>(exact_total, 1)), view_only);
+
+  // Infinite far planes (standard and reversed-Z): casters sampled as small boxes around q - t d
+  // for points q in the view, must all be kept.
+  std::size_t samples = 0, lost = 0, planes_total = 0;
+  for (int k = 0; k < 20; ++k) {
+    const glm::vec3 eye(rng.uniform(-20, 20), rng.uniform(2, 20), rng.uniform(-20, 20));
+    const glm::vec3 target = eye + glm::vec3(rng.uniform(-1, 1), rng.uniform(-0.5f, 0.2f), rng.uniform(-1, 1)) * 10.0f;
+    const bool reversed = k % 2 == 1;
+    const Camera cam = support::make_camera(eye, target, 70, 64, 64, 0.5f, 0.0f, DepthRange::zero_to_one, reversed);
+    const glm::vec3 light = glm::normalize(glm::vec3(rng.uniform(-1, 1), -1.0f, rng.uniform(-1, 1)));
+    const Frustum view = frustum_of(cam);
+    const ConvexVolume vol = shadow_caster_volume(view, light);
+    // A light shining along the view's infinite cone makes every point a possible caster (the
+    // swept cone covers space): no planes is then the exact answer.
+    planes_total += vol.plane_count();
+    const PixelRays rays(cam);
+    for (int i = 0; i < 400; ++i) {
+      const Ray r = rays.ray_at(rng.uniform(0, 64), rng.uniform(0, 64));
+      const glm::vec3 q = r.origin + r.direction * rng.uniform(1.0f, 500.0f);
+      const glm::vec3 p = q - light * rng.uniform(0.0f, 300.0f);
+      const Aabb b{p - 0.01f, p + 0.01f};
+      ++samples;
+      lost += vol.classify(b) == Containment::outside;
+    }
+  }
+  CHECK_MSG(lost == 0, "%zu of %zu sampled casters lost (infinite far)", lost, samples);
+  CHECK(planes_total >= 40);  // the volumes do cut
+  // Degenerate input: everything may cast.
+  CHECK(shadow_caster_volume(Frustum{}, glm::vec3(0, -1, 0)).plane_count() == 0);
+  CHECK(shadow_caster_volume(frustum_of(support::make_camera(glm::vec3(0), glm::vec3(1), 60, 8, 8, 1, 10)), glm::vec3(0))
+            .plane_count() == 0);
+}
+}  // namespace
+
+int main() {
+  volume_cull();
+  views_cull();
+  shadow_casters();
+  return cullkit_test::report("test_engine_views");
+}

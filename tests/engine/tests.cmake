@@ -1,0 +1,5 @@
+set(_engine ${CMAKE_CURRENT_LIST_DIR})
+cullkit_add_test(test_engine_bad_bounds SOURCES ${_engine}/test_engine_bad_bounds.cpp LABELS engine)
+cullkit_add_test(test_engine_camera SOURCES ${_engine}/test_engine_camera.cpp LABELS engine)
+cullkit_add_test(test_engine_views SOURCES ${_engine}/test_engine_views.cpp LABELS engine)
+cullkit_add_test(test_engine_refit SOURCES ${_engine}/test_engine_refit.cpp LABELS engine)
