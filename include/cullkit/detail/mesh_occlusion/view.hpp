@@ -2,6 +2,7 @@
 // precision, onto the coverage grid, with the near-plane test and the depth measure.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
