@@ -118,6 +118,16 @@ int main() {
     const cullkit::MeshOcclusionCuller<glm::vec3> partial(s.mesh(), s.objects.data(), s.objects.size());
     CHECK(partial.build_stats().triangles == s.indices.size() / 3);
   }
+  // Overlapping objects (the wall twice, and one of its triangles a third time): the same
+  // answer as without the copies.
+  {
+    TestScene s = base;
+    s.objects.push_back({0, 2});
+    s.objects.push_back({1, 1});
+    cullkit::MeshOcclusionStats st;
+    CHECK(cull_with(s, s.indices, front_camera(), &st) == (std::vector<std::uint32_t>{0, 4, 5}));
+    CHECK(st.occluder_triangles == 2);
+  }
   // Degenerate triangles are counted and never occlude; their object keeps its bounds.
   {
     TestScene s = base;

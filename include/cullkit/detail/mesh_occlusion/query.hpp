@@ -182,7 +182,8 @@ inline void gather_triangles(const MeshIndex& index, Scratch& s) {
     const MeshObject& range = index.objects[o.second];
     for (std::uint32_t t = range.first_triangle; t < range.first_triangle + range.triangle_count; ++t) {
       const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
-      if (c[0] == none) continue;
+      // Objects may overlap: a triangle goes in once.
+      if (c[0] == none || s.triangle_stamp[t] == s.frame) continue;
       double x[3], y[3], w[3];
       bool usable = true;
       for (int k = 0; k < 3 && usable; ++k) {
