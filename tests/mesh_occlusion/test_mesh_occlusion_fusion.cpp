@@ -197,6 +197,7 @@ int main() {
     total_hidden += hidden;
     total_peek_visible += peek_visible;
   }
+  CHECK(total_must > 500);
   CHECK(total_hidden > 600);
   CHECK(total_peek_visible > 60);
   return cullkit_test::report("test_mesh_occlusion_fusion");
