@@ -12,3 +12,4 @@
 #include "depth_sort.hpp"
 #include "bsp_tree.hpp"
 #include "portal_graph.hpp"
+#include "mesh_occlusion_culler.hpp"

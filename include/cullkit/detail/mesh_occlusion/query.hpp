@@ -1,0 +1,328 @@
+// cullkit/detail/mesh_occlusion/query.hpp: one frame of MeshOcclusionCuller::cull, as named steps:
+// frustum walk, object boxes on screen, occluder choice, occluder bands into the coverage grid,
+// object tests.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+#include "../../geometry/camera.hpp"
+#include "coverage.hpp"
+#include "index.hpp"
+#include "view.hpp"
+
+namespace cullkit {
+namespace detail {
+namespace mesh_occlusion {
+
+/// An object's box seen from the eye: its grid rectangle and its smallest depth, when every corner
+/// is clearly beyond the near plane (`usable`); otherwise it can be neither hidden nor measured.
+struct BoxView {
+  double x0, y0, x1, y1;
+  double w_min;
+  bool usable;
+};
+
+/// Per-thread working memory of a query; only grows.
+struct Scratch {
+  MeshOcclusionStats stats;
+  std::vector<std::uint32_t> in_frustum;  // tree positions, then objects
+  std::vector<BoxView> boxes;             // parallel to in_frustum
+  std::vector<std::pair<float, std::uint32_t>> candidates;  // (screen cells, position in in_frustum)
+  std::vector<std::pair<double, std::uint32_t>> occluders;  // (depth key, object)
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> triangles, sort_buffer;  // (depth bits, triangle)
+  // Per-frame caches, valid where the stamp equals `frame`.
+  const void* owner = nullptr;
+  std::uint32_t frame = 0;
+  std::vector<std::uint32_t> vertex_stamp, vertex_slot, triangle_stamp, triangle_band;
+  std::vector<Projected> projected;
+  View view;
+  CoverageGrid grid;
+};
+
+/// Sorts (key, value) pairs by key, stable: three passes of 11 bits.
+inline void radix_sort(std::vector<std::pair<std::uint32_t, std::uint32_t>>& items,
+                       std::vector<std::pair<std::uint32_t, std::uint32_t>>& buffer) {
+  if (items.size() < 2) return;
+  buffer.resize(items.size());
+  for (int pass = 0; pass < 3; ++pass) {
+    const int shift = 11 * pass;
+    std::uint32_t offsets[2048] = {};
+    for (const auto& it : items) ++offsets[(it.first >> shift) & 2047u];
+    std::uint32_t sum = 0;
+    for (std::uint32_t& o : offsets) {
+      const std::uint32_t n = o;
+      o = sum;
+      sum += n;
+    }
+    for (const auto& it : items) buffer[offsets[(it.first >> shift) & 2047u]++] = it;
+    items.swap(buffer);
+  }
+}
+
+/// Makes the caches fit `index` and starts a new frame.
+inline void begin_frame(const MeshIndex& index, Scratch& s) {
+  if (s.owner != &index || s.vertex_stamp.size() != index.positions.size() ||
+      s.triangle_stamp.size() != index.corners.size() / 3) {
+    s.owner = &index;
+    s.vertex_stamp.assign(index.positions.size(), 0);
+    s.vertex_slot.assign(index.positions.size(), 0);
+    s.triangle_stamp.assign(index.corners.size() / 3, 0);
+    s.triangle_band.assign(index.corners.size() / 3, 0);
+    s.frame = 0;
+  }
+  if (++s.frame == 0) {
+    std::fill(s.vertex_stamp.begin(), s.vertex_stamp.end(), 0);
+    std::fill(s.triangle_stamp.begin(), s.triangle_stamp.end(), 0);
+    s.frame = 1;
+  }
+  s.projected.clear();
+}
+
+inline const Projected& project_vertex(const MeshIndex& index, Scratch& s, std::uint32_t v) {
+  if (s.vertex_stamp[v] != s.frame) {
+    s.vertex_stamp[v] = s.frame;
+    s.vertex_slot[v] = static_cast<std::uint32_t>(s.projected.size());
+    const glm::vec3& p = index.positions[v];
+    s.projected.push_back(s.view.project(p.x, p.y, p.z));
+  }
+  return s.projected[s.vertex_slot[v]];
+}
+
+inline BoxView project_box(const View& view, const Aabb& box) {
+  // Clip x, y, w and the near-plane value are affine: the corners are the values at box.min
+  // plus any of the three edge vectors' contributions.
+  const double q[3] = {double(box.min.x) - view.eye[0], double(box.min.y) - view.eye[1], double(box.min.z) - view.eye[2]};
+  const double e[3] = {double(box.max.x) - double(box.min.x), double(box.max.y) - double(box.min.y),
+                       double(box.max.z) - double(box.min.z)};
+  double base[4], step[3][4], scale[4];
+  for (int r = 0; r < 3; ++r) {
+    base[r] = view.row[r][0] * q[0] + view.row[r][1] * q[1] + view.row[r][2] * q[2];
+    for (int a = 0; a < 3; ++a) step[a][r] = view.row[r][a] * e[a];
+  }
+  const double* n = view.near_plane;
+  base[3] = n[0] * box.min.x + n[1] * box.min.y + n[2] * box.min.z + n[3];
+  for (int a = 0; a < 3; ++a) step[a][3] = n[a] * e[a];
+  // Tolerances as in View::project, taken at their largest over the box.
+  const double reach[3] = {std::max(std::fabs(q[0]), std::fabs(q[0] + e[0])), std::max(std::fabs(q[1]), std::fabs(q[1] + e[1])),
+                           std::max(std::fabs(q[2]), std::fabs(q[2] + e[2]))};
+  const double far_coord[3] = {std::max(std::fabs(double(box.min.x)), std::fabs(double(box.max.x))),
+                               std::max(std::fabs(double(box.min.y)), std::fabs(double(box.max.y))),
+                               std::max(std::fabs(double(box.min.z)), std::fabs(double(box.max.z)))};
+  scale[2] = std::fabs(view.row[2][0]) * reach[0] + std::fabs(view.row[2][1]) * reach[1] + std::fabs(view.row[2][2]) * reach[2];
+  scale[3] = std::fabs(n[0]) * far_coord[0] + std::fabs(n[1]) * far_coord[1] + std::fabs(n[2]) * far_coord[2] + std::fabs(n[3]);
+  // Rounding of the sums below is far inside these tolerances (2^-18 relative).
+  const double ntol = 0x1p-18 * scale[3] + 0x1p-40 * scale[3];
+  const double wtol = 1e-8 * scale[2];
+  BoxView b{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, HUGE_VAL, false};
+  for (int k = 0; k < 8; ++k) {
+    double c[4] = {base[0], base[1], base[2], base[3]};
+    for (int a = 0; a < 3; ++a)
+      if ((k >> a) & 1)
+        for (int r = 0; r < 4; ++r) c[r] += step[a][r];
+    if (!(c[3] > ntol) || !(c[2] > wtol)) return b;
+    const double inv = 1.0 / c[2];
+    const double x = c[0] * inv * view.scale_x + view.offset_x, y = c[1] * inv * view.scale_y + view.offset_y;
+    b.x0 = std::min(b.x0, x);
+    b.x1 = std::max(b.x1, x);
+    b.y0 = std::min(b.y0, y);
+    b.y1 = std::max(b.y1, y);
+    b.w_min = std::min(b.w_min, c[2]);
+  }
+  b.usable = std::isfinite(b.x0) && std::isfinite(b.x1) && std::isfinite(b.y0) && std::isfinite(b.y1) && std::isfinite(b.w_min);
+  return b;
+}
+
+/// Picks occluder objects by size on screen, biggest first, within the triangle budget; fills
+/// `s.occluders`.
+inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+  const double grid_cells = double(s.grid.width()) * double(s.grid.height());
+  const double min_cells = std::max(1.0, params.min_occluder_screen_fraction * grid_cells);
+  s.candidates.clear();
+  for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
+    const BoxView& b = s.boxes[i];
+    double cells = grid_cells;  // a box through the near plane: near the eye, likely big
+    if (b.usable) {
+      const double w = std::min(b.x1, double(s.grid.width())) - std::max(b.x0, 0.0);
+      const double h = std::min(b.y1, double(s.grid.height())) - std::max(b.y0, 0.0);
+      cells = w > 0.0 && h > 0.0 ? w * h : 0.0;
+    }
+    if (cells >= min_cells) s.candidates.emplace_back(static_cast<float>(cells), static_cast<std::uint32_t>(i));
+  }
+  // Biggest first. A full sort of the candidates only (they are the objects above the size floor).
+  std::sort(s.candidates.begin(), s.candidates.end(),
+            [](const std::pair<float, std::uint32_t>& a, const std::pair<float, std::uint32_t>& b) {
+              return a.first > b.first || (a.first == b.first && a.second < b.second);
+            });
+  s.occluders.clear();
+  std::uint64_t budget = params.occluder_triangle_budget;
+  for (const auto& c : s.candidates) {
+    if (s.occluders.size() >= params.max_occluder_objects) break;
+    const std::uint32_t o = s.in_frustum[c.second];
+    const std::uint32_t n = index.objects[o].triangle_count;
+    if (n > budget) continue;
+    budget -= n;
+    const BoxView& b = s.boxes[c.second];
+    s.occluders.emplace_back(b.usable ? b.w_min : 0.0, o);
+  }
+}
+
+/// Projects the occluder objects' triangles and keeps those that can occlude: every corner
+/// clearly beyond the near plane, clearly front-facing, touching the grid. Fills `s.triangles`
+/// with (largest corner depth as float bits, triangle), nearest first.
+inline void gather_triangles(const MeshIndex& index, Scratch& s) {
+  const int orient = s.view.orient;
+  const double gw = s.grid.width(), gh = s.grid.height();
+  s.triangles.clear();
+  for (const auto& o : s.occluders) {
+    const MeshObject& range = index.objects[o.second];
+    for (std::uint32_t t = range.first_triangle; t < range.first_triangle + range.triangle_count; ++t) {
+      const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
+      // Objects may overlap: a triangle goes in once.
+      if (c[0] == none || s.triangle_stamp[t] == s.frame) continue;
+      double x[3], y[3], w[3];
+      bool usable = true;
+      for (int k = 0; k < 3 && usable; ++k) {
+        const Projected& p = project_vertex(index, s, c[k]);
+        usable = p.usable;
+        x[k] = p.x;
+        y[k] = p.y;
+        w[k] = p.w;
+      }
+      // A corner not clearly beyond the near plane: the triangle is left out, and its
+      // neighbours' edges become outline.
+      if (!usable) continue;
+      const double xmin = std::min(std::min(x[0], x[1]), x[2]), xmax = std::max(std::max(x[0], x[1]), x[2]);
+      const double ymin = std::min(std::min(y[0], y[1]), y[2]), ymax = std::max(std::max(y[0], y[1]), y[2]);
+      if (xmax < 0.0 || xmin > gw || ymax < 0.0 || ymin > gh) continue;
+      // Clearly front-facing: back-facing and edge-on triangles are left out (their neighbours'
+      // edges then stay on the outline, which only covers less).
+      const double area2 = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+      const double extent = std::max(xmax - xmin, ymax - ymin);
+      if (!(area2 * orient > 1e-9 * extent * extent)) continue;
+      const float key = static_cast<float>(std::min(std::min(w[0], w[1]), w[2]));
+      std::uint32_t bits;
+      std::memcpy(&bits, &key, sizeof bits);  // positive floats order as their bits
+      s.triangles.emplace_back(bits, t);
+      s.triangle_stamp[t] = s.frame;
+    }
+  }
+  radix_sort(s.triangles, s.sort_buffer);
+}
+
+/// Inserts the gathered triangles nearest first, in bands of similar depth, so a cell freezes at
+/// the depth of the nearest layer that covers it. Within a band, an edge shared by two of its
+/// triangles is never touched: it cancels before the band ends. Returns the cells covered.
+inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+  CoverageGrid& grid = s.grid;
+  const int orient = s.view.orient;
+  const float ratio = 1.0f + std::max(0.0f, params.depth_band_ratio);
+  // Bands: runs of the sorted triangles whose nearest depth is within `ratio` of the run's first.
+  std::uint32_t band = 0;
+  float band_start = 0.0f;
+  for (std::size_t i = 0; i < s.triangles.size(); ++i) {
+    float key;
+    std::memcpy(&key, &s.triangles[i].first, sizeof key);
+    if (i == 0 || !(key <= band_start * ratio)) {
+      band_start = key;
+      ++band;
+    }
+    s.triangle_band[s.triangles[i].second] = band;
+  }
+  std::size_t covered = 0;
+  const auto corners_of = [&](std::uint32_t t, double* x, double* y, double* w) {
+    const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
+    for (int k = 0; k < 3; ++k) {
+      const Projected& p = s.projected[s.vertex_slot[c[k]]];
+      x[k] = p.x;
+      y[k] = p.y;
+      w[k] = p.w;
+    }
+  };
+  for (std::size_t begin = 0, end = 0; begin < s.triangles.size(); begin = end) {
+    const std::uint32_t my_band = s.triangle_band[s.triangles[begin].second];
+    end = begin;
+    while (end < s.triangles.size() && s.triangle_band[s.triangles[end].second] == my_band) ++end;
+    // A triangle over cells that are all covered already can change nothing that matters: it is
+    // dropped, as if it were no occluder (decided for the whole band before any of its edges
+    // cancel against a neighbour's).
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t t = s.triangles[i].second;
+      double x[3], y[3], w[3];
+      corners_of(t, x, y, w);
+      if (grid.all_frozen(x, y)) s.triangle_stamp[t] = 0;
+    }
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t t = s.triangles[i].second;
+      if (s.triangle_stamp[t] != s.frame) continue;
+      ++s.stats.occluder_triangles;
+      double x[3], y[3], w[3];
+      corners_of(t, x, y, w);
+      grid.add_depth(x, y, w);
+      grid.add_count(x, y, orient);
+      for (int k = 0; k < 3; ++k) {
+        const int l = k == 2 ? 0 : k + 1;
+        const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
+        const bool twin_here = twin != none && s.triangle_stamp[twin / 3] == s.frame;
+        const std::uint32_t twin_band = twin_here ? s.triangle_band[twin / 3] : none;
+        if (twin_band == my_band) continue;  // cancels within the band
+        // The twin in an earlier band: its edge (l -> k, as its triangle runs) leaves the
+        // outline, and this one never joins it.
+        if (twin_band < my_band) grid.touch_edge(x[l], y[l], x[k], y[k], orient, -1);
+        else grid.touch_edge(x[k], y[k], x[l], y[l], orient, 1);
+      }
+    }
+    covered += grid.end_band();
+  }
+  return covered;
+}
+
+inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera, Scratch& s,
+                 std::vector<std::uint32_t>& out) {
+  out.clear();
+  MeshOcclusionStats& stats = s.stats;
+  stats = MeshOcclusionStats{};
+  index.tree.cull(frustum_of(camera), s.in_frustum);
+  for (std::uint32_t& i : s.in_frustum) i = index.tree_objects[i];
+  stats.objects_in_frustum = s.in_frustum.size();
+  out.insert(out.end(), index.unusable.begin(), index.unusable.end());
+  stats.objects_unusable_visible = index.unusable.size();
+
+  s.view.setup(camera, params.grid_width, params.grid_height);
+  stats.occlusion_enabled = s.view.enabled;
+  if (!s.view.enabled || s.in_frustum.empty()) {
+    out.insert(out.end(), s.in_frustum.begin(), s.in_frustum.end());
+    return;
+  }
+  begin_frame(index, s);
+  s.grid.reset(params.grid_width, params.grid_height);
+  s.boxes.resize(s.in_frustum.size());
+  for (std::size_t i = 0; i < s.in_frustum.size(); ++i) s.boxes[i] = project_box(s.view, index.bounds[s.in_frustum[i]]);
+
+  choose_occluders(index, params, s);
+  gather_triangles(index, s);
+  stats.occluders_used = s.occluders.size();
+  stats.cells_covered = insert_triangles(index, params, s);
+  s.grid.finish();
+
+  for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
+    const BoxView& b = s.boxes[i];
+    bool hidden = false;
+    if (b.usable) {
+      const CellRect r = s.grid.cells_of(b.x0, b.y0, b.x1, b.y1);
+      // A box that misses the grid meets no ray through the frustum.
+      const float threshold = static_cast<float>((1.0 / b.w_min) * (1.0 + 0x1p-20));
+      hidden = r.empty() || (std::isfinite(threshold) && s.grid.all_nearer(r, threshold));
+    }
+    if (hidden) ++stats.objects_hidden;
+    else out.push_back(s.in_frustum[i]);
+  }
+}
+
+}  // namespace mesh_occlusion
+}  // namespace detail
+}  // namespace cullkit
