@@ -9,3 +9,4 @@
 #include "occlusion_tree.hpp"
 #include "occlusion_culling.hpp"
 #include "normal_class_index.hpp"
+#include "mesh_occlusion_culler.hpp"

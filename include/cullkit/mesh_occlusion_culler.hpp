@@ -1,0 +1,120 @@
+// cullkit/mesh_occlusion_culler.hpp: occlusion culling of the objects of one triangle mesh, with
+// the mesh's own surfaces as occluders, conservative for every ray.
+//
+// The mesh is an indexed triangle list cut into objects (runs of consecutive triangles). Each frame,
+// `cull` keeps the objects inside the view frustum, picks the objects that are biggest on screen as
+// occluders (up to a triangle budget), and fills a coarse coverage grid with their front-facing
+// triangles. A cell counts as covered only when the union of those triangles covers all of it;
+// triangles that share an edge fuse with no seam, within one object and across objects, because
+// coverage is decided by the winding number of the union's outline: an edge used by two occluder
+// triangles in opposite directions cancels and is not part of the outline. Each covered cell gets a
+// depth that no ray through it can pass without meeting an occluder. An object whose screen
+// rectangle lies entirely on covered cells nearer than its box is hidden. The algorithm, its
+// parameters and its limits are described in docs/mesh_occlusion.md.
+//
+// Depth is clip-space w, which grows along every ray from the eye; cells and object rectangles are
+// computed through the eye itself, in double precision, with margins for what rounding is left,
+// so the answer holds for every ray, not only for the rays of some resolution.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "adaptive_binary_tree.hpp"
+#include "config.hpp"
+#include "geometry/aabb.hpp"
+#include "geometry/camera.hpp"
+#include "traits.hpp"
+#include "mesh_occlusion_params.hpp"
+// The index and the query are plain functions on flat arrays, compiled once whatever the vertex type.
+#include "detail/mesh_occlusion/index.hpp"
+#include "detail/mesh_occlusion/query.hpp"
+
+namespace cullkit {
+
+/// Caller-owned working memory for `MeshOcclusionCuller::cull`. Reusing one context makes the warm
+/// path allocation-free (buffers only grow). One context per thread: a context must not be used by
+/// two `cull` calls at once. A context may be used with different cullers.
+class MeshOcclusionContext {
+ public:
+  MeshOcclusionContext() = default;
+  /// Statistics of the last `cull` that used this context.
+  [[nodiscard]] const MeshOcclusionStats& stats() const noexcept { return scratch_.stats; }
+
+ private:
+  template <class, class, class>
+  friend class MeshOcclusionCuller;
+  detail::mesh_occlusion::Scratch scratch_;
+};
+
+/// Occlusion culling of the objects of a triangle mesh by the mesh's own front faces.
+///
+/// Build: O(n) expected in triangles (a hash weld of corner positions and a hash of directed edges),
+/// plus the frustum tree over object bounds, O(m log m) in objects; the culler copies what it needs
+/// (the mesh and objects need not outlive it): about 60 bytes per triangle and 12 per vertex.
+///
+/// Query: see `cull`. Queries are `const` and safe to run concurrently, each with its own context.
+template <class Vertex, class Index = std::uint32_t, class Traits = VertexTraits<Vertex>>
+class MeshOcclusionCuller {
+ public:
+  /// Builds over `mesh` cut into `objects[0, object_count)`. Triangles with an index out of range
+  /// or a NaN/infinite corner are skipped and counted; the objects that hold one, objects whose range
+  /// leaves the mesh and objects with no triangles are always reported visible. Degenerate
+  /// triangles count towards their object's bounds but never occlude. Objects may overlap, leave
+  /// triangles out, or come in any order.
+  /// pre: `objects` points to `object_count` objects (may be null when the count is 0); `mesh`'s
+  /// pointers hold their counts. Allocates; reads the mesh once.
+  MeshOcclusionCuller(MeshView<Vertex, Index> mesh, const MeshObject* objects, std::size_t object_count,
+                      const MeshOcclusionParams& params = {}) {
+    static_assert(require_vertex_traits<Vertex, Traits>::value, "");
+    CULLKIT_ASSERT(objects != nullptr || object_count == 0, "objects points to object_count objects");
+    CULLKIT_ASSERT(mesh.vertices != nullptr || mesh.vertex_count == 0, "vertices points to vertex_count vertices");
+    CULLKIT_ASSERT(mesh.indices != nullptr || mesh.index_count == 0, "indices points to index_count indices");
+    if constexpr (has_vertex_traits_v<Vertex, Traits>) {
+      if (objects == nullptr) object_count = 0;
+      if (mesh.vertices == nullptr) mesh.vertex_count = 0;
+      if (mesh.indices == nullptr) mesh.index_count = 0;
+      params_ = detail::mesh_occlusion::sanitize(params);
+      const std::size_t triangle_count = mesh.index_count / 3;
+      detail::mesh_occlusion::build_index(
+          index_, triangle_count,
+          [&mesh](std::size_t t, glm::vec3 p[3]) { return triangle_positions<Traits>(mesh, t, p); },
+          objects, object_count, params_.tree);
+    }
+  }
+
+  /// Clears `out`, then writes, once each, in any order, every object that may be visible from
+  /// `camera`: an object is left out only if no ray from camera.eye through the view frustum meets a
+  /// front-facing triangle of it beyond the near plane before it meets a front-facing triangle of
+  /// another object beyond the near plane. Objects outside the frustum are left out; objects with
+  /// unusable bounds are always written. For an orthographic or degenerate (NaN, singular) matrix,
+  /// or an eye that is not the matrix's centre of projection, nothing occludes: every object that
+  /// may meet the frustum is written.
+  /// Cost: frustum tree walk, then O(occluder triangles + covered cells + in-frustum objects).
+  /// Allocates a fresh context per call; use the context overload on hot paths.
+  /// Thread safety: concurrent calls are safe (distinct `out`).
+  void cull(const Camera& camera, std::vector<std::uint32_t>& out) const {
+    MeshOcclusionContext context;
+    cull(camera, context, out);
+  }
+
+  /// As above, with caller-owned working memory: no allocation once `context` and `out` have grown
+  /// to this scene's needs. `context.stats()` then describes this call.
+  void cull(const Camera& camera, MeshOcclusionContext& context, std::vector<std::uint32_t>& out) const {
+    detail::mesh_occlusion::cull(index_, params_, camera, context.scratch_, out);
+  }
+
+  /// What the constructor found.
+  [[nodiscard]] const MeshOcclusionBuildStats& build_stats() const noexcept { return index_.build_stats; }
+  /// Objects given to the constructor.
+  [[nodiscard]] std::size_t object_count() const noexcept { return index_.object_count; }
+  /// The parameters in use (after clamping).
+  [[nodiscard]] const MeshOcclusionParams& params() const noexcept { return params_; }
+
+ private:
+  MeshOcclusionParams params_;
+  detail::mesh_occlusion::MeshIndex index_;
+};
+
+}  // namespace cullkit

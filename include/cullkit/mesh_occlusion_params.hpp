@@ -1,0 +1,65 @@
+// cullkit/mesh_occlusion_params.hpp: the plain types of MeshOcclusionCuller: objects, parameters
+// and statistics (included by mesh_occlusion_culler.hpp).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "adaptive_binary_tree.hpp"
+
+namespace cullkit {
+
+/// An object of a `MeshOcclusionCuller`: the triangles [first_triangle, first_triangle +
+/// triangle_count) of the mesh (triangle t is indices[3t, 3t + 3)).
+struct MeshObject {
+  std::uint32_t first_triangle;
+  std::uint32_t triangle_count;
+};
+
+/// Parameters of `MeshOcclusionCuller`. Every field has a documented default; `{}` is a sound choice.
+struct MeshOcclusionParams {
+  /// Coverage cells across the screen. Default 256. The cells are not the renderer's pixels: the
+  /// answer holds for every ray whatever the grid. More cells hide objects seen through narrower
+  /// gaps and behind thinner occluders, at a cost roughly proportional to the cell count (covered
+  /// area) plus the occluder edges' lengths in cells. Clamped to [8, 4096].
+  int grid_width = 256;
+  /// Coverage cells down the screen. Default 144 (16:9 with the default width). Clamped to [8, 4096].
+  int grid_height = 144;
+  /// Most occluder triangles per frame. Default 16384. Occluder objects are taken by size on screen,
+  /// biggest first, while their triangles fit; raise it for scenes whose occluders are finely
+  /// triangulated, lower it when `cull` is too slow.
+  std::uint32_t occluder_triangle_budget = 16384;
+  /// Objects whose box covers less than this fraction of the screen are never occluders. Default
+  /// 0.0005 (about 1000 pixels at 1920x1080). Small objects hide little and cost as much per triangle.
+  float min_occluder_screen_fraction = 0.0005f;
+  /// Most occluder objects per frame. Default 4096.
+  std::uint32_t max_occluder_objects = 4096;
+  /// Parameters of the frustum-culling tree over object bounds.
+  AbtParams tree = {};
+};
+
+/// What the constructor found (`MeshOcclusionCuller::build_stats`).
+struct MeshOcclusionBuildStats {
+  std::size_t triangles = 0;             ///< whole triangles in the mesh (index_count / 3)
+  std::size_t triangles_unusable = 0;    ///< an index out of range or a NaN/infinite corner
+  std::size_t triangles_degenerate = 0;  ///< finite, but two corners coincide or all three are collinear
+  std::size_t welded_vertices = 0;       ///< distinct corner positions (exact float equality)
+  std::size_t shared_edges = 0;          ///< edges used by two triangles in opposite directions
+  std::size_t objects = 0;               ///< objects given
+  std::size_t objects_unusable = 0;      ///< always reported visible: range outside the mesh, no
+                                         ///< triangles, or an unusable triangle (bounds unknown)
+};
+
+/// What one `cull` did (`MeshOcclusionContext::stats`).
+struct MeshOcclusionStats {
+  std::size_t objects_in_frustum = 0;          ///< usable objects whose box may meet the frustum
+  std::size_t occluders_used = 0;              ///< occluder objects rasterized
+  std::size_t occluder_triangles = 0;          ///< occluder triangles rasterized (front-facing, beyond the near plane)
+  std::size_t objects_hidden = 0;              ///< objects in the frustum left out as hidden
+  std::size_t objects_unusable_visible = 0;    ///< objects with unusable bounds, reported visible
+  std::size_t cells_covered = 0;               ///< coverage cells covered at the end
+  bool occlusion_enabled = false;              ///< false: orthographic, degenerate or NaN matrix, or
+                                               ///< an eye away from the matrix's centre: no occlusion
+};
+
+}  // namespace cullkit
