@@ -23,19 +23,7 @@
 #include <cullkit_support/scene.hpp>
 #include <embree_oracle.hpp>
 
-#if __has_include(<cullkit/mesh_occlusion_culler.hpp>)
 #include <cullkit/mesh_occlusion_culler.hpp>
-#define CULLKIT_TEST_HAVE_MESH_OCCLUSION 1
-#else
-#define CULLKIT_TEST_HAVE_MESH_OCCLUSION 0
-namespace cullkit {
-// The contract's object type, for building the harness before the culler exists.
-struct MeshObject {
-  std::uint32_t first_triangle;
-  std::uint32_t triangle_count;
-};
-}  // namespace cullkit
-#endif
 
 namespace mesh_occlusion_test {
 

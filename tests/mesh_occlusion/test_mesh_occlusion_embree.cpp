@@ -215,14 +215,9 @@ void run_all(MakeCuller&& make) {
 }  // namespace
 
 int main() {
-#if CULLKIT_TEST_HAVE_MESH_OCCLUSION
   std::printf("MeshOcclusionCuller (default parameters), %dx%d:\n", kWidth, kHeight);
   run_all([](const support::Scene& s, const ObjectMap& map) {
     return MeshOcclusionCuller<glm::vec3>(s.mesh(), map.objects.data(), map.objects.size());
   });
-#else
-  std::printf("MeshOcclusionCuller not available: the frustum-only stand-in, %dx%d:\n", kWidth, kHeight);
-  run_all([](const support::Scene& s, const ObjectMap&) { return FrustumOnly{&s}; });
-#endif
   return cullkit_test::report("test_mesh_occlusion_embree");
 }

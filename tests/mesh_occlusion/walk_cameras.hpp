@@ -77,6 +77,17 @@ inline bool stand(const oracle::EmbreeScene& embree, const WalkSpec& spec, const
   return true;
 }
 
+/// A player keeps a body's width from walls: 0.3 m clear all round at eye and knee height.
+inline bool roomy(const oracle::EmbreeScene& embree, const WalkSpec& spec, const glm::vec3& eye) {
+  const glm::vec3 knee = eye - glm::vec3(0.0f, spec.eye_height - 0.4f * spec.metre, 0.0f);
+  for (int a = 0; a < 8; ++a) {
+    const glm::vec3 d = yaw_dir(static_cast<float>(a) * 0.25f * kPi);
+    if (clear_distance(embree, eye, d) < 0.3f * spec.metre || clear_distance(embree, knee, d) < 0.3f * spec.metre)
+      return false;
+  }
+  return true;
+}
+
 /// The `info_player_deathmatch` origins and headings of a Quake-style map's entity text (the scene's
 /// .json sidecar holds it as an escaped string; quotes may be escaped, numbers are not). Map (x, y, z)
 /// becomes (x, z, -y) in the scene; a yaw `angle` a (degrees, about the map's z) looks along
@@ -131,7 +142,7 @@ inline WalkSpec walk_spec(const std::string& name, const support::Scene& scene, 
     for (int tries = 0; static_cast<int>(spec.starts.size()) < count && tries < 200 * count; ++tries) {
       glm::vec3 p = sample();
       glm::vec3 eye;
-      if (!stand(embree, spec, p, 1.0e30f, eye)) continue;
+      if (!stand(embree, spec, p, 1.0e30f, eye) || !roomy(embree, spec, eye)) continue;
       if (near_any_box(scene, eye, 0.0f) && name == "city") continue;
       spec.starts.emplace_back(eye, yaw_dir(rng.uniform(0.0f, 2.0f * kPi)));
     }
@@ -144,7 +155,8 @@ inline WalkSpec walk_spec(const std::string& name, const support::Scene& scene, 
     const std::string json = support::scenes_dir() + "/oacmpdm9.json";
     for (const auto& s : deathmatch_spawns(json)) {
       glm::vec3 eye;
-      if (stand(embree, spec, s.first + glm::vec3(0, 16, 0), 400.0f, eye)) spec.starts.emplace_back(eye, s.second);
+      if (stand(embree, spec, s.first + glm::vec3(0, 16, 0), 400.0f, eye) && roomy(embree, spec, eye))
+        spec.starts.emplace_back(eye, s.second);
     }
   } else if (name.find("sportsCar") != std::string::npos || name.find("bunny") != std::string::npos) {
     spec.orbit = true;
@@ -159,7 +171,7 @@ inline WalkSpec walk_spec(const std::string& name, const support::Scene& scene, 
     for (std::size_t i = 0; i < rooms.size() && spec.starts.size() < 8; i += 1 + rooms.size() / 8) {
       glm::vec3 eye;
       const glm::vec3 c = rooms[i].center();
-      if (stand(embree, spec, glm::vec3(c.x, rooms[i].max.y + 2.0f, c.z), 10.0f, eye))
+      if (stand(embree, spec, glm::vec3(c.x, rooms[i].max.y + 2.0f, c.z), 10.0f, eye) && roomy(embree, spec, eye))
         spec.starts.emplace_back(eye, yaw_dir(rng.uniform(0.0f, 2.0f * kPi)));
     }
   } else if (name == "city") {
@@ -231,13 +243,14 @@ inline std::vector<Camera> walk(const WalkSpec& spec, const support::Scene& scen
         }
       }
       yaw = next;
+      // The new eye must be roomy, or the walker stays and turns.
       glm::vec3 moved;
-      const glm::vec3 p = eye + yaw_dir(yaw) * std::min(spec.step, 0.5f * clear(yaw));
-      if (stand(embree, spec, p, spec.eye_height + 3.0f * spec.metre, moved) &&
-          moved.y > eye.y - 3.0f * spec.metre && moved.y < eye.y + 0.7f * spec.eye_height)
-        eye = moved;
-      else
-        yaw += kPi;  // an edge or a wall: turn round
+      const glm::vec3 p = eye + yaw_dir(yaw) * spec.step;
+      bool ok = clear(yaw) >= need && stand(embree, spec, p, spec.eye_height + 3.0f * spec.metre, moved) &&
+                moved.y > eye.y - 3.0f * spec.metre && moved.y < eye.y + 0.7f * spec.eye_height;
+      ok = ok && roomy(embree, spec, moved);
+      if (ok) eye = moved;
+      else yaw += rng.uniform(0.5f * kPi, 1.5f * kPi);
     }
   }
   return cams;
