@@ -2,8 +2,9 @@
 // OpenArena map oacmpdm9 when present (else the generated office), from the walk camera whose
 // culler hides the most, writes into argv[1]:
 //   mesh_occlusion_topdown.png  the level from above, cut just above the eye (no ceilings): triangles
-//                               of kept objects green, of objects hidden by occlusion red, of objects
-//                               outside the frustum grey; the camera and its view edges in blue.
+//                               of objects outside the frustum grey, then of kept objects green, then
+//                               of objects hidden by occlusion red on top; the camera and its view
+//                               edges in blue.
 //   mesh_occlusion_view.png     the camera's view (Embree first hits, shaded by facing; kept objects
 //                               tinted green) with the edges of the hidden objects' triangles drawn
 //                               in red through the walls that hide them.
@@ -49,15 +50,16 @@ support::Image top_down(const support::Scene& scene, const ObjectMap& map, const
   if (is_empty(frame)) frame = scene.bounds;
   support::TopDownMap top(frame, 1200);
   top.image().fill_rect(0, 0, top.image().width(), top.image().height(), {255, 255, 255});
-  // Outside first, then hidden, then kept, so what the culler keeps is never painted over.
-  for (int pass = 0; pass < 3; ++pass) {
+  // Outside first, then kept, then hidden: the hidden objects are mostly small things in rooms whose
+  // kept floors and walls would otherwise paint over them.
+  for (const int pass : {0, 2, 1}) {
     for (std::size_t t = 0; t < scene.triangle_count(); ++t) {
       const std::uint32_t o = map.triangle_object[t];
       if (o == no_object || !drawn[o] || static_cast<int>(fate[o]) != pass) continue;
       const glm::vec3 a = scene.positions[scene.indices[3 * t]], b = scene.positions[scene.indices[3 * t + 1]],
                       c = scene.positions[scene.indices[3 * t + 2]];
       if (std::min({a.y, b.y, c.y}) > cut_height) continue;
-      top.image().fill_triangle(top.to_pixel(a), top.to_pixel(b), top.to_pixel(c), kColour[pass], pass == 0 ? 0.25f : 0.6f);
+      top.image().fill_triangle(top.to_pixel(a), top.to_pixel(b), top.to_pixel(c), kColour[pass], pass == 0 ? 0.25f : 0.5f);
     }
   }
   top.camera(cam, view_length, {30, 60, 230});
@@ -157,7 +159,7 @@ int main(int argc, char** argv) {
     visible += seen[o] != 0;
     false_culls += seen[o] && fate[o] != Fate::kept;
   }
-  const support::Image top = top_down(scene, map, fate, cam, cam.eye.y + 0.5f * spec.eye_height, 12.0f * spec.step);
+  const support::Image top = top_down(scene, map, fate, cam, cam.eye.y + 0.5f * spec.eye_height, 40.0f * spec.step);
   const support::Image front = view(scene, map, fate, embree, cam);
   const bool ok = top.write_png(dir + "/mesh_occlusion_topdown.png") && front.write_png(dir + "/mesh_occlusion_view.png");
   std::printf("%s, walk camera %zu (eye %.1f %.1f %.1f): %zu objects kept, %zu hidden by occlusion, %zu outside "
