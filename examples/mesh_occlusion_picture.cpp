@@ -1,6 +1,6 @@
 // mesh_occlusion_picture: what MeshOcclusionCuller keeps and hides from one player's view. On the
-// OpenArena map oacmpdm9 when present (else the generated office), from the walk camera whose
-// culler hides the most, writes into argv[1]:
+// OpenArena map oacmpdm9 when present (else the generated office; argv[2] may name another scene),
+// from the walk camera whose culler hides the most, writes into argv[1]:
 //   mesh_occlusion_topdown.png  the level from above, cut just above the eye (no ceilings): triangles
 //                               of objects outside the frustum grey, then of kept objects green, then
 //                               of objects hidden by occlusion red on top; the camera and its view
@@ -111,18 +111,25 @@ support::Image view(const support::Scene& scene, const ObjectMap& map, const std
 
 int main(int argc, char** argv) {
   const std::string dir = argc > 1 ? argv[1] : ".";
+  // argv[2] (optional): another scene, "city", "office" or a file name in the scenes folder.
+  const std::string wanted = argc > 2 ? argv[2] : "oacmpdm9.obj";
   support::Scene scene;
   std::string name = "office";
   bool loaded = false;
   for (const auto& f : support::real_scene_files()) {
-    if (f != "oacmpdm9.obj") continue;
+    if (f != wanted) continue;
     if (auto s = support::load_obj(support::scenes_dir() + "/" + f)) {
       scene = std::move(*s);
       name = f;
       loaded = true;
     }
   }
-  if (!loaded) scene = support::make_office(1, 10, 8);
+  if (!loaded && wanted == "city") {
+    scene = support::make_city(1, 8);
+    name = "city";
+  } else if (!loaded) {
+    scene = support::make_office(1, 10, 8);
+  }
   oracle::EmbreeScene embree;
   embree.add_mesh(scene.positions.data(), scene.positions.size(), scene.indices.data(), scene.indices.size());
   embree.commit();

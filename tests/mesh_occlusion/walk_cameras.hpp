@@ -138,11 +138,12 @@ inline WalkSpec walk_spec(const std::string& name, const support::Scene& scene, 
   const float diag = diagonal(sb);
   spec.far_plane = 1.5f * diag;
   support::Rng rng(seed);
+  float max_start_y = 1.0e30f;
   const auto floor_starts = [&](int count, const auto& sample) {
     for (int tries = 0; static_cast<int>(spec.starts.size()) < count && tries < 200 * count; ++tries) {
       glm::vec3 p = sample();
       glm::vec3 eye;
-      if (!stand(embree, spec, p, 1.0e30f, eye) || !roomy(embree, spec, eye)) continue;
+      if (!stand(embree, spec, p, 1.0e30f, eye) || eye.y > max_start_y || !roomy(embree, spec, eye)) continue;
       if (near_any_box(scene, eye, 0.0f) && name == "city") continue;
       spec.starts.emplace_back(eye, yaw_dir(rng.uniform(0.0f, 2.0f * kPi)));
     }
@@ -178,8 +179,12 @@ inline WalkSpec walk_spec(const std::string& name, const support::Scene& scene, 
     spec.step = 3.0f;
     floor_starts(8, [&] { return glm::vec3(rng.uniform(sb.min.x, sb.max.x), sb.min.y + 1.0f, rng.uniform(sb.min.z, sb.max.z)); });
   } else {
-    // Outdoor scenes in metres: stand on what is under the centre of a random object.
+    // Outdoor scenes in metres: stand on what is under the centre of a random object. A lone house
+    // (fzk_haus) would put most starts on its roof: there, only floors up to 2 m above the lowest
+    // point (the site and the ground floor) are starting points.
+    const bool lone_house = name.find("fzk_haus") != std::string::npos;
     spec.step = name.find("lasdunas") != std::string::npos ? 4.0f : 1.0f;
+    max_start_y = lone_house ? sb.min.y + 2.0f + spec.eye_height : 1.0e30f;
     floor_starts(8, [&] {
       const Aabb& b = scene.objects[rng.next() % scene.objects.size()].bounds;
       const glm::vec3 c = b.center();
