@@ -6,8 +6,10 @@
 // covering a point equals the winding number of their edges around it, and an edge used by two of
 // them in opposite directions contributes nothing. So only the outline edges (the uncancelled
 // ones) matter: a cell that no outline edge touches has one count over all its area, and if that
-// count is at least one, every point of the cell is covered. Counts are exact integers, added and
-// removed by the same arithmetic on the same inputs, so two triangles sharing an edge leave no seam.
+// count is at least one, every point of the cell is covered; a cell that outline edges cross is
+// covered when the count at its centre exceeds the number of those edges it could fall by (see
+// `touch_edge`). Counts are exact integers, added and removed by the same arithmetic on the same
+// inputs, so two triangles sharing an edge leave no seam.
 #pragma once
 
 #include <algorithm>
@@ -73,20 +75,37 @@ class CoverageGrid {
     }
   }
 
-  /// Adds `delta` to the outline counter of every cell the segment touches (with a margin). The
-  /// segment is sorted first, so removing it later with -delta undoes exactly what was added.
-  void touch_edge(double xa, double ya, double xb, double yb, int delta) {
+  /// An outline edge joins (delta +1) or leaves (delta -1) the outline: `from` -> `to` as its own
+  /// triangle runs, `orient` the sign of front-facing areas. Every cell the segment touches (with a
+  /// margin) whose centre lies on the edge's inner side (towards its triangle) gets `delta` added
+  /// to its outline counter; where the side is too close to call, 2 * delta. The arithmetic runs
+  /// on the endpoints sorted, so the edge's removal subtracts exactly what its addition added.
+  ///
+  /// Why the inner side only: a segment from the cell centre to any point of the cell crosses each
+  /// outline edge at most once, and crossing an edge changes the count by one: down when leaving its
+  /// inner side, up otherwise. So the count anywhere in the cell is at least the count at the centre
+  /// minus this counter (an edge near the centre may also have put the centre's count off by one:
+  /// hence the double weight there).
+  void touch_edge(double x_from, double y_from, double x_to, double y_to, int orient, int delta) {
+    double xa = x_from, ya = y_from, xb = x_to, yb = y_to;
+    int side = orient;
     if (ya > yb || (ya == yb && xa > xb)) {
       std::swap(xa, xb);
       std::swap(ya, yb);
+      side = -side;
     }
-    const double m = cell_margin(std::max(std::max(std::fabs(xa), std::fabs(xb)), std::max(std::fabs(ya), std::fabs(yb))));
+    const double magnitude = std::max(std::max(std::fabs(xa), std::fabs(xb)), std::max(std::fabs(ya), std::fabs(yb)));
+    const double m = cell_margin(magnitude);
     const int j0 = clamp_cell(ya - m, height_), j1 = clamp_cell(yb + m, height_);
     if (yb + m < 0.0 || ya - m >= height_) return;
-    const double slope = yb > ya ? (xb - xa) / (yb - ya) : 0.0;
+    const double dx = xb - xa, dy = yb - ya;
+    const double slope = dy > 0.0 ? dx / dy : 0.0;
+    // |orient2d| below this: the centre is within about 2^-20 cells (plus rounding) of the line.
+    const double near_line = (0x1p-20 + 0x1p-40 * magnitude) * (std::fabs(dx) + std::fabs(dy));
+    const double rounding = 0x1p-48 * (std::fabs(dx) + std::fabs(dy));
     for (int j = j0; j <= j1; ++j) {
       double xl = xa, xr = xb;
-      if (yb > ya) {
+      if (dy > 0.0) {
         const double lo = std::max(ya, j - m), hi = std::min(yb, j + 1 + m);
         xl = xa + (lo - ya) * slope;
         xr = xa + (hi - ya) * slope;
@@ -97,7 +116,14 @@ class CoverageGrid {
       if (xr + m < 0.0 || xl - m >= width_) continue;
       const int i0 = clamp_cell(xl - m, width_), i1 = clamp_cell(xr + m, width_);
       std::int32_t* row = block_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-      for (int i = i0; i <= i1; ++i) row[i] += delta;
+      const double qy = j + 0.5 - ya;
+      for (int i = i0; i <= i1; ++i) {
+        const double qx = i + 0.5 - xa;
+        const double s = dx * qy - dy * qx;  // orient2d(a, b, centre)
+        const double tol = near_line + rounding * (std::fabs(qx) + std::fabs(qy));
+        if (std::fabs(s) <= tol) row[i] += 2 * delta;
+        else if (s * side > 0.0) row[i] += delta;
+      }
     }
   }
 
@@ -166,7 +192,7 @@ class CoverageGrid {
         run += diff_[c];
         diff_[c] = 0;
         count_[c] += run;
-        if (count_[c] >= 1 && block_[c] == 0 && depth_[c] == 0.0f) {
+        if (count_[c] - block_[c] >= 1 && depth_[c] == 0.0f) {
           depth_[c] = bound_[c];
           ++covered;
         }

@@ -157,9 +157,10 @@ inline std::size_t insert_occluder(const MeshIndex& index, Scratch& s, std::uint
     for (int k = 0; k < 3; ++k) {
       const int l = k == 2 ? 0 : k + 1;
       const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
-      // The twin already in: its edge leaves the outline, and this one never joins it.
-      const bool cancels = twin != none && s.triangle_stamp[twin / 3] == s.frame;
-      grid.touch_edge(x[k], y[k], x[l], y[l], cancels ? -1 : 1);
+      // The twin already in: its edge (l -> k, as its triangle runs) leaves the outline, and this
+      // one never joins it.
+      if (twin != none && s.triangle_stamp[twin / 3] == s.frame) grid.touch_edge(x[l], y[l], x[k], y[k], orient, -1);
+      else grid.touch_edge(x[k], y[k], x[l], y[l], orient, 1);
     }
     s.triangle_stamp[t] = s.frame;
     ++inserted;
