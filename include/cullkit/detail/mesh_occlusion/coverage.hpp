@@ -49,6 +49,10 @@ class CoverageGrid {
       tiles_x_ = (width + tile - 1) / tile;
       tiles_y_ = (height + tile - 1) / tile;
       tile_depth_.assign(static_cast<std::size_t>(tiles_x_) * static_cast<std::size_t>(tiles_y_), 0.0f);
+      band_lo_.assign(static_cast<std::size_t>(height), width);
+      band_hi_.assign(static_cast<std::size_t>(height), -1);
+      band_rows_.clear();
+      band_rows_.reserve(static_cast<std::size_t>(height));
       dirty_ = CellRect{width, height, -1, -1};
       return;
     }
@@ -58,8 +62,6 @@ class CoverageGrid {
   [[nodiscard]] int width() const { return width_; }
   [[nodiscard]] int height() const { return height_; }
 
-  /// Starts a band: cells outside its rectangle cannot change.
-  void begin_band() { band_ = CellRect{width_, height_, -1, -1}; }
 
   /// Adds a front-facing triangle's count: `sign` is +1 or -1 so that the triangle counts +1 inside.
   /// (x, y) are grid coordinates of the corners in the triangle's own order.
@@ -115,6 +117,7 @@ class CoverageGrid {
       }
       if (xr + m < 0.0 || xl - m >= width_) continue;
       const int i0 = clamp_cell(xl - m, width_), i1 = clamp_cell(xr + m, width_);
+      mark(j, i0, i1);
       std::int32_t* row = block_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
       const double qy = j + 0.5 - ya;
       for (int i = i0; i <= i1; ++i) {
@@ -135,11 +138,8 @@ class CoverageGrid {
     const double m = cell_margin(std::max(std::max(std::fabs(xmin), std::fabs(xmax)), std::max(std::fabs(ymin), std::fabs(ymax))));
     CellRect r{width_, height_, -1, -1};
     if (xmax + m < 0.0 || xmin - m >= width_ || ymax + m < 0.0 || ymin - m >= height_) return r;
-    // Crossings may land one cell right of the box (a crossing in the right half of the last
-    // cell): the band's rectangle includes that column.
-    r = CellRect{clamp_cell(xmin - m, width_), clamp_cell(ymin - m, height_), clamp_cell(xmax + 1.0 + m, width_),
+    r = CellRect{clamp_cell(xmin - m, width_), clamp_cell(ymin - m, height_), clamp_cell(xmax + m, width_),
                  clamp_cell(ymax + m, height_)};
-    grow(band_, r);
     // Every point of the triangle has w <= its largest corner w: 1/w >= lowest.
     const double w_max = std::max(std::max(w[0], w[1]), w[2]);
     const float lowest = static_cast<float>((1.0 / w_max) * (1.0 - 0x1p-20));
@@ -164,7 +164,10 @@ class CoverageGrid {
       for (int j = r.y0; j <= r.y1; ++j) {
         float* row = bound_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
         const float start = static_cast<float>(v00 - err) + bf * static_cast<float>(j - r.y0);
-        for (int i = r.x0; i <= r.x1; ++i) {
+        int i0, i1;
+        if (!row_span(x, y, j, m, i0, i1)) continue;
+        mark(j, i0, i1);
+        for (int i = i0; i <= i1; ++i) {
           const float v = std::max(lowest, start + af * static_cast<float>(i - r.x0));
           row[i] = std::min(row[i], v);
         }
@@ -172,22 +175,31 @@ class CoverageGrid {
     } else {
       for (int j = r.y0; j <= r.y1; ++j) {
         float* row = bound_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-        for (int i = r.x0; i <= r.x1; ++i) row[i] = std::min(row[i], lowest);
+        int i0, i1;
+        if (!row_span(x, y, j, m, i0, i1)) continue;
+        mark(j, i0, i1);
+        for (int i = i0; i <= i1; ++i) row[i] = std::min(row[i], lowest);
       }
     }
     return r;
   }
 
-  /// Ends a band: accumulates its counts and freezes the cells it newly covered at their running
-  /// bound. Returns how many cells it covered.
+  /// Ends a band (the triangles added since the last end): accumulates its counts and freezes the
+  /// cells it newly covered at their running bound. Only the cells the band changed are visited.
+  /// Returns how many cells it covered.
   std::size_t end_band() {
-    if (band_.empty()) return 0;
-    grow(dirty_, band_);
     std::size_t covered = 0;
-    for (int j = band_.y0; j <= band_.y1; ++j) {
+    for (int j : band_rows_) {
       const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+      const int i0 = band_lo_[static_cast<std::size_t>(j)], i1 = band_hi_[static_cast<std::size_t>(j)];
+      band_lo_[static_cast<std::size_t>(j)] = width_;
+      band_hi_[static_cast<std::size_t>(j)] = -1;
+      grow(dirty_, CellRect{i0, j, i1, j});
       std::int32_t run = 0;
-      for (int i = band_.x0; i <= band_.x1; ++i) {
+      int i = i0;
+      // A crossing beyond the last column is dropped, so a row's sum need not be zero: then the
+      // count changes up to the row's end.
+      for (; i <= i1 || (run != 0 && i < width_); ++i) {
         const std::size_t c = base + static_cast<std::size_t>(i);
         run += diff_[c];
         diff_[c] = 0;
@@ -197,7 +209,9 @@ class CoverageGrid {
           ++covered;
         }
       }
+      grow(dirty_, CellRect{i0, j, i - 1, j});
     }
+    band_rows_.clear();
     return covered;
   }
 
@@ -254,6 +268,45 @@ class CoverageGrid {
   static constexpr int tile = 8;
 
  private:
+  // Cells of row j that the triangle touches (its part in the row's slab, widened by m): the
+  // depth bound of a triangle only matters where a ray can meet it, and a slanted triangle's box
+  // is mostly elsewhere. False when it misses the row.
+  bool row_span(const double* x, const double* y, int j, double m, int& i0, int& i1) const {
+    const double lo = j - m, hi = j + 1 + m;
+    double xl = HUGE_VAL, xr = -HUGE_VAL;
+    for (int k = 0; k < 3; ++k) {
+      const int l = k == 2 ? 0 : k + 1;
+      double xa = x[k], ya = y[k], xb = x[l], yb = y[l];
+      if (ya > yb) {
+        std::swap(xa, xb);
+        std::swap(ya, yb);
+      }
+      if (yb < lo || ya > hi) continue;
+      if (yb > ya) {
+        const double slope = (xb - xa) / (yb - ya);
+        const double y0 = std::max(ya, lo), y1 = std::min(yb, hi);
+        const double x0 = xa + (y0 - ya) * slope, x1 = xa + (y1 - ya) * slope;
+        xl = std::min(xl, std::min(x0, x1));
+        xr = std::max(xr, std::max(x0, x1));
+      } else {
+        xl = std::min(xl, std::min(xa, xb));
+        xr = std::max(xr, std::max(xa, xb));
+      }
+    }
+    if (!(xl <= xr) || xr + m < 0.0 || xl - m >= width_) return false;
+    i0 = clamp_cell(xl - m, width_);
+    i1 = clamp_cell(xr + m, width_);
+    return true;
+  }
+
+  // Cell range [i0, i1] of row j changed in this band: end_band scans it.
+  void mark(int j, int i0, int i1) {
+    const auto r = static_cast<std::size_t>(j);
+    if (band_hi_[r] < 0) band_rows_.push_back(j);
+    band_lo_[r] = std::min(band_lo_[r], i0);
+    band_hi_[r] = std::max(band_hi_[r], i1);
+  }
+
   static int clamp_cell(double v, int n) {
     if (!(v >= 0.0)) return 0;
     if (v >= n) return n - 1;
@@ -285,6 +338,7 @@ class CoverageGrid {
       const double k = std::floor(x + 0.5);
       if (k >= width_) continue;
       const int i = k < 0.0 ? 0 : static_cast<int>(k);
+      mark(j, i, i);
       diff_[static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(i)] += sign;
     }
   }
@@ -308,7 +362,8 @@ class CoverageGrid {
   std::vector<float> bound_;   // running lower bound of 1/w over the triangles touching the cell
   std::vector<float> depth_;   // frozen lower bound of 1/w at the first hit; 0: not covered
   std::vector<float> tile_depth_;
-  CellRect band_{0, 0, -1, -1}, dirty_{0, 0, -1, -1};
+  std::vector<int> band_lo_, band_hi_, band_rows_;  // per row: cells changed in the current band
+  CellRect dirty_{0, 0, -1, -1};
 };
 
 }  // namespace mesh_occlusion

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <utility>
 #include <vector>
 
@@ -33,6 +34,7 @@ struct Scratch {
   std::vector<BoxView> boxes;             // parallel to in_frustum
   std::vector<std::pair<float, std::uint32_t>> candidates;  // (screen cells, position in in_frustum)
   std::vector<std::pair<double, std::uint32_t>> occluders;  // (depth key, object)
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> triangles, sort_buffer;  // (depth bits, triangle)
   // Per-frame caches, valid where the stamp equals `frame`.
   const void* owner = nullptr;
   std::uint32_t frame = 0;
@@ -41,6 +43,26 @@ struct Scratch {
   View view;
   CoverageGrid grid;
 };
+
+/// Sorts (key, value) pairs by key, stable: three passes of 11 bits.
+inline void radix_sort(std::vector<std::pair<std::uint32_t, std::uint32_t>>& items,
+                       std::vector<std::pair<std::uint32_t, std::uint32_t>>& buffer) {
+  if (items.size() < 2) return;
+  buffer.resize(items.size());
+  for (int pass = 0; pass < 3; ++pass) {
+    const int shift = 11 * pass;
+    std::uint32_t offsets[2048] = {};
+    for (const auto& it : items) ++offsets[(it.first >> shift) & 2047u];
+    std::uint32_t sum = 0;
+    for (std::uint32_t& o : offsets) {
+      const std::uint32_t n = o;
+      o = sum;
+      sum += n;
+    }
+    for (const auto& it : items) buffer[offsets[(it.first >> shift) & 2047u]++] = it;
+    items.swap(buffer);
+  }
+}
 
 /// Makes the caches fit `index` and starts a new frame.
 inline void begin_frame(const MeshIndex& index, Scratch& s) {
@@ -89,7 +111,7 @@ inline BoxView project_box(const View& view, const Aabb& box) {
 }
 
 /// Picks occluder objects by size on screen, biggest first, within the triangle budget; fills
-/// `s.occluders` sorted nearest first.
+/// `s.occluders`.
 inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
   const double grid_cells = double(s.grid.width()) * double(s.grid.height());
   const double min_cells = std::max(1.0, params.min_occluder_screen_fraction * grid_cells);
@@ -120,38 +142,65 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
     const BoxView& b = s.boxes[c.second];
     s.occluders.emplace_back(b.usable ? b.w_min : 0.0, o);
   }
-  std::sort(s.occluders.begin(), s.occluders.end());
 }
 
-/// Inserts one occluder object as a band. Returns the triangles inserted.
-inline std::size_t insert_occluder(const MeshIndex& index, Scratch& s, std::uint32_t object) {
-  const MeshObject& range = index.objects[object];
+/// Projects the occluder objects' triangles and keeps those that can occlude: every corner
+/// clearly beyond the near plane, clearly front-facing, touching the grid. Fills `s.triangles`
+/// with (largest corner depth as float bits, triangle), nearest first.
+inline void gather_triangles(const MeshIndex& index, Scratch& s) {
+  const int orient = s.view.orient;
+  const double gw = s.grid.width(), gh = s.grid.height();
+  s.triangles.clear();
+  for (const auto& o : s.occluders) {
+    const MeshObject& range = index.objects[o.second];
+    for (std::uint32_t t = range.first_triangle; t < range.first_triangle + range.triangle_count; ++t) {
+      const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
+      if (c[0] == none) continue;
+      double x[3], y[3], w[3];
+      bool usable = true;
+      for (int k = 0; k < 3 && usable; ++k) {
+        const Projected& p = project_vertex(index, s, c[k]);
+        usable = p.usable;
+        x[k] = p.x;
+        y[k] = p.y;
+        w[k] = p.w;
+      }
+      // A corner not clearly beyond the near plane: the triangle is left out, and its
+      // neighbours' edges become outline.
+      if (!usable) continue;
+      const double xmin = std::min(std::min(x[0], x[1]), x[2]), xmax = std::max(std::max(x[0], x[1]), x[2]);
+      const double ymin = std::min(std::min(y[0], y[1]), y[2]), ymax = std::max(std::max(y[0], y[1]), y[2]);
+      if (xmax < 0.0 || xmin > gw || ymax < 0.0 || ymin > gh) continue;
+      // Clearly front-facing: back-facing and edge-on triangles are left out (their neighbours'
+      // edges then stay on the outline, which only covers less).
+      const double area2 = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+      const double extent = std::max(xmax - xmin, ymax - ymin);
+      if (!(area2 * orient > 1e-9 * extent * extent)) continue;
+      const float key = static_cast<float>(std::min(std::min(w[0], w[1]), w[2]));
+      std::uint32_t bits;
+      std::memcpy(&bits, &key, sizeof bits);  // positive floats order as their bits
+      s.triangles.emplace_back(bits, t);
+    }
+  }
+  radix_sort(s.triangles, s.sort_buffer);
+}
+
+/// Inserts the gathered triangles nearest first, each as its own band, so a cell freezes at the
+/// depth of the nearest layer that covers it. Returns the cells covered.
+inline std::size_t insert_triangles(const MeshIndex& index, Scratch& s) {
   CoverageGrid& grid = s.grid;
   const int orient = s.view.orient;
-  const double gw = grid.width(), gh = grid.height();
-  std::size_t inserted = 0;
-  grid.begin_band();
-  for (std::uint32_t t = range.first_triangle; t < range.first_triangle + range.triangle_count; ++t) {
+  std::size_t covered = 0;
+  for (const auto& entry : s.triangles) {
+    const std::uint32_t t = entry.second;
     const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
-    if (c[0] == none) continue;
     double x[3], y[3], w[3];
-    bool usable = true;
-    for (int k = 0; k < 3 && usable; ++k) {
-      const Projected& p = project_vertex(index, s, c[k]);
-      usable = p.usable;
+    for (int k = 0; k < 3; ++k) {
+      const Projected& p = s.projected[s.vertex_slot[c[k]]];
       x[k] = p.x;
       y[k] = p.y;
       w[k] = p.w;
     }
-    if (!usable) continue;  // a corner not clearly beyond the near plane: its neighbours' edges become outline
-    const double xmin = std::min(std::min(x[0], x[1]), x[2]), xmax = std::max(std::max(x[0], x[1]), x[2]);
-    const double ymin = std::min(std::min(y[0], y[1]), y[2]), ymax = std::max(std::max(y[0], y[1]), y[2]);
-    if (xmax < 0.0 || xmin > gw || ymax < 0.0 || ymin > gh) continue;
-    // Front-facing, clearly: back-facing and edge-on triangles are left out (their neighbours'
-    // edges then stay on the outline, which only covers less).
-    const double area2 = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
-    const double extent = std::max(xmax - xmin, ymax - ymin);
-    if (!(area2 * orient > 1e-9 * extent * extent)) continue;
     grid.add_depth(x, y, w);
     grid.add_count(x, y, orient);
     for (int k = 0; k < 3; ++k) {
@@ -163,10 +212,9 @@ inline std::size_t insert_occluder(const MeshIndex& index, Scratch& s, std::uint
       else grid.touch_edge(x[k], y[k], x[l], y[l], orient, 1);
     }
     s.triangle_stamp[t] = s.frame;
-    ++inserted;
+    covered += grid.end_band();
   }
-  grid.end_band();
-  return inserted;
+  return covered;
 }
 
 inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera, Scratch& s,
@@ -192,13 +240,11 @@ inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, cons
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) s.boxes[i] = project_box(s.view, index.bounds[s.in_frustum[i]]);
 
   choose_occluders(index, params, s);
-  for (const auto& o : s.occluders) {
-    const std::size_t n = insert_occluder(index, s, o.second);
-    stats.occluder_triangles += n;
-    stats.occluders_used += n > 0;
-  }
+  gather_triangles(index, s);
+  stats.occluders_used = s.occluders.size();
+  stats.occluder_triangles = s.triangles.size();
+  stats.cells_covered = insert_triangles(index, s);
   s.grid.finish();
-  stats.cells_covered = s.grid.covered_cells();
 
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
     const BoxView& b = s.boxes[i];
