@@ -7,7 +7,8 @@
 // other depth conventions.
 //
 // Shared by the Embree test, the benchmark and the picture example. Seeded: the same cameras on
-// every run and platform (support::Rng only).
+// every run of one build (other compilers may round the trigonometry and Embree's hits differently
+// and walk elsewhere).
 #pragma once
 
 #include <cmath>
