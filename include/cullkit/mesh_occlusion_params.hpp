@@ -32,6 +32,12 @@ struct MeshOcclusionParams {
   /// Objects whose box covers less than this fraction of the screen are never occluders. Default
   /// 0.0005 (about 1000 pixels at 1920x1080). Small objects hide little and cost as much per triangle.
   float min_occluder_screen_fraction = 0.0005f;
+  /// Occluder triangles go in nearest first, in bands: a band holds the triangles whose nearest
+  /// corner is at most (1 + depth_band_ratio) times as far as the band's first. A cell is given
+  /// its depth when a band ends, as the farthest of the triangles near it so far. Default 0.1.
+  /// 0 makes every distinct depth its own band (tightest depths, slowest); larger values are
+  /// faster and hide less behind layered occluders.
+  float depth_band_ratio = 0.1f;
   /// Most occluder objects per frame. Default 4096.
   std::uint32_t max_occluder_objects = 4096;
   /// Parameters of the frustum-culling tree over object bounds.

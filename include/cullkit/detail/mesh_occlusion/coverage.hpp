@@ -49,6 +49,10 @@ class CoverageGrid {
       tiles_x_ = (width + tile - 1) / tile;
       tiles_y_ = (height + tile - 1) / tile;
       tile_depth_.assign(static_cast<std::size_t>(tiles_x_) * static_cast<std::size_t>(tiles_y_), 0.0f);
+      tile_frozen_.assign(tile_depth_.size(), 0);
+      tile_cells_.assign(tile_depth_.size(), 0);
+      for (int j = 0; j < height; ++j)
+        for (int i = 0; i < width; ++i) ++tile_cells_[tile_of(i, j)];
       band_lo_.assign(static_cast<std::size_t>(height), width);
       band_hi_.assign(static_cast<std::size_t>(height), -1);
       band_rows_.clear();
@@ -140,6 +144,7 @@ class CoverageGrid {
     if (xmax + m < 0.0 || xmin - m >= width_ || ymax + m < 0.0 || ymin - m >= height_) return r;
     r = CellRect{clamp_cell(xmin - m, width_), clamp_cell(ymin - m, height_), clamp_cell(xmax + m, width_),
                  clamp_cell(ymax + m, height_)};
+    const TriangleEdges edges = edges_of(x, y);
     // Every point of the triangle has w <= its largest corner w: 1/w >= lowest.
     const double w_max = std::max(std::max(w[0], w[1]), w[2]);
     const float lowest = static_cast<float>((1.0 / w_max) * (1.0 - 0x1p-20));
@@ -165,7 +170,7 @@ class CoverageGrid {
         float* row = bound_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
         const float start = static_cast<float>(v00 - err) + bf * static_cast<float>(j - r.y0);
         int i0, i1;
-        if (!row_span(x, y, j, m, i0, i1)) continue;
+        if (!row_span(edges, j, m, i0, i1)) continue;
         mark(j, i0, i1);
         for (int i = i0; i <= i1; ++i) {
           const float v = std::max(lowest, start + af * static_cast<float>(i - r.x0));
@@ -176,7 +181,7 @@ class CoverageGrid {
       for (int j = r.y0; j <= r.y1; ++j) {
         float* row = bound_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
         int i0, i1;
-        if (!row_span(x, y, j, m, i0, i1)) continue;
+        if (!row_span(edges, j, m, i0, i1)) continue;
         mark(j, i0, i1);
         for (int i = i0; i <= i1; ++i) row[i] = std::min(row[i], lowest);
       }
@@ -206,6 +211,7 @@ class CoverageGrid {
         count_[c] += run;
         if (count_[c] - block_[c] >= 1 && depth_[c] == 0.0f) {
           depth_[c] = bound_[c];
+          ++tile_frozen_[tile_of(i, j)];
           ++covered;
         }
       }
@@ -246,6 +252,21 @@ class CoverageGrid {
     return true;
   }
 
+  /// True when every cell the triangle's box touches (with a margin) is covered already, by
+  /// whole tiles (a cheap test; false when unsure).
+  [[nodiscard]] bool all_frozen(const double* x, const double* y) const {
+    const double xmin = std::min(std::min(x[0], x[1]), x[2]), xmax = std::max(std::max(x[0], x[1]), x[2]);
+    const double ymin = std::min(std::min(y[0], y[1]), y[2]), ymax = std::max(std::max(y[0], y[1]), y[2]);
+    const CellRect r = cells_of(xmin, ymin, xmax, ymax);
+    if (r.empty()) return false;
+    for (int ty = r.y0 / tile; ty <= r.y1 / tile; ++ty)
+      for (int tx = r.x0 / tile; tx <= r.x1 / tile; ++tx) {
+        const std::size_t t = static_cast<std::size_t>(ty) * static_cast<std::size_t>(tiles_x_) + static_cast<std::size_t>(tx);
+        if (tile_frozen_[t] != tile_cells_[t]) return false;
+      }
+    return true;
+  }
+
   /// Covered cells (for statistics).
   [[nodiscard]] std::size_t covered_cells() const {
     std::size_t n = 0;
@@ -268,35 +289,50 @@ class CoverageGrid {
   static constexpr int tile = 8;
 
  private:
+  // A triangle's edges sorted by y, with their slopes, for the per-row spans.
+  struct TriangleEdges {
+    double xa[3], ya[3], xb[3], yb[3], slope[3];
+  };
+  static TriangleEdges edges_of(const double* x, const double* y) {
+    TriangleEdges e;
+    for (int k = 0; k < 3; ++k) {
+      const int l = k == 2 ? 0 : k + 1;
+      const bool up = y[k] <= y[l];
+      e.xa[k] = up ? x[k] : x[l];
+      e.ya[k] = up ? y[k] : y[l];
+      e.xb[k] = up ? x[l] : x[k];
+      e.yb[k] = up ? y[l] : y[k];
+      e.slope[k] = e.yb[k] > e.ya[k] ? (e.xb[k] - e.xa[k]) / (e.yb[k] - e.ya[k]) : 0.0;
+    }
+    return e;
+  }
+
   // Cells of row j that the triangle touches (its part in the row's slab, widened by m): the
   // depth bound of a triangle only matters where a ray can meet it, and a slanted triangle's box
   // is mostly elsewhere. False when it misses the row.
-  bool row_span(const double* x, const double* y, int j, double m, int& i0, int& i1) const {
+  bool row_span(const TriangleEdges& e, int j, double m, int& i0, int& i1) const {
     const double lo = j - m, hi = j + 1 + m;
     double xl = HUGE_VAL, xr = -HUGE_VAL;
     for (int k = 0; k < 3; ++k) {
-      const int l = k == 2 ? 0 : k + 1;
-      double xa = x[k], ya = y[k], xb = x[l], yb = y[l];
-      if (ya > yb) {
-        std::swap(xa, xb);
-        std::swap(ya, yb);
-      }
-      if (yb < lo || ya > hi) continue;
-      if (yb > ya) {
-        const double slope = (xb - xa) / (yb - ya);
-        const double y0 = std::max(ya, lo), y1 = std::min(yb, hi);
-        const double x0 = xa + (y0 - ya) * slope, x1 = xa + (y1 - ya) * slope;
+      if (e.yb[k] < lo || e.ya[k] > hi) continue;
+      if (e.yb[k] > e.ya[k]) {
+        const double y0 = std::max(e.ya[k], lo), y1 = std::min(e.yb[k], hi);
+        const double x0 = e.xa[k] + (y0 - e.ya[k]) * e.slope[k], x1 = e.xa[k] + (y1 - e.ya[k]) * e.slope[k];
         xl = std::min(xl, std::min(x0, x1));
         xr = std::max(xr, std::max(x0, x1));
       } else {
-        xl = std::min(xl, std::min(xa, xb));
-        xr = std::max(xr, std::max(xa, xb));
+        xl = std::min(xl, std::min(e.xa[k], e.xb[k]));
+        xr = std::max(xr, std::max(e.xa[k], e.xb[k]));
       }
     }
     if (!(xl <= xr) || xr + m < 0.0 || xl - m >= width_) return false;
     i0 = clamp_cell(xl - m, width_);
     i1 = clamp_cell(xr + m, width_);
     return true;
+  }
+
+  [[nodiscard]] std::size_t tile_of(int i, int j) const {
+    return static_cast<std::size_t>(j / tile) * static_cast<std::size_t>(tiles_x_) + static_cast<std::size_t>(i / tile);
   }
 
   // Cell range [i0, i1] of row j changed in this band: end_band scans it.
@@ -354,6 +390,7 @@ class CoverageGrid {
       std::fill(bound_.begin() + b, bound_.begin() + e, std::numeric_limits<float>::infinity());
       std::fill(depth_.begin() + b, depth_.begin() + e, 0.0f);
     }
+    std::fill(tile_frozen_.begin(), tile_frozen_.end(), 0);
     dirty_ = CellRect{width_, height_, -1, -1};
   }
 
@@ -362,6 +399,7 @@ class CoverageGrid {
   std::vector<float> bound_;   // running lower bound of 1/w over the triangles touching the cell
   std::vector<float> depth_;   // frozen lower bound of 1/w at the first hit; 0: not covered
   std::vector<float> tile_depth_;
+  std::vector<std::int32_t> tile_frozen_, tile_cells_;  // per tile: covered cells, cells
   std::vector<int> band_lo_, band_hi_, band_rows_;  // per row: cells changed in the current band
   CellRect dirty_{0, 0, -1, -1};
 };

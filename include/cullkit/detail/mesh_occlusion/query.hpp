@@ -38,7 +38,7 @@ struct Scratch {
   // Per-frame caches, valid where the stamp equals `frame`.
   const void* owner = nullptr;
   std::uint32_t frame = 0;
-  std::vector<std::uint32_t> vertex_stamp, vertex_slot, triangle_stamp;
+  std::vector<std::uint32_t> vertex_stamp, vertex_slot, triangle_stamp, triangle_band;
   std::vector<Projected> projected;
   View view;
   CoverageGrid grid;
@@ -72,6 +72,7 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
     s.vertex_stamp.assign(index.positions.size(), 0);
     s.vertex_slot.assign(index.positions.size(), 0);
     s.triangle_stamp.assign(index.corners.size() / 3, 0);
+    s.triangle_band.assign(index.corners.size() / 3, 0);
     s.frame = 0;
   }
   if (++s.frame == 0) {
@@ -93,20 +94,46 @@ inline const Projected& project_vertex(const MeshIndex& index, Scratch& s, std::
 }
 
 inline BoxView project_box(const View& view, const Aabb& box) {
-  BoxView b{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, HUGE_VAL, true};
-  for (int k = 0; k < 8; ++k) {
-    const Projected p = view.project(k & 1 ? box.max.x : box.min.x, k & 2 ? box.max.y : box.min.y,
-                                     k & 4 ? box.max.z : box.min.z);
-    if (!p.usable) {
-      b.usable = false;
-      return b;
-    }
-    b.x0 = std::min(b.x0, p.x);
-    b.x1 = std::max(b.x1, p.x);
-    b.y0 = std::min(b.y0, p.y);
-    b.y1 = std::max(b.y1, p.y);
-    b.w_min = std::min(b.w_min, p.w);
+  // Clip x, y, w and the near-plane value are affine: the corners are the values at box.min
+  // plus any of the three edge vectors' contributions.
+  const double q[3] = {double(box.min.x) - view.eye[0], double(box.min.y) - view.eye[1], double(box.min.z) - view.eye[2]};
+  const double e[3] = {double(box.max.x) - double(box.min.x), double(box.max.y) - double(box.min.y),
+                       double(box.max.z) - double(box.min.z)};
+  double base[4], step[3][4], scale[4];
+  for (int r = 0; r < 3; ++r) {
+    base[r] = view.row[r][0] * q[0] + view.row[r][1] * q[1] + view.row[r][2] * q[2];
+    for (int a = 0; a < 3; ++a) step[a][r] = view.row[r][a] * e[a];
   }
+  const double* n = view.near_plane;
+  base[3] = n[0] * box.min.x + n[1] * box.min.y + n[2] * box.min.z + n[3];
+  for (int a = 0; a < 3; ++a) step[a][3] = n[a] * e[a];
+  // Tolerances as in View::project, taken at their largest over the box.
+  const double reach[3] = {std::max(std::fabs(q[0]), std::fabs(q[0] + e[0])), std::max(std::fabs(q[1]), std::fabs(q[1] + e[1])),
+                           std::max(std::fabs(q[2]), std::fabs(q[2] + e[2]))};
+  const double far_coord[3] = {std::max(std::fabs(double(box.min.x)), std::fabs(double(box.max.x))),
+                               std::max(std::fabs(double(box.min.y)), std::fabs(double(box.max.y))),
+                               std::max(std::fabs(double(box.min.z)), std::fabs(double(box.max.z)))};
+  scale[2] = std::fabs(view.row[2][0]) * reach[0] + std::fabs(view.row[2][1]) * reach[1] + std::fabs(view.row[2][2]) * reach[2];
+  scale[3] = std::fabs(n[0]) * far_coord[0] + std::fabs(n[1]) * far_coord[1] + std::fabs(n[2]) * far_coord[2] + std::fabs(n[3]);
+  // Rounding of the sums below is far inside these tolerances (2^-18 relative).
+  const double ntol = 0x1p-18 * scale[3] + 0x1p-40 * scale[3];
+  const double wtol = 1e-8 * scale[2];
+  BoxView b{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, HUGE_VAL, false};
+  for (int k = 0; k < 8; ++k) {
+    double c[4] = {base[0], base[1], base[2], base[3]};
+    for (int a = 0; a < 3; ++a)
+      if ((k >> a) & 1)
+        for (int r = 0; r < 4; ++r) c[r] += step[a][r];
+    if (!(c[3] > ntol) || !(c[2] > wtol)) return b;
+    const double inv = 1.0 / c[2];
+    const double x = c[0] * inv * view.scale_x + view.offset_x, y = c[1] * inv * view.scale_y + view.offset_y;
+    b.x0 = std::min(b.x0, x);
+    b.x1 = std::max(b.x1, x);
+    b.y0 = std::min(b.y0, y);
+    b.y1 = std::max(b.y1, y);
+    b.w_min = std::min(b.w_min, c[2]);
+  }
+  b.usable = std::isfinite(b.x0) && std::isfinite(b.x1) && std::isfinite(b.y0) && std::isfinite(b.y1) && std::isfinite(b.w_min);
   return b;
 }
 
@@ -180,38 +207,74 @@ inline void gather_triangles(const MeshIndex& index, Scratch& s) {
       std::uint32_t bits;
       std::memcpy(&bits, &key, sizeof bits);  // positive floats order as their bits
       s.triangles.emplace_back(bits, t);
+      s.triangle_stamp[t] = s.frame;
     }
   }
   radix_sort(s.triangles, s.sort_buffer);
 }
 
-/// Inserts the gathered triangles nearest first, each as its own band, so a cell freezes at the
-/// depth of the nearest layer that covers it. Returns the cells covered.
-inline std::size_t insert_triangles(const MeshIndex& index, Scratch& s) {
+/// Inserts the gathered triangles nearest first, in bands of similar depth, so a cell freezes at
+/// the depth of the nearest layer that covers it. Within a band, an edge shared by two of its
+/// triangles is never touched: it cancels before the band ends. Returns the cells covered.
+inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
   CoverageGrid& grid = s.grid;
   const int orient = s.view.orient;
+  const float ratio = 1.0f + std::max(0.0f, params.depth_band_ratio);
+  // Bands: runs of the sorted triangles whose nearest depth is within `ratio` of the run's first.
+  std::uint32_t band = 0;
+  float band_start = 0.0f;
+  for (std::size_t i = 0; i < s.triangles.size(); ++i) {
+    float key;
+    std::memcpy(&key, &s.triangles[i].first, sizeof key);
+    if (i == 0 || !(key <= band_start * ratio)) {
+      band_start = key;
+      ++band;
+    }
+    s.triangle_band[s.triangles[i].second] = band;
+  }
   std::size_t covered = 0;
-  for (const auto& entry : s.triangles) {
-    const std::uint32_t t = entry.second;
+  const auto corners_of = [&](std::uint32_t t, double* x, double* y, double* w) {
     const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
-    double x[3], y[3], w[3];
     for (int k = 0; k < 3; ++k) {
       const Projected& p = s.projected[s.vertex_slot[c[k]]];
       x[k] = p.x;
       y[k] = p.y;
       w[k] = p.w;
     }
-    grid.add_depth(x, y, w);
-    grid.add_count(x, y, orient);
-    for (int k = 0; k < 3; ++k) {
-      const int l = k == 2 ? 0 : k + 1;
-      const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
-      // The twin already in: its edge (l -> k, as its triangle runs) leaves the outline, and this
-      // one never joins it.
-      if (twin != none && s.triangle_stamp[twin / 3] == s.frame) grid.touch_edge(x[l], y[l], x[k], y[k], orient, -1);
-      else grid.touch_edge(x[k], y[k], x[l], y[l], orient, 1);
+  };
+  for (std::size_t begin = 0, end = 0; begin < s.triangles.size(); begin = end) {
+    const std::uint32_t my_band = s.triangle_band[s.triangles[begin].second];
+    end = begin;
+    while (end < s.triangles.size() && s.triangle_band[s.triangles[end].second] == my_band) ++end;
+    // A triangle over cells that are all covered already can change nothing that matters: it is
+    // dropped, as if it were no occluder (decided for the whole band before any of its edges
+    // cancel against a neighbour's).
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t t = s.triangles[i].second;
+      double x[3], y[3], w[3];
+      corners_of(t, x, y, w);
+      if (grid.all_frozen(x, y)) s.triangle_stamp[t] = 0;
     }
-    s.triangle_stamp[t] = s.frame;
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t t = s.triangles[i].second;
+      if (s.triangle_stamp[t] != s.frame) continue;
+      ++s.stats.occluder_triangles;
+      double x[3], y[3], w[3];
+      corners_of(t, x, y, w);
+      grid.add_depth(x, y, w);
+      grid.add_count(x, y, orient);
+      for (int k = 0; k < 3; ++k) {
+        const int l = k == 2 ? 0 : k + 1;
+        const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
+        const bool twin_here = twin != none && s.triangle_stamp[twin / 3] == s.frame;
+        const std::uint32_t twin_band = twin_here ? s.triangle_band[twin / 3] : none;
+        if (twin_band == my_band) continue;  // cancels within the band
+        // The twin in an earlier band: its edge (l -> k, as its triangle runs) leaves the
+        // outline, and this one never joins it.
+        if (twin_band < my_band) grid.touch_edge(x[l], y[l], x[k], y[k], orient, -1);
+        else grid.touch_edge(x[k], y[k], x[l], y[l], orient, 1);
+      }
+    }
     covered += grid.end_band();
   }
   return covered;
@@ -242,8 +305,7 @@ inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, cons
   choose_occluders(index, params, s);
   gather_triangles(index, s);
   stats.occluders_used = s.occluders.size();
-  stats.occluder_triangles = s.triangles.size();
-  stats.cells_covered = insert_triangles(index, s);
+  stats.cells_covered = insert_triangles(index, params, s);
   s.grid.finish();
 
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {

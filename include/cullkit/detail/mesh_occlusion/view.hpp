@@ -131,7 +131,7 @@ struct View {
     const double ntol = 0x1p-18 * (std::fabs(near_plane[0] * px) + std::fabs(near_plane[1] * py) +
                                    std::fabs(near_plane[2] * pz) + std::fabs(near_plane[3]));
     Projected out;
-    out.usable = n > ntol && cw > 1e-9 * wscale && cw > 0.0;
+    out.usable = n > ntol && cw > 1e-8 * wscale && cw > 0.0;
     if (!out.usable) {
       out.x = out.y = out.w = 0.0;
       return out;

@@ -1,0 +1,145 @@
+// libFuzzer target: bytes -> a small mesh cut into objects (quantized or raw float corners, NaN and
+// inf included, indices possibly out of range, object ranges possibly outside the mesh) and a
+// perspective camera (either depth range, reversed-Z, infinite far plane, any grid size). Checks:
+// no crash, no sanitizer report, each written object once and in range, unusable objects written,
+// and the contract on a few rays: no pixel-rule ray through the screen sees a hidden object first
+// (front faces, beyond the near plane; double-precision brute force).
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <vector>
+
+#include <glm/ext/matrix_clip_space.hpp>
+#include <glm/ext/matrix_transform.hpp>
+#include <glm/ext/vector_double3.hpp>
+#include <glm/geometric.hpp>
+
+#include <cullkit/mesh_occlusion_culler.hpp>
+
+namespace {
+struct Reader {
+  const std::uint8_t* data;
+  std::size_t size;
+  std::uint8_t byte() {
+    if (size == 0) return 0;
+    --size;
+    return *data++;
+  }
+  float coord(bool raw) {
+    if (raw && size >= 4) {
+      float f;
+      std::memcpy(&f, data, 4);
+      data += 4;
+      size -= 4;
+      return f;
+    }
+    return (static_cast<int>(byte()) - 128) / 16.0f;  // [-8, 8) in 1/16 steps: shared edges, ties
+  }
+};
+
+// Front-face hit parameter, or -1. grow > 0 widens the triangle (occluders), < 0 shrinks it.
+double hit(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
+           double grow) {
+  const glm::dvec3 e1 = b - a, e2 = c - a;
+  if (!(glm::dot(d, glm::cross(e1, e2)) < 0.0)) return -1.0;
+  const glm::dvec3 p = glm::cross(d, e2);
+  const double inv = 1.0 / glm::dot(e1, p);
+  const glm::dvec3 s = o - a, q = glm::cross(s, e1);
+  const double u = glm::dot(s, p) * inv, v = glm::dot(d, q) * inv, t = glm::dot(e2, q) * inv;
+  if (!(u >= -grow && v >= -grow && u + v <= 1.0 + grow)) return -1.0;
+  return t > 0.0 && std::isfinite(t) ? t : -1.0;
+}
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  Reader r{data, size};
+  const std::uint8_t config = r.byte();
+  const bool raw = (config & 1) != 0;
+  const auto depth = (config & 2) ? cullkit::DepthRange::zero_to_one : cullkit::DepthRange::negative_one_to_one;
+  const bool reversed = (config & 4) != 0, infinite = (config & 8) != 0;
+  const std::size_t vertex_count = r.byte() % 24;
+  const std::size_t triangle_count = r.byte() % 20;
+  const std::size_t object_count = r.byte() % 8;
+  std::vector<glm::vec3> vertices(vertex_count);
+  for (auto& v : vertices) v = glm::vec3(r.coord(raw), r.coord(raw), r.coord(raw));
+  std::vector<std::uint32_t> indices(3 * triangle_count);
+  for (auto& i : indices) i = r.byte() % (vertex_count + 2);  // a few out of range
+  std::vector<cullkit::MeshObject> objects(object_count);
+  for (auto& o : objects) {
+    o.first_triangle = r.byte() % (triangle_count + 2);
+    o.triangle_count = r.byte() % 6;
+  }
+  const glm::vec3 eye(r.coord(false), r.coord(false), r.coord(false));
+  glm::vec3 target(r.coord(false), r.coord(false), r.coord(false));
+  if (glm::length(target - eye) < 0.1f) target = eye + glm::vec3(0.0f, 0.0f, -1.0f);
+  const float near_plane = 0.01f + r.byte() / 64.0f;
+  const float fov = glm::radians(20.0f + r.byte() % 120);
+  const glm::vec3 forward = glm::normalize(target - eye);
+  const glm::vec3 up = std::fabs(forward.y) > 0.99f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+  const glm::mat4 view = glm::lookAtRH(eye, target, up);
+  glm::mat4 proj;
+  const float far_plane = 100.0f;
+  if (infinite) {
+    proj = glm::infinitePerspectiveRH(fov, 1.5f, near_plane);
+  } else if (depth == cullkit::DepthRange::zero_to_one) {
+    proj = reversed ? glm::perspectiveRH_ZO(fov, 1.5f, far_plane, near_plane) : glm::perspectiveRH_ZO(fov, 1.5f, near_plane, far_plane);
+  } else {
+    proj = glm::perspectiveRH_NO(fov, 1.5f, near_plane, far_plane);
+  }
+  const cullkit::Camera cam{eye, proj * view, 96, 64, infinite ? cullkit::DepthRange::negative_one_to_one : depth};
+
+  cullkit::MeshOcclusionParams params;
+  params.grid_width = 8 + r.byte() % 64;
+  params.grid_height = 8 + r.byte() % 64;
+  params.min_occluder_screen_fraction = 0.0f;
+  params.depth_band_ratio = (r.byte() % 4) * 0.1f;
+  const cullkit::MeshView<glm::vec3> mesh{vertices.data(), vertices.size(), indices.data(), indices.size()};
+  const cullkit::MeshOcclusionCuller<glm::vec3> culler(mesh, objects.data(), objects.size(), params);
+  std::vector<std::uint32_t> out;
+  culler.cull(cam, out);
+  std::vector<char> written(object_count, 0);
+  for (std::uint32_t o : out) {
+    if (o >= object_count || written[o]) std::abort();
+    written[o] = 1;
+  }
+  // Object of each triangle (the last object listing it; overlaps are allowed) for the rays.
+  std::vector<int> owner(triangle_count, -1);
+  for (std::size_t o = 0; o < object_count; ++o)
+    for (std::uint64_t t = objects[o].first_triangle; t < std::uint64_t(objects[o].first_triangle) + objects[o].triangle_count; ++t)
+      if (t < triangle_count) owner[t] = static_cast<int>(o);
+  const cullkit::PixelRays rays(cam);
+  const glm::dvec3 o(eye), fwd(forward);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 12; ++x) {
+      const cullkit::Ray ray = rays.ray_at(x * 8.0 + 4.0, y * 8.0 + 4.0);
+      const glm::dvec3 d(ray.direction);
+      if (d == glm::dvec3(0.0)) continue;
+      // Nearest hit of each object beyond the near plane, for the objects the culler hid.
+      for (std::size_t ob = 0; ob < object_count; ++ob) {
+        if (written[ob]) continue;
+        double t_ob = -1.0, t_other = -1.0;
+        for (std::size_t t = 0; t < triangle_count; ++t) {
+          bool ok = true;
+          glm::dvec3 p[3];
+          for (int k = 0; k < 3; ++k) {
+            const std::uint32_t i = indices[3 * t + std::size_t(k)];
+            ok = ok && i < vertex_count;
+            if (ok) p[k] = glm::dvec3(vertices[i]);
+          }
+          if (!ok) continue;
+          const bool mine = objects[ob].first_triangle <= t && t < std::uint64_t(objects[ob].first_triangle) + objects[ob].triangle_count;
+          const double th = hit(o, d, p[0], p[1], p[2], mine ? -1e-9 : 1e-9);
+          if (th < 0.0 || !(th * glm::dot(d, fwd) > near_plane)) continue;
+          if (mine && owner[t] >= 0) {
+            if (t_ob < 0.0 || th < t_ob) t_ob = th;
+          } else if (!mine && owner[t] >= 0) {
+            if (t_other < 0.0 || th < t_other) t_other = th;
+          }
+        }
+        if (t_ob >= 0.0 && !(t_other >= 0.0 && t_other < t_ob)) std::abort();  // a hidden object is seen
+      }
+    }
+  return 0;
+}
