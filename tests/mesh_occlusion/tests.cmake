@@ -9,3 +9,5 @@ if(TARGET cullkit_oracle)
   target_link_libraries(measure_mesh_occlusion PRIVATE cullkit::cullkit cullkit_warnings cullkit_support cullkit_oracle)
   target_include_directories(measure_mesh_occlusion PRIVATE ${CMAKE_CURRENT_LIST_DIR}/..)
 endif()
+# MeshOcclusionCuller against Embree on real and generated scenes.
+include(${CMAKE_CURRENT_LIST_DIR}/embree.cmake)

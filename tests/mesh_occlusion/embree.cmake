@@ -1,0 +1,4 @@
+# MeshOcclusionCuller against Embree on the generated and real scenes (walks and hard cameras).
+find_package(Threads REQUIRED)
+cullkit_add_test(test_mesh_occlusion_embree SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_embree.cpp EMBREE
+                 LIBS Threads::Threads TIMEOUT 600 LABELS mesh_occlusion)
