@@ -1,0 +1,316 @@
+// cullkit/detail/mesh_occlusion/coverage.hpp: the coverage grid. Occluder triangles go in by
+// bands (one occluder object each); a cell is covered once the union of the triangles so far covers
+// all of it, and then keeps a bound on the depth at which every ray through it meets an occluder.
+//
+// Why the union and not each triangle: for triangles that all face the eye, the number of them
+// covering a point equals the winding number of their edges around it, and an edge used by two of
+// them in opposite directions contributes nothing. So only the outline edges (the uncancelled
+// ones) matter: a cell that no outline edge touches has one count over all its area, and if that
+// count is at least one, every point of the cell is covered; a cell that outline edges cross is
+// covered when the count at its centre exceeds the number of those edges it could fall by (see
+// `touch_edge`). Counts are exact integers, added and removed by the same arithmetic on the same
+// inputs, so two triangles sharing an edge leave no seam.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace cullkit {
+namespace detail {
+namespace mesh_occlusion {
+
+/// A cell rectangle, inclusive, within the grid; empty when x0 > x1.
+struct CellRect {
+  int x0, y0, x1, y1;
+  [[nodiscard]] bool empty() const { return x0 > x1 || y0 > y1; }
+};
+
+/// Margin (in cells) added around edges and boxes: it absorbs the double-precision rounding of
+/// projected coordinates, which grows with their size (off-screen corners can be far away).
+inline double cell_margin(double magnitude) { return 1.0 / 1024.0 + 0x1p-36 * magnitude; }
+
+/// The grid's cells and their state. All arrays are width * height, row-major, row 0 at the top.
+class CoverageGrid {
+ public:
+  /// Sizes the grid (a no-op when the size is unchanged) and leaves it empty.
+  void reset(int width, int height) {
+    if (width != width_ || height != height_) {
+      width_ = width;
+      height_ = height;
+      const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+      count_.assign(n, 0);
+      diff_.assign(n, 0);
+      block_.assign(n, 0);
+      bound_.assign(n, std::numeric_limits<float>::infinity());
+      depth_.assign(n, 0.0f);
+      tiles_x_ = (width + tile - 1) / tile;
+      tiles_y_ = (height + tile - 1) / tile;
+      tile_depth_.assign(static_cast<std::size_t>(tiles_x_) * static_cast<std::size_t>(tiles_y_), 0.0f);
+      dirty_ = CellRect{width, height, -1, -1};
+      return;
+    }
+    clear_dirty();
+  }
+
+  [[nodiscard]] int width() const { return width_; }
+  [[nodiscard]] int height() const { return height_; }
+
+  /// Starts a band: cells outside its rectangle cannot change.
+  void begin_band() { band_ = CellRect{width_, height_, -1, -1}; }
+
+  /// Adds a front-facing triangle's count: `sign` is +1 or -1 so that the triangle counts +1 inside.
+  /// (x, y) are grid coordinates of the corners in the triangle's own order.
+  void add_count(const double* x, const double* y, int sign) {
+    for (int k = 0; k < 3; ++k) {
+      const int l = k == 2 ? 0 : k + 1;
+      // An edge's crossings are computed from its endpoints sorted by y, so the same edge seen from
+      // its two triangles gives bit-identical crossings (and opposite signs).
+      if (y[k] == y[l]) continue;
+      const bool down = y[l] > y[k];
+      add_crossings(down ? x[k] : x[l], down ? y[k] : y[l], down ? x[l] : x[k], down ? y[l] : y[k],
+                    down ? -sign : sign);
+    }
+  }
+
+  /// An outline edge joins (delta +1) or leaves (delta -1) the outline: `from` -> `to` as its own
+  /// triangle runs, `orient` the sign of front-facing areas. Every cell the segment touches (with a
+  /// margin) whose centre lies on the edge's inner side (towards its triangle) gets `delta` added
+  /// to its outline counter; where the side is too close to call, 2 * delta. The arithmetic runs
+  /// on the endpoints sorted, so the edge's removal subtracts exactly what its addition added.
+  ///
+  /// Why the inner side only: a segment from the cell centre to any point of the cell crosses each
+  /// outline edge at most once, and crossing an edge changes the count by one: down when leaving its
+  /// inner side, up otherwise. So the count anywhere in the cell is at least the count at the centre
+  /// minus this counter (an edge near the centre may also have put the centre's count off by one:
+  /// hence the double weight there).
+  void touch_edge(double x_from, double y_from, double x_to, double y_to, int orient, int delta) {
+    double xa = x_from, ya = y_from, xb = x_to, yb = y_to;
+    int side = orient;
+    if (ya > yb || (ya == yb && xa > xb)) {
+      std::swap(xa, xb);
+      std::swap(ya, yb);
+      side = -side;
+    }
+    const double magnitude = std::max(std::max(std::fabs(xa), std::fabs(xb)), std::max(std::fabs(ya), std::fabs(yb)));
+    const double m = cell_margin(magnitude);
+    const int j0 = clamp_cell(ya - m, height_), j1 = clamp_cell(yb + m, height_);
+    if (yb + m < 0.0 || ya - m >= height_) return;
+    const double dx = xb - xa, dy = yb - ya;
+    const double slope = dy > 0.0 ? dx / dy : 0.0;
+    // |orient2d| below this: the centre is within about 2^-20 cells (plus rounding) of the line.
+    const double near_line = (0x1p-20 + 0x1p-40 * magnitude) * (std::fabs(dx) + std::fabs(dy));
+    const double rounding = 0x1p-48 * (std::fabs(dx) + std::fabs(dy));
+    for (int j = j0; j <= j1; ++j) {
+      double xl = xa, xr = xb;
+      if (dy > 0.0) {
+        const double lo = std::max(ya, j - m), hi = std::min(yb, j + 1 + m);
+        xl = xa + (lo - ya) * slope;
+        xr = xa + (hi - ya) * slope;
+        if (xl > xr) std::swap(xl, xr);
+      } else if (xl > xr) {
+        std::swap(xl, xr);
+      }
+      if (xr + m < 0.0 || xl - m >= width_) continue;
+      const int i0 = clamp_cell(xl - m, width_), i1 = clamp_cell(xr + m, width_);
+      std::int32_t* row = block_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+      const double qy = j + 0.5 - ya;
+      for (int i = i0; i <= i1; ++i) {
+        const double qx = i + 0.5 - xa;
+        const double s = dx * qy - dy * qx;  // orient2d(a, b, centre)
+        const double tol = near_line + rounding * (std::fabs(qx) + std::fabs(qy));
+        if (std::fabs(s) <= tol) row[i] += 2 * delta;
+        else if (s * side > 0.0) row[i] += delta;
+      }
+    }
+  }
+
+  /// Lowers the running depth bound of every cell the triangle's box touches to what this
+  /// triangle allows there: inverse depth, so the bound kept is a minimum. Returns the cells.
+  CellRect add_depth(const double* x, const double* y, const double* w) {
+    const double xmin = std::min(std::min(x[0], x[1]), x[2]), xmax = std::max(std::max(x[0], x[1]), x[2]);
+    const double ymin = std::min(std::min(y[0], y[1]), y[2]), ymax = std::max(std::max(y[0], y[1]), y[2]);
+    const double m = cell_margin(std::max(std::max(std::fabs(xmin), std::fabs(xmax)), std::max(std::fabs(ymin), std::fabs(ymax))));
+    CellRect r{width_, height_, -1, -1};
+    if (xmax + m < 0.0 || xmin - m >= width_ || ymax + m < 0.0 || ymin - m >= height_) return r;
+    // Crossings may land one cell right of the box (a crossing in the right half of the last
+    // cell): the band's rectangle includes that column.
+    r = CellRect{clamp_cell(xmin - m, width_), clamp_cell(ymin - m, height_), clamp_cell(xmax + 1.0 + m, width_),
+                 clamp_cell(ymax + m, height_)};
+    grow(band_, r);
+    // Every point of the triangle has w <= its largest corner w: 1/w >= lowest.
+    const double w_max = std::max(std::max(w[0], w[1]), w[2]);
+    const float lowest = static_cast<float>((1.0 / w_max) * (1.0 - 0x1p-20));
+    // 1/w is affine over the screen for a plane: inside a cell, 1/w >= its value at the cell corner
+    // that minimizes it. Worth it for big triangles seen at a slant (floors, long walls).
+    const double area2 = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+    const double extent = std::max(xmax - xmin, ymax - ymin);
+    const int cells = (r.x1 - r.x0 + 1) * (r.y1 - r.y0 + 1);
+    if (cells > 4 && std::fabs(area2) > 1e-6 * extent * extent) {
+      const double inv[3] = {1.0 / w[0], 1.0 / w[1], 1.0 / w[2]};
+      const double a = ((inv[1] - inv[0]) * (y[2] - y[0]) - (inv[2] - inv[0]) * (y[1] - y[0])) / area2;
+      const double b = ((x[1] - x[0]) * (inv[2] - inv[0]) - (x[2] - x[0]) * (inv[1] - inv[0])) / area2;
+      // Value at the minimizing corner of cell (r.x0, r.y0); then a per column, b per row.
+      const double v00 = inv[0] + a * (r.x0 + (a < 0.0 ? 1.0 : 0.0) - x[0]) + b * (r.y0 + (b < 0.0 ? 1.0 : 0.0) - y[0]);
+      const double span = std::fabs(a) * (r.x1 - r.x0 + 1) + std::fabs(b) * (r.y1 - r.y0 + 1);
+      // Rounding of the solve (relative to the values, amplified by a thin triangle) and of the
+      // float loop below.
+      const double inv_max = std::max(std::max(inv[0], inv[1]), inv[2]);
+      const double err = 0x1p-19 * (std::fabs(v00) + span + inv_max) +
+                         1e-12 * inv_max * (1.0 + extent * extent / std::fabs(area2));
+      const float af = static_cast<float>(a), bf = static_cast<float>(b);
+      for (int j = r.y0; j <= r.y1; ++j) {
+        float* row = bound_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+        const float start = static_cast<float>(v00 - err) + bf * static_cast<float>(j - r.y0);
+        for (int i = r.x0; i <= r.x1; ++i) {
+          const float v = std::max(lowest, start + af * static_cast<float>(i - r.x0));
+          row[i] = std::min(row[i], v);
+        }
+      }
+    } else {
+      for (int j = r.y0; j <= r.y1; ++j) {
+        float* row = bound_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+        for (int i = r.x0; i <= r.x1; ++i) row[i] = std::min(row[i], lowest);
+      }
+    }
+    return r;
+  }
+
+  /// Ends a band: accumulates its counts and freezes the cells it newly covered at their running
+  /// bound. Returns how many cells it covered.
+  std::size_t end_band() {
+    if (band_.empty()) return 0;
+    grow(dirty_, band_);
+    std::size_t covered = 0;
+    for (int j = band_.y0; j <= band_.y1; ++j) {
+      const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+      std::int32_t run = 0;
+      for (int i = band_.x0; i <= band_.x1; ++i) {
+        const std::size_t c = base + static_cast<std::size_t>(i);
+        run += diff_[c];
+        diff_[c] = 0;
+        count_[c] += run;
+        if (count_[c] - block_[c] >= 1 && depth_[c] == 0.0f) {
+          depth_[c] = bound_[c];
+          ++covered;
+        }
+      }
+    }
+    return covered;
+  }
+
+  /// After the last band: per-tile minimum of the frozen inverse depths (0 where uncovered).
+  void finish() {
+    std::fill(tile_depth_.begin(), tile_depth_.end(), 0.0f);
+    if (dirty_.empty()) return;
+    for (int ty = dirty_.y0 / tile; ty <= dirty_.y1 / tile; ++ty)
+      for (int tx = dirty_.x0 / tile; tx <= dirty_.x1 / tile; ++tx) {
+        float v = std::numeric_limits<float>::infinity();
+        for (int j = ty * tile; j < std::min(height_, (ty + 1) * tile); ++j)
+          for (int i = tx * tile; i < std::min(width_, (tx + 1) * tile); ++i)
+            v = std::min(v, depth_[static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(i)]);
+        tile_depth_[static_cast<std::size_t>(ty) * static_cast<std::size_t>(tiles_x_) + static_cast<std::size_t>(tx)] = v;
+      }
+  }
+
+  /// True when every cell of `r` is covered with an inverse depth above `threshold`.
+  [[nodiscard]] bool all_nearer(const CellRect& r, float threshold) const {
+    for (int ty = r.y0 / tile; ty <= r.y1 / tile; ++ty)
+      for (int tx = r.x0 / tile; tx <= r.x1 / tile; ++tx) {
+        if (tile_depth_[static_cast<std::size_t>(ty) * static_cast<std::size_t>(tiles_x_) + static_cast<std::size_t>(tx)] > threshold)
+          continue;
+        const int j0 = std::max(r.y0, ty * tile), j1 = std::min(r.y1, ty * tile + tile - 1);
+        const int i0 = std::max(r.x0, tx * tile), i1 = std::min(r.x1, tx * tile + tile - 1);
+        for (int j = j0; j <= j1; ++j) {
+          const float* row = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+          for (int i = i0; i <= i1; ++i)
+            if (!(row[i] > threshold)) return false;
+        }
+      }
+    return true;
+  }
+
+  /// Covered cells (for statistics).
+  [[nodiscard]] std::size_t covered_cells() const {
+    std::size_t n = 0;
+    if (dirty_.empty()) return 0;
+    for (int j = dirty_.y0; j <= dirty_.y1; ++j)
+      for (int i = dirty_.x0; i <= dirty_.x1; ++i)
+        n += depth_[static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(i)] > 0.0f;
+    return n;
+  }
+
+  /// Cells touched by the rectangle [x0, x1] x [y0, y1] in grid coordinates, with a margin,
+  /// clamped to the grid (empty when it misses the grid).
+  [[nodiscard]] CellRect cells_of(double x0, double y0, double x1, double y1) const {
+    const double m = cell_margin(std::max(std::max(std::fabs(x0), std::fabs(x1)), std::max(std::fabs(y0), std::fabs(y1))));
+    if (x1 + m < 0.0 || x0 - m >= width_ || y1 + m < 0.0 || y0 - m >= height_) return CellRect{0, 0, -1, -1};
+    return CellRect{clamp_cell(x0 - m, width_), clamp_cell(y0 - m, height_), clamp_cell(x1 + m, width_),
+                    clamp_cell(y1 + m, height_)};
+  }
+
+  static constexpr int tile = 8;
+
+ private:
+  static int clamp_cell(double v, int n) {
+    if (!(v >= 0.0)) return 0;
+    if (v >= n) return n - 1;
+    return static_cast<int>(v);
+  }
+  static void grow(CellRect& r, const CellRect& s) {
+    r.x0 = std::min(r.x0, s.x0);
+    r.y0 = std::min(r.y0, s.y0);
+    r.x1 = std::max(r.x1, s.x1);
+    r.y1 = std::max(r.y1, s.y1);
+  }
+
+  // Crossings of the edge (xa, ya) -> (xb, yb), ya < yb, with the rows' centre lines, half-open in
+  // y: the count at a cell centre is the signed number of edges crossing its row left of it.
+  void add_crossings(double xa, double ya, double xb, double yb, int sign) {
+    // Rows j with ya <= j + 0.5 < yb.
+    int j0 = static_cast<int>(std::max(-1.0, std::min(double(height_), std::ceil(ya - 0.5))));
+    int j1 = static_cast<int>(std::max(-1.0, std::min(double(height_), std::ceil(yb - 0.5)))) - 1;
+    while (j0 > 0 && j0 - 0.5 >= ya) --j0;
+    while (j0 < height_ && j0 + 0.5 < ya) ++j0;
+    while (j1 + 1 < height_ && j1 + 1.5 < yb) ++j1;
+    while (j1 >= 0 && j1 + 0.5 >= yb) --j1;
+    j0 = std::max(j0, 0);
+    j1 = std::min(j1, height_ - 1);
+    const double slope = (xb - xa) / (yb - ya);
+    for (int j = j0; j <= j1; ++j) {
+      const double x = xa + (j + 0.5 - ya) * slope;
+      // The first cell whose centre is right of the crossing.
+      const double k = std::floor(x + 0.5);
+      if (k >= width_) continue;
+      const int i = k < 0.0 ? 0 : static_cast<int>(k);
+      diff_[static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(i)] += sign;
+    }
+  }
+
+  // Returns the touched part of the grid to the empty state.
+  void clear_dirty() {
+    if (dirty_.empty()) return;
+    for (int j = dirty_.y0; j <= dirty_.y1; ++j) {
+      const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+      const auto b = static_cast<std::ptrdiff_t>(base) + dirty_.x0, e = static_cast<std::ptrdiff_t>(base) + dirty_.x1 + 1;
+      std::fill(count_.begin() + b, count_.begin() + e, 0);
+      std::fill(block_.begin() + b, block_.begin() + e, 0);
+      std::fill(bound_.begin() + b, bound_.begin() + e, std::numeric_limits<float>::infinity());
+      std::fill(depth_.begin() + b, depth_.begin() + e, 0.0f);
+    }
+    dirty_ = CellRect{width_, height_, -1, -1};
+  }
+
+  int width_ = 0, height_ = 0, tiles_x_ = 0, tiles_y_ = 0;
+  std::vector<std::int32_t> count_, diff_, block_;
+  std::vector<float> bound_;   // running lower bound of 1/w over the triangles touching the cell
+  std::vector<float> depth_;   // frozen lower bound of 1/w at the first hit; 0: not covered
+  std::vector<float> tile_depth_;
+  CellRect band_{0, 0, -1, -1}, dirty_{0, 0, -1, -1};
+};
+
+}  // namespace mesh_occlusion
+}  // namespace detail
+}  // namespace cullkit

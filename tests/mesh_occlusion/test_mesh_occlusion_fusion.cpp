@@ -1,0 +1,200 @@
+// Occluder fusion: one wall given as 2 triangles (both diagonals, welded or not), as a finely
+// triangulated mesh with jittered inner vertices, as several objects sharing edges, and as a curved
+// triangulated wall. From many eyes, every cube whose screen rectangle (widened by three cells) lies
+// on the wall must be hidden, and every cube the culler hides must be unseen by the brute-force
+// oracle (cubes peeking past the wall's edges among them).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <cullkit/cullkit.hpp>
+#include <cullkit_support/scene.hpp>
+
+#include "check.hpp"
+#include "mesh_occlusion_oracle.hpp"
+
+using cullkit::support::Rng;
+using mesh_oracle::TestScene;
+
+namespace {
+
+constexpr float kWallX = 4.0f, kWallY0 = 0.0f, kWallY1 = 3.0f;
+
+// The flat wall at z = 0 facing +z, an nx x ny grid of quads; `objects_x` vertical strips become
+// separate objects; `jitter` moves inner vertices within the plane; `weld` shares vertex indices.
+void flat_wall(TestScene& s, int nx, int ny, int objects_x, float jitter, bool other_diagonal, Rng& rng) {
+  std::vector<glm::vec3> grid;
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) {
+      glm::vec3 p(-kWallX + 2 * kWallX * i / nx, kWallY0 + (kWallY1 - kWallY0) * j / ny, 0.0f);
+      if (i > 0 && i < nx && j > 0 && j < ny) {
+        p.x += jitter * rng.uniform(-1.0f, 1.0f) * (2 * kWallX / nx);
+        p.y += jitter * rng.uniform(-1.0f, 1.0f) * ((kWallY1 - kWallY0) / ny);
+      }
+      grid.push_back(p);
+    }
+  const auto at = [&](int i, int j) { return grid[static_cast<std::size_t>(j * (nx + 1) + i)]; };
+  for (int strip = 0; strip < objects_x; ++strip) {
+    s.begin_object();
+    for (int i = strip * nx / objects_x; i < (strip + 1) * nx / objects_x; ++i)
+      for (int j = 0; j < ny; ++j) {
+        const glm::vec3 a = at(i, j), b = at(i + 1, j), c = at(i + 1, j + 1), d = at(i, j + 1);
+        if (!other_diagonal) {
+          s.triangle(a, b, c);
+          s.triangle(a, c, d);
+        } else {
+          s.triangle(a, b, d);
+          s.triangle(b, c, d);
+        }
+      }
+  }
+}
+
+// A curved wall: a cylinder arc of radius r around the z axis point (0, 0, 6), seen from inside
+// (the eyes stand near its axis), facing inward, as `segments` x `ny` quads over 120 degrees.
+void curved_wall(TestScene& s, int segments, int ny, int objects) {
+  const float r = 6.0f;
+  const auto at = [&](int i, int j) {
+    const float a = glm::radians(-60.0f + 120.0f * i / segments);
+    return glm::vec3(r * std::sin(a), kWallY0 + (kWallY1 - kWallY0) * j / ny, 6.0f - r * std::cos(a));
+  };
+  for (int o = 0; o < objects; ++o) {
+    s.begin_object();
+    for (int i = o * segments / objects; i < (o + 1) * segments / objects; ++i)
+      for (int j = 0; j < ny; ++j) {
+        // Counter-clockwise seen from the axis side (+z of the arc's middle).
+        s.triangle(at(i, j), at(i + 1, j), at(i + 1, j + 1));
+        s.triangle(at(i, j), at(i + 1, j + 1), at(i, j + 1));
+      }
+  }
+}
+
+struct Variant {
+  std::string name;
+  std::function<void(TestScene&, Rng&)> wall;
+  bool curved;
+};
+
+// Must-hide rule: the cube's screen rectangle widened by three cells is on the wall everywhere
+// (sampled 9 x 9, every ray hits a wall triangle).
+bool on_wall(const TestScene& s, const cullkit::Camera& cam, const mesh_oracle::NearSide& ns, std::uint32_t cube,
+             std::uint32_t wall_objects, int grid_w, int grid_h) {
+  const glm::dmat4 m(cam.view_proj);
+  double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
+  const cullkit::MeshObject& r = s.objects[cube];
+  for (std::uint32_t t = r.first_triangle; t < r.first_triangle + r.triangle_count; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const glm::dvec4 c = m * glm::dvec4(glm::dvec3(s.positions[s.indices[3 * t + std::uint32_t(k)]]), 1.0);
+      if (!(c.w > 0.0)) return false;
+      x0 = std::min(x0, c.x / c.w);
+      x1 = std::max(x1, c.x / c.w);
+      y0 = std::min(y0, c.y / c.w);
+      y1 = std::max(y1, c.y / c.w);
+    }
+  const double mx = 3.0 * 2.0 / grid_w, my = 3.0 * 2.0 / grid_h;
+  x0 -= mx;
+  x1 += mx;
+  y0 -= my;
+  y1 += my;
+  if (x0 < -1 || x1 > 1 || y0 < -1 || y1 > 1) return false;
+  const cullkit::PixelRays rays(cam);
+  for (int j = 0; j <= 8; ++j)
+    for (int i = 0; i <= 8; ++i) {
+      const double u = x0 + (x1 - x0) * i / 8, v = y0 + (y1 - y0) * j / 8;
+      const cullkit::Ray ray = rays.ray_at((u + 1) * 0.5 * cam.width, (1 - v) * 0.5 * cam.height);
+      bool any = false;
+      for (std::uint32_t w = 0; w < wall_objects && !any; ++w)
+        any = mesh_oracle::nearest(s, ns, glm::dvec3(ray.direction), w, false, 1e-9) >= 0.0;
+      if (!any) return false;
+    }
+  return true;
+}
+
+}  // namespace
+
+int main() {
+  const std::vector<Variant> variants = {
+      {"quad", [](TestScene& s, Rng& rng) { flat_wall(s, 1, 1, 1, 0.0f, false, rng); }, false},
+      {"quad_other_diagonal", [](TestScene& s, Rng& rng) { flat_wall(s, 1, 1, 1, 0.0f, true, rng); }, false},
+      {"fine_jittered", [](TestScene& s, Rng& rng) { flat_wall(s, 16, 9, 1, 0.35f, false, rng); }, false},
+      {"two_objects", [](TestScene& s, Rng& rng) { flat_wall(s, 2, 1, 2, 0.0f, false, rng); }, false},
+      {"many_objects_jittered", [](TestScene& s, Rng& rng) { flat_wall(s, 8, 6, 8, 0.3f, true, rng); }, false},
+      {"curved", [](TestScene& s, Rng&) { curved_wall(s, 24, 4, 1); }, true},
+      {"curved_objects", [](TestScene& s, Rng&) { curved_wall(s, 24, 4, 6); }, true},
+  };
+  cullkit::MeshOcclusionParams params;
+  std::size_t total_must = 0, total_hidden = 0, total_peek_visible = 0;
+  for (std::size_t vi = 0; vi < variants.size(); ++vi) {
+    const Variant& variant = variants[vi];
+    Rng rng(1000 + vi);
+    TestScene s;
+    variant.wall(s, rng);
+    const auto wall_objects = static_cast<std::uint32_t>(s.objects.size());
+    // Cubes: a grid behind the wall (on every seam of the coarse variants too), and peeking ones
+    // across the wall's left, right and top edges.
+    std::vector<std::uint32_t> peeking;
+    for (int j = 0; j < 5; ++j)
+      for (int i = 0; i < 9; ++i) {
+        const float x = -3.0f + 0.75f * i, y = 0.4f + 0.55f * j;
+        if (!variant.curved) {
+          s.box(glm::vec3(x - 0.1f, y - 0.1f, -1.2f - 0.1f * j), glm::vec3(x + 0.1f, y + 0.1f, -1.0f - 0.1f * j));
+        } else {
+          const float a = glm::radians(-40.0f + 10.0f * i), r = 6.8f + 0.2f * j;
+          const glm::vec3 c(r * std::sin(a), y, 6.0f - r * std::cos(a));
+          s.box(c - glm::vec3(0.1f), c + glm::vec3(0.1f));
+        }
+      }
+    if (!variant.curved) {
+      for (int j = 0; j < 3; ++j) {
+        const float y = 0.6f + j;
+        peeking.push_back(s.box(glm::vec3(kWallX - 0.15f, y, -1.0f), glm::vec3(kWallX + 0.15f, y + 0.3f, -0.7f)));
+        peeking.push_back(s.box(glm::vec3(-kWallX - 0.15f, y, -1.0f), glm::vec3(-kWallX + 0.15f, y + 0.3f, -0.7f)));
+      }
+      for (int i = 0; i < 3; ++i)
+        peeking.push_back(s.box(glm::vec3(-2.0f + 2.0f * i, kWallY1 - 0.1f, -0.6f), glm::vec3(-1.7f + 2.0f * i, kWallY1 + 0.2f, -0.3f)));
+    }
+    const cullkit::MeshOcclusionCuller<glm::vec3> culler(s.mesh(), s.objects.data(), s.objects.size(), params);
+    cullkit::MeshOcclusionContext context;
+    std::vector<std::uint32_t> visible;
+    std::size_t must = 0, must_failed = 0, hidden = 0, peek_visible = 0;
+    for (int e = 0; e < 24; ++e) {
+      const glm::vec3 eye = variant.curved ? glm::vec3(rng.uniform(-1.0f, 1.0f), rng.uniform(1.0f, 2.0f), 6.0f + rng.uniform(-1.0f, 1.0f))
+                                           : glm::vec3(rng.uniform(-1.5f, 1.5f), rng.uniform(1.0f, 2.0f), rng.uniform(3.0f, 8.0f));
+      const glm::vec3 target = variant.curved ? glm::vec3(rng.uniform(-1.0f, 1.0f), 1.5f, 0.0f)
+                                              : glm::vec3(rng.uniform(-1.0f, 1.0f), rng.uniform(1.0f, 2.0f), 0.0f);
+      const float fov = rng.uniform(60.0f, 90.0f);
+      const cullkit::Camera cam = cullkit::support::make_camera(eye, target, fov, 1280, 720, 0.1f, 100.0f);
+      const mesh_oracle::NearSide ns{glm::dvec3(eye), glm::normalize(glm::dvec3(target) - glm::dvec3(eye)), 0.1};
+      culler.cull(cam, context, visible);
+      std::vector<char> is_visible(s.objects.size(), 0);
+      for (std::uint32_t o : visible) is_visible[o] = 1;
+      for (std::uint32_t o = wall_objects; o < s.objects.size(); ++o) {
+        const bool peek = std::find(peeking.begin(), peeking.end(), o) != peeking.end();
+        if (!is_visible[o]) {
+          ++hidden;
+          const bool seen = mesh_oracle::find_sighting(s, ns, cam, o, 16, 200, rng);
+          CHECK_MSG(!seen, "%s eye %d: object %u hidden but a ray sees it", variant.name.c_str(), e, o);
+        } else if (peek) {
+          ++peek_visible;
+        }
+        if (!peek && on_wall(s, cam, ns, o, wall_objects, params.grid_width, params.grid_height)) {
+          ++must;
+          if (is_visible[o]) ++must_failed;
+        }
+      }
+    }
+    std::printf("%-22s cubes on the wall %4zu, of them reported visible %zu; hidden %zu; peeking visible %zu\n",
+                variant.name.c_str(), must, must_failed, hidden, peek_visible);
+    CHECK_MSG(must_failed == 0, "%s: %zu cubes behind the wall not hidden", variant.name.c_str(), must_failed);
+    CHECK_MSG(must > 60, "%s: the must-hide rule applied to only %zu cubes", variant.name.c_str(), must);
+    total_must += must;
+    total_hidden += hidden;
+    total_peek_visible += peek_visible;
+  }
+  CHECK(total_hidden > 600);
+  CHECK(total_peek_visible > 60);
+  return cullkit_test::report("test_mesh_occlusion_fusion");
+}

@@ -1,0 +1,3 @@
+# MeshOcclusionCuller tests: fusion of occluders, brute-force oracle on random scenes, bad input.
+cullkit_add_test(test_mesh_occlusion_fusion SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_fusion.cpp TIMEOUT 300)
+cullkit_add_test(test_mesh_occlusion_bruteforce SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_bruteforce.cpp TIMEOUT 300)
