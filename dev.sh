@@ -4,7 +4,8 @@ set -euo pipefail
 cd "$(dirname "$0")"
 
 PACKAGES=(cmake ninja-build g++ clang libclang-rt-14-dev libglm-dev libembree-dev libbullet-dev
-          libbenchmark-dev libtinyobjloader-dev libstb-dev libosmesa6-dev)
+          libbenchmark-dev libtinyobjloader-dev libstb-dev libosmesa6-dev libopenscenegraph-dev
+          xvfb xauth)
 JOBS=${JOBS:-$(nproc 2>/dev/null || echo 2)}
 
 say() { printf '\033[1m==> %s\033[0m\n' "$*"; }
@@ -28,7 +29,7 @@ deps() {
     fi
   fi
   "${sudo[@]}" apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq "${missing[@]}"
+  DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
 }
 
 build() {  # build <preset> [targets...]
