@@ -69,7 +69,7 @@ template <std::size_t Capacity>
 }
 
 /// Classifies `src` against `plane` and splits it when it straddles, with the same rule as
-/// ConvexPolygon::split (so answers match the polygon-based code this replaced): a vertex within
+/// ConvexPolygon::split (so fragments and polygons are cut alike): a vertex within
 /// `epsilon` of the plane is on it and goes to both pieces; `in` gets the part at distance >= 0, `out`
 /// the part at distance <= 0, crossing points placed where a clearly crossing edge meets distance 0.
 /// `in`/`out` may not alias `src`; their `ref` is left alone. Cost: one dot product per vertex, and a
