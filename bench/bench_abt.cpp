@@ -160,8 +160,8 @@ void build_race(const support::Scene& scene) {
   const auto r = cullkit_bench::race(
       "build_" + std::to_string(tris) + "_triangles",
       {{"embree_commit_medium_1thread", embree},
-       {"cullkit_abt_binning_1thread", abt_with(AbtCandidates::binning, 0)},
-       {"cullkit_abt_sampling_1thread", abt_with(AbtCandidates::sampling, 0)},
+       {"cullkit_abt_binning_1thread", abt_with(AbtCandidates::binning, 1)},
+       {"cullkit_abt_sampling_1thread", abt_with(AbtCandidates::sampling, 1)},
        {"cullkit_abt_binning_2threads", abt_with(AbtCandidates::binning, 2)}},
       5);
   std::fprintf(stderr, "build: abt binning / embree medium = %.3f, sampling / embree = %.3f (abt nodes %zu)\n",

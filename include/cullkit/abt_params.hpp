@@ -52,9 +52,11 @@ struct AbtParams {
   std::uint32_t score_sample_limit = 8192;
   /// Seed of the sampling generator (unused by binning). Default 0x5eed.
   std::uint64_t seed = 0x5eedu;
-  /// Worker threads for the build: 0 or 1 build on the calling thread only (default 0). With N > 1,
-  /// subtrees are built by up to N threads (the caller included). The tree is identical either way.
-  unsigned threads = 0;
+  /// Worker threads for the build: 0 uses all hardware threads, 1 builds on the calling thread
+  /// only (the default: a build takes no other thread unless asked to). With N > 1,
+  /// subtrees are built by up to N threads (the caller included) of the library's persistent
+  /// worker pool. The tree is identical either way.
+  unsigned threads = 1;
   /// Subtrees smaller than this are never handed to another thread. Default 4096 objects.
   std::uint32_t parallel_grain = 4096;
   /// `cull` tests the objects of a straddling subtree of at most this many objects directly

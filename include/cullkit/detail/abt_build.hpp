@@ -3,7 +3,7 @@
 // Three named steps fill the tree's flat arrays:
 //  1. `abt_build_node` splits a range of build items recursively (scores from abt_split.hpp,
 //     then an in-place partition by centroid), appending child pairs to a raw node array;
-//  2. `abt_build_raw` runs step 1 over the whole input, serially or with worker threads (top
+//  2. `abt_build_raw` runs step 1 over the whole input, serially or on the shared WorkerPool (top
 //     levels on the calling thread, then each deferred subtree into its own array, stitched);
 //  3. `abt_relayout` renumbers the raw nodes in the canonical pre-order layout, so the result is
 //     identical for every thread count and for every order in which subtrees were (re)built.
@@ -13,16 +13,18 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <mutex>
-#include <thread>
 #include <vector>
 
 #include "../abt_params.hpp"
 #include "../geometry/aabb.hpp"
 #include "../geometry/sphere.hpp"
 #include "abt_split.hpp"
+#include "worker_pool.hpp"
 
 namespace cullkit::detail {
 
@@ -168,9 +170,11 @@ inline void abt_stitch(std::vector<AbtNode>& raw, std::uint32_t at, const std::v
   }
 }
 
-/// Builds a raw node array (root at 0) over items [begin, end), the root at `depth`. With
-/// `threads` > 1 and enough items, subtrees below `grain` items are built by a pool. Split choices
-/// depend only on a node's own items and key, so the tree is the same for every thread count.
+/// Builds a raw node array (root at 0) over items [begin, end), the root at `depth`. `threads`
+/// follows AbtParams::threads (0: all hardware threads, 1: the calling thread only); with more
+/// than one and enough items, subtrees below `grain` items are deferred as tasks and built on the
+/// shared WorkerPool. Split choices depend only on a node's own items and key, and each task
+/// writes its own array, stitched in task order, so the tree is the same for every thread count.
 inline std::vector<AbtNode> abt_build_raw(AbtBuildContext ctx, std::uint32_t begin, std::uint32_t end,
                                           std::uint32_t depth, unsigned threads, std::uint32_t grain) {
   std::vector<AbtNode> raw(1);
@@ -179,7 +183,8 @@ inline std::vector<AbtNode> abt_build_raw(AbtBuildContext ctx, std::uint32_t beg
   scratch.reserve(ctx.cfg.candidates);
   Aabb box, centroids;
   abt_range_bounds(ctx.items, begin, end, box, centroids);
-  if (threads <= 1 || end - begin < 2 * grain) {
+  const unsigned workers = resolve_threads(threads, std::numeric_limits<unsigned>::max());
+  if (workers <= 1 || end - begin < 2 * grain) {
     abt_build_node(raw, 0, begin, end, depth, box, centroids, ctx, scratch);
     return raw;
   }
@@ -189,26 +194,29 @@ inline std::vector<AbtNode> abt_build_raw(AbtBuildContext ctx, std::uint32_t beg
   abt_build_node(raw, 0, begin, end, depth, box, centroids, ctx, scratch);
   ctx.grain = 0;
   ctx.tasks = nullptr;
-  std::vector<std::vector<AbtNode>> local(tasks.size());
-  std::atomic<std::size_t> next{0};
-  auto worker = [&]() {
-    AbtSplitScratch s;
-    s.reserve(ctx.cfg.candidates);
-    for (;;) {
-      const std::size_t t = next.fetch_add(1);
-      if (t >= tasks.size()) return;
-      std::vector<AbtNode>& sub = local[t];
-      sub.resize(1);
-      abt_build_node(sub, 0, tasks[t].begin, tasks[t].end, tasks[t].depth, tasks[t].box, tasks[t].centroids, ctx, s);
-    }
-  };
-  std::vector<std::thread> pool;
-  const unsigned extra = std::min<unsigned>(threads - 1, static_cast<unsigned>(tasks.size()));
-  pool.reserve(extra);
-  for (unsigned t = 0; t < extra; ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& th : pool) th.join();
-  for (std::size_t t = 0; t < tasks.size(); ++t) abt_stitch(raw, tasks[t].node, local[t]);
+  // Each pool task is one worker with its own scratch, pulling subtrees from a shared counter.
+  struct Job {
+    const AbtBuildContext* ctx;
+    const std::vector<AbtBuildTask>* tasks;
+    std::vector<std::vector<AbtNode>> local;
+    std::atomic<std::size_t> next{0};
+  } job{&ctx, &tasks, std::vector<std::vector<AbtNode>>(tasks.size()), {}};
+  const std::size_t count = std::min<std::size_t>(workers, tasks.size());
+  WorkerPool::shared().run(
+      count,
+      [](void* p, std::size_t) {
+        Job& j = *static_cast<Job*>(p);
+        AbtSplitScratch s;
+        s.reserve(j.ctx->cfg.candidates);
+        for (std::size_t t = j.next.fetch_add(1); t < j.tasks->size(); t = j.next.fetch_add(1)) {
+          const AbtBuildTask& task = (*j.tasks)[t];
+          std::vector<AbtNode>& sub = j.local[t];
+          sub.resize(1);
+          abt_build_node(sub, 0, task.begin, task.end, task.depth, task.box, task.centroids, *j.ctx, s);
+        }
+      },
+      &job);
+  for (std::size_t t = 0; t < tasks.size(); ++t) abt_stitch(raw, tasks[t].node, job.local[t]);
   return raw;
 }
 

@@ -21,6 +21,7 @@
 
 #include "../config.hpp"
 #include "../geometry/aabb.hpp"
+#include "splitmix64.hpp"
 
 namespace cullkit::detail {
 
@@ -33,14 +34,6 @@ struct AbtBuildItem {
 
 /// Centroid of a valid box without overflow for huge coordinates.
 [[nodiscard]] inline glm::vec3 abt_centroid(const Aabb& b) noexcept { return b.min * 0.5f + b.max * 0.5f; }
-
-/// splitmix64 step: a tiny, well-mixed, platform-independent generator.
-[[nodiscard]] inline std::uint64_t splitmix64(std::uint64_t& state) noexcept {
-  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
 
 /// Volume in double: finite for any box with finite float coordinates.
 [[nodiscard]] inline double abt_volume(const Aabb& b) noexcept {
@@ -152,7 +145,7 @@ inline void fill(const AbtBuildItem* items, std::uint32_t begin, std::uint32_t e
     node_ext[a] = double(node_box.max[a]) - double(node_box.min[a]);
     max_ext = std::max(max_ext, node_ext[a]);
   }
-  std::uint64_t rng = cfg.seed ^ (key * 0xD1B54A32D192ED03ull);
+  SplitMix64 rng(cfg.seed ^ (key * 0xD1B54A32D192ED03ull));
   const std::uint32_t k_max = std::max<std::uint32_t>(1u, cfg.candidates);
 
   // Candidate positions per axis; bin(v) approximates #{candidates <= v} (exact for sampling).
@@ -166,7 +159,7 @@ inline void fill(const AbtBuildItem* items, std::uint32_t begin, std::uint32_t e
     float scale = 0.0f;
     if (cfg.sampling) {
       for (std::uint32_t i = 0; i < k_max; ++i) {
-        const std::uint32_t pick = begin + static_cast<std::uint32_t>(splitmix64(rng) % n);
+        const std::uint32_t pick = begin + static_cast<std::uint32_t>(rng.below(n));
         const float p = items[pick].centroid[axis];
         if (p > cmin) positions.push_back(p);  // a plane at cmin would leave the left side empty
       }

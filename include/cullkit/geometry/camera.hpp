@@ -5,11 +5,6 @@
 #include <cstdint>
 #include <limits>
 
-#if defined(__SSE2__) || defined(_M_X64)
-#include <emmintrin.h>
-#define CULLKIT_CAMERA_SSE2 1
-#endif
-
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
@@ -18,6 +13,10 @@
 
 #include "../config.hpp"
 #include "frustum.hpp"
+
+#if CULLKIT_HAS_SSE2
+#include <emmintrin.h>
+#endif
 
 namespace cullkit {
 
@@ -89,7 +88,7 @@ class PixelRays {
   /// e.g. -ffp-contract=fast with -mfma, or the two may differ in the last bit).
   void directions(int x, int y, int count, float* dx, float* dy, float* dz) const noexcept {
     int i = 0;
-#ifdef CULLKIT_CAMERA_SSE2
+#if CULLKIT_HAS_SSE2
     const double py = static_cast<double>(y) + 0.5;
     const __m128d v = _mm_set1_pd(1.0 - 2.0 * py / height_);
     const __m128d two = _mm_set1_pd(2.0), one = _mm_set1_pd(1.0), half = _mm_set1_pd(0.5);

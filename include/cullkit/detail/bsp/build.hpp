@@ -5,7 +5,7 @@
 // make and the convex polygons it receives, each item owning its polygons) processed depth first:
 // choose a splitter plane, keep polygons in that plane at the node, send the others to the front or
 // back item, cutting those that straddle it. Large inputs are cut on the calling thread until there
-// are enough independent subtrees, which worker threads then build; the result is laid out in one
+// are enough independent subtrees, which the shared WorkerPool then builds; the result is laid out in one
 // canonical order afterwards, so it does not depend on the thread count.
 #pragma once
 
@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <thread>
 #include <vector>
 
@@ -24,6 +25,7 @@
 #include <glm/vec3.hpp>
 
 #include "../../config.hpp"
+#include "../worker_pool.hpp"
 
 namespace cullkit {
 
@@ -54,7 +56,8 @@ struct BspParams {
   float balance_weight = 1.0f;
   float coplanar_weight = 1.0f;
   /// Worker threads for the build: 0 uses all hardware threads, 1 builds on the calling thread
-  /// only. The tree does not depend on it.
+  /// only; N > 1 uses up to N threads (the caller included) of the library's persistent worker
+  /// pool. The tree does not depend on it.
   unsigned threads = 0;
   /// Inputs with fewer triangles are built on the calling thread only. Default 8192.
   std::size_t parallel_min_triangles = 8192;
@@ -403,33 +406,38 @@ inline void canonical_order(Data& data) {
   data = std::move(out);
 }
 
-/// Runs `items` on up to `threads` threads (the caller included), each into its own Output,
-/// reporting progress from the calling thread; returns the outputs in item order.
+/// Runs `items` as up to `threads` tasks of the shared WorkerPool (the calling thread is task 0),
+/// each item into its own Output; returns the outputs in item order. Progress is reported from
+/// the calling thread only: while it builds (every 1024 nodes) and, once no item is left to take,
+/// every 20 ms until the other tasks have finished theirs.
 inline std::vector<Output> build_parallel(std::vector<Item>& items, unsigned threads, Context& ctx) {
-  std::vector<Output> outs(items.size());
-  std::atomic<std::size_t> next{0}, done{0};
-  auto work = [&](bool report_here) {
-    for (std::size_t i = next.fetch_add(1); i < items.size(); i = next.fetch_add(1)) {
-      build_subtree(std::move(items[i]), outs[i], ctx, report_here);
-      done.fetch_add(1);
-    }
-  };
-  // With a progress callback the caller only reports (sleeping between reports) and `threads`
-  // workers build; without, the caller is one of the `threads`.
-  const bool report = static_cast<bool>(ctx.params->progress) && threads > 1;
-  const std::size_t workers = std::min<std::size_t>(report ? threads : threads - 1, items.size());
-  std::vector<std::thread> pool;
-  for (std::size_t t = 0; t < workers; ++t) pool.emplace_back(work, false);
-  if (report && !pool.empty()) {
-    while (done.load() < items.size()) {
-      ctx.params->progress(BspProgress{ctx.placed.load(), ctx.pending.load()});
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-  } else {
-    work(static_cast<bool>(ctx.params->progress));  // on the calling thread: it may report
-  }
-  for (auto& t : pool) t.join();
-  return outs;
+  struct Job {
+    std::vector<Item>* items;
+    std::vector<Output> outs;
+    Context* ctx;
+    std::atomic<std::size_t> next{0}, done{0};
+  } job{&items, std::vector<Output>(items.size()), &ctx, {}, {}};
+  const std::size_t count = std::min<std::size_t>(std::max(1u, threads), items.size());
+  WorkerPool::shared().run(
+      count,
+      [](void* p, std::size_t task) {
+        Job& j = *static_cast<Job*>(p);
+        const std::size_t n = j.items->size();
+        const bool report = task == 0 && static_cast<bool>(j.ctx->params->progress);
+        for (std::size_t i = j.next.fetch_add(1); i < n; i = j.next.fetch_add(1)) {
+          build_subtree(std::move((*j.items)[i]), j.outs[i], *j.ctx, report);
+          j.done.fetch_add(1);
+        }
+        // Only task 0 waits here, and only for items other tasks have already taken: when the
+        // pool runs every task on this thread instead, task 0 has taken them all.
+        if (!report) return;
+        while (j.done.load() < n) {
+          j.ctx->params->progress(BspProgress{j.ctx->placed.load(), j.ctx->pending.load()});
+          std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        }
+      },
+      &job);
+  return std::move(job.outs);
 }
 
 /// The whole build. `triangle_corners(i, out3)` reads triangle i (false: bad index).
@@ -445,7 +453,7 @@ void build(std::size_t triangle_count, const Positions& triangle_corners, const 
   ctx.eps = data.stats.epsilon;
   ctx.params = &params;
   ctx.pending = root.polys.size();
-  unsigned threads = params.threads ? params.threads : std::max(1u, std::thread::hardware_concurrency());
+  unsigned threads = resolve_threads(params.threads, std::numeric_limits<unsigned>::max());
   if (root.polys.size() < params.parallel_min_triangles) threads = 1;
   std::size_t cuts = 0, depth = 0;
   if (!root.polys.empty()) {

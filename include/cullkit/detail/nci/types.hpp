@@ -29,7 +29,8 @@ struct NciParams {
   /// threads come from the library's persistent pool (started on first use, never per call) or,
   /// with `task_runner`, from the caller's job system; 1 runs on the calling thread only.
   unsigned threads = 0;
-  /// Worker threads for the build (per class); 0: all hardware threads. Never changes the index.
+  /// Worker threads for the build (per class, from the same persistent pool); 0: all hardware
+  /// threads, 1: the calling thread only. Never changes the index.
   unsigned build_threads = 0;
   /// Where select_visible's parallel work runs: `threads` tasks (0: as many as hardware threads,
   /// at most one per screen tile) handed to `task_runner.dispatch` when it is set, else to the
