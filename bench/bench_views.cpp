@@ -15,10 +15,6 @@
 #include <string>
 #include <vector>
 
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#endif
-#include <BulletCollision/BroadphaseCollision/btDbvt.h>
 
 #include <glm/ext/matrix_clip_space.hpp>
 #include <glm/ext/matrix_transform.hpp>
@@ -26,57 +22,14 @@
 #include <cullkit/cullkit.hpp>
 #include <cullkit_support/scene.hpp>
 
+#include "dbvt_peer.hpp"
 #include "race.hpp"
 
 using namespace cullkit;
+using cullkit::bench::DbvtPeer;
+using cullkit::bench::random_boxes;
 
 namespace {
-
-class DbvtPeer {
- public:
-  explicit DbvtPeer(const std::vector<Aabb>& boxes) {
-    for (std::size_t i = 0; i < boxes.size(); ++i) {
-      const btDbvtVolume v = btDbvtVolume::FromMM(btVector3(boxes[i].min.x, boxes[i].min.y, boxes[i].min.z),
-                                                  btVector3(boxes[i].max.x, boxes[i].max.y, boxes[i].max.z));
-      tree_.insert(v, reinterpret_cast<void*>(static_cast<std::uintptr_t>(i)));
-    }
-    tree_.optimizeTopDown();
-  }
-  void cull(const Frustum& f, std::vector<std::uint32_t>& out) {
-    btVector3 normals[6];
-    btScalar offsets[6];
-    int count = 0;
-    for (int p = 0; p < Frustum::max_planes; ++p) {
-      if (!f.has_plane(p)) continue;
-      normals[count] = btVector3(f.plane(p).normal.x, f.plane(p).normal.y, f.plane(p).normal.z);
-      offsets[count] = f.plane(p).d;
-      ++count;
-    }
-    struct Collect : btDbvt::ICollide {
-      std::vector<std::uint32_t>* out;
-      void Process(const btDbvtNode* n) override {
-        out->push_back(static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(n->data)));
-      }
-    } collect;
-    collect.out = &out;
-    out.clear();
-    btDbvt::collideKDOP(tree_.m_root, normals, offsets, count, collect);
-  }
-
- private:
-  btDbvt tree_;
-};
-
-std::vector<Aabb> random_boxes(std::size_t n) {
-  support::Rng rng(60000);
-  std::vector<Aabb> boxes(n);
-  for (auto& b : boxes) {
-    const glm::vec3 c(rng.uniform(-500, 500), rng.uniform(0, 50), rng.uniform(-500, 500));
-    const glm::vec3 h(rng.uniform(0.5f, 5), rng.uniform(0.5f, 10), rng.uniform(0.5f, 5));
-    b = Aabb{c - h, c + h};
-  }
-  return boxes;
-}
 
 std::vector<Aabb> triangle_boxes(const support::Scene& s) {
   std::vector<Aabb> out;
