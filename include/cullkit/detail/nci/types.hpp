@@ -12,6 +12,14 @@
 
 namespace cullkit {
 
+/// Which path serves a (screen tile, grid cell) pair in select_visible (`NciParams::crowded_path`).
+/// Both give the same per-pixel answer; they differ in cost.
+enum class NciCrowdedPath : std::uint8_t {
+  automatic,  ///< chosen per frame and per pair from the cell's triangle count and the tile's live pixels
+  walk_only,  ///< always the near-to-far walk of the cell's triangles
+  rays_only,  ///< always the tile's live rays through the cell's hierarchy, where the cell has one
+};
+
 /// Configuration of a NormalClassIndex. Every field has a usable default.
 struct NciParams {
   /// Normal classes (k of the spherical k-means). More classes: tighter cones, so more classes are
@@ -57,6 +65,8 @@ struct NciParams {
   void (*progress)(float fraction, void* user) = nullptr;
   /// Passed to `progress` unchanged.
   void* progress_user = nullptr;
+  /// How crowded cells are served (see NciCrowdedPath). Never changes the answer.
+  NciCrowdedPath crowded_path = NciCrowdedPath::automatic;
 };
 
 /// The result of NormalClassIndex::select_visible.
@@ -106,6 +116,8 @@ struct NciSelectStats {
   /// meets every front-facing triangle near the visible surface and casting one ray per pixel
   /// through a BVH does less work.
   std::size_t triangles_no_pixel = 0;
+  std::size_t cells_walked = 0;    ///< (tile, cell) pairs served by the near-to-far walk
+  std::size_t cells_ray_cast = 0;  ///< (tile, cell) pairs served by casting the tile's rays through the cell's hierarchy
   int axis = 0;                    ///< grid axis walked
 };
 
