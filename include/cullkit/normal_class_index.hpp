@@ -76,6 +76,7 @@
 #include "geometry/aabb.hpp"
 #include "geometry/camera.hpp"
 #include "task_runner.hpp"
+#include "mesh_buffers.hpp"
 #include "traits.hpp"
 #include "detail/nci/build.hpp"
 #include "detail/nci/context.hpp"
@@ -101,14 +102,25 @@ class NormalClassIndex {
  public:
   /// Builds the index. Triangles with an out-of-range index, a non-finite coordinate or zero area
   /// are skipped and counted in stats(); an empty or all-invalid mesh gives an index that selects
-  /// nothing. pre: mesh.vertices != nullptr when vertex_count > 0, mesh.indices likewise.
+  /// nothing. pre: mesh.vertices != nullptr when vertex_count > 0, mesh.indices likewise (asserted
+  /// in debug builds; a null pointer is read as an empty buffer in release builds).
   explicit NormalClassIndex(MeshView<Vertex, Index> mesh, const NciParams& params = {}) {
-    CULLKIT_ASSERT(mesh.vertices != nullptr || mesh.vertex_count == 0, "vertices present when vertex_count > 0");
-    CULLKIT_ASSERT(mesh.indices != nullptr || mesh.index_count == 0, "indices present when index_count > 0");
+    mesh = checked_mesh(mesh);
     const Vertex* vertices = mesh.vertices;
-    construct(
-        [vertices](std::size_t i) { return glm::vec3(Traits::position(vertices[i])); }, mesh.vertex_count,
-        mesh.indices, mesh.index_count, params);
+    const Index* indices = mesh.indices;
+    construct([vertices](std::size_t i) { return glm::vec3(Traits::position(vertices[i])); }, mesh.vertex_count,
+              [indices](std::size_t i) { return widen_index(indices[i]); }, mesh.index_count, params);
+  }
+
+  /// Builds the index from raw buffers: positions through a pointer and a byte stride, indices of
+  /// a width chosen at run time (see StridedMesh). Same skipping rules and the same index (hence
+  /// the same answers) as the MeshView constructor given the same positions and indices; `Vertex`
+  /// and `Index` are not read. pre: as StridedMesh's (asserted in debug builds; null buffers are
+  /// read as empty in release builds).
+  explicit NormalClassIndex(const StridedMesh& mesh, const NciParams& params = {}) {
+    const StridedMesh m = checked_mesh(mesh);
+    construct([&m](std::size_t i) { return m.positions(static_cast<std::uint32_t>(i)); }, m.vertex_count,
+              [&m](std::size_t i) { return std::uint64_t{m.indices[i]}; }, m.indices.count, params);
   }
 
   /// Builds the index from positions read through a pointer and a byte stride (an interleaved
@@ -116,18 +128,15 @@ class NormalClassIndex {
   /// alignment) and `index_count` indices (3 per triangle) of this index's `Index` type, which may
   /// be 16 or 32 bits. Same skipping rules and answers as the MeshView constructor; `Vertex` is not
   /// read. pre: positions.base != nullptr when vertex_count > 0, indices != nullptr when
-  /// index_count > 0.
+  /// index_count > 0. For an index width chosen at run time, use the StridedMesh constructor.
   NormalClassIndex(const StridedPositions& positions, std::size_t vertex_count, const Index* indices,
                    std::size_t index_count, const NciParams& params = {}) {
     CULLKIT_ASSERT(positions.base != nullptr || vertex_count == 0, "positions present when vertex_count > 0");
     CULLKIT_ASSERT(indices != nullptr || index_count == 0, "indices present when index_count > 0");
-    construct(
-        [positions](std::size_t i) {
-          float q[3];  // memcpy: the buffer need not be float-aligned
-          std::memcpy(q, positions.base + i * positions.stride_bytes + positions.offset_bytes, sizeof q);
-          return glm::vec3(q[0], q[1], q[2]);
-        },
-        vertex_count, indices, index_count, params);
+    if (positions.base == nullptr) vertex_count = 0;
+    if (indices == nullptr) index_count = 0;
+    construct([&positions](std::size_t i) { return positions(static_cast<std::uint32_t>(i)); }, vertex_count,
+              [indices](std::size_t i) { return widen_index(indices[i]); }, index_count, params);
   }
 
   /// The triangles that are the first front-facing surface hit by the ray of some pixel centre
@@ -252,8 +261,17 @@ class NormalClassIndex {
 
  private:
   // Clamps the parameters, gathers the triangles and builds; times the whole.
-  template <class Position>
-  void construct(const Position& position, std::size_t vertex_count, const Index* indices, std::size_t index_count,
+  // An index as an unsigned 64-bit value; a negative one (signed Index) becomes out of range.
+  template <class I>
+  [[nodiscard]] static std::uint64_t widen_index(I i) noexcept {
+    if constexpr (std::is_signed_v<I>) {
+      if (i < 0) return ~std::uint64_t{0};
+    }
+    return static_cast<std::uint64_t>(i);
+  }
+
+  template <class Position, class IndexAt>
+  void construct(const Position& position, std::size_t vertex_count, const IndexAt& index_at, std::size_t index_count,
                  const NciParams& params) {
     NciParams& p = data_.params = params;
     p.classes = std::clamp(p.classes, 1, 4096);
@@ -261,17 +279,18 @@ class NormalClassIndex {
     if (p.tile_size != 0) p.tile_size = std::clamp(p.tile_size, 2, detail::nci::TileState::max_tile);
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<glm::vec3> normals;
-    gather(position, vertex_count, indices, index_count, normals);
+    gather(position, vertex_count, index_at, index_count, normals);
     detail::nci::build(data_, normals);
     data_.stats.build_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 
   // The valid triangles into data_ (vertices deduplicated through a remap) and their unit
-  // normals; the skipped ones counted. `position(i)`: vertex i's position, for i < vertex_count.
-  // The only step that reads the user's types.
-  template <class Position>
-  void gather(const Position& position, std::size_t vertex_count, const Index* indices, std::size_t index_count,
+  // normals; the skipped ones counted. `position(i)`: vertex i's position, for i < vertex_count;
+  // `index_at(i)`: index i widened to 64 bits (out of range when negative). The only step that
+  // reads the user's types.
+  template <class Position, class IndexAt>
+  void gather(const Position& position, std::size_t vertex_count, const IndexAt& index_at, std::size_t index_count,
               std::vector<glm::vec3>& normals) {
     detail::nci::IndexData& data = data_;
     data.stats.triangles_input = index_count / 3;
@@ -281,12 +300,9 @@ class NormalClassIndex {
       std::size_t idx[3];
       bool in_range = true;
       for (int k = 0; k < 3; ++k) {
-        const auto i = indices[3 * t + static_cast<std::size_t>(k)];
-        if constexpr (std::is_signed_v<Index>) {
-          if (i < 0) in_range = false;
-        }
-        idx[k] = static_cast<std::size_t>(i);
-        if (!in_range || idx[k] >= vertex_count) in_range = false;
+        const std::uint64_t i = index_at(3 * t + static_cast<std::size_t>(k));
+        if (i >= vertex_count) in_range = false;
+        idx[k] = in_range ? static_cast<std::size_t>(i) : 0;
       }
       if (!in_range) {
         ++data.stats.skipped_out_of_range;
@@ -331,5 +347,10 @@ class NormalClassIndex {
 
   detail::nci::IndexData data_;
 };
+
+/// `NormalClassIndex index(strided_mesh)` builds a NormalClassIndex<glm::vec3> (the vertex type
+/// is not read from raw buffers).
+NormalClassIndex(const StridedMesh&)->NormalClassIndex<glm::vec3>;
+NormalClassIndex(const StridedMesh&, const NciParams&)->NormalClassIndex<glm::vec3>;
 
 }  // namespace cullkit
