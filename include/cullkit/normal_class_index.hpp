@@ -80,7 +80,9 @@
 #include "traits.hpp"
 #include "detail/nci/build.hpp"
 #include "detail/nci/context.hpp"
+#include "detail/nci/degenerate_camera.hpp"
 #include "detail/nci/index_data.hpp"
+#include "detail/nci/moving.hpp"
 #include "detail/nci/select.hpp"
 #include "detail/nci/types.hpp"
 
@@ -149,7 +151,10 @@ class NormalClassIndex {
   /// So the set may be a little larger than the pixels' first hits (in ordinary views a few
   /// triangles in ten thousand; in views a few degrees wide from kilometres away up to +60%),
   /// never smaller. The per-pixel output stays the plain first hit of the watertight test.
-  /// A camera with a non-positive width or height gives an empty set. Allocates a context.
+  /// A camera with a non-positive width or height gives an empty set (no pixel sees anything). A
+  /// degenerate camera (a NaN or infinite eye; a NaN, infinite or singular matrix), whose pixel
+  /// rays are undefined, gives every kept triangle (nothing can be decided, so nothing is hidden)
+  /// with no triangle tested and every pixel a miss. Allocates a context.
   [[nodiscard]] VisibleSet select_visible(const Camera& camera) const {
     NciContext context;
     VisibleSet out;
@@ -162,82 +167,39 @@ class NormalClassIndex {
   /// depends on NciParams::threads. Cost: proportional to the rays times the triangles met near
   /// the visible surfaces, divided over the threads.
   void select_visible(const Camera& camera, NciContext& context, VisibleSet& out, NciPixels* pixels) const {
+    if (camera.width > 0 && camera.height > 0 && detail::nci::degenerate_camera(camera))
+      return detail::nci::select_everything(data_, camera, context, out, pixels);
     detail::nci::select_frame(data_, camera, context, out, pixels, nullptr, nullptr);
   }
 
-  /// With moving objects: each object has its own index, built in its local frame,
-  /// and a rigid `local_to_world` transform (rotation and translation only: ray parameters t stay
-  /// the same in both frames). The objects are selected first, each with the camera taken into its
-  /// local frame; then the static scene, whose pixels stay unfinished but start from the objects'
-  /// depths, so only static triangles in front of the objects are searched. `out` holds the static
-  /// triangles; `object_triangles` (cleared first) the objects' visible triangles as sorted unique
-  /// (object id, triangle) pairs. `pixels`, when given, holds static triangle ids, or for a pixel
-  /// won by an object NciPixels::miss with the object's depth (see `object_pixels`). Edge bands
-  /// (see above) span objects and scene: an object's triangle is reported where it lies no farther
-  /// than its pixel's first hit outside every band, whichever mesh that hit belongs to.
+  /// With moving objects: each object has its own index, built in its local frame, and an affine
+  /// `local_to_world` transform (any invertible one: rotation, translation, uniform or non-uniform
+  /// scale, shear, mirror). The objects are selected first, each with the camera taken into its
+  /// local frame (the pixel rays mapped by the inverse transform, so ray parameters t stay those of
+  /// the world; depths are brought back to the unit world pixel ray); then the static scene, whose
+  /// pixels stay unfinished but start from the objects' depths, so only static triangles in front
+  /// of the objects are searched. `out` holds the static triangles; `object_triangles` (cleared
+  /// first) the objects' visible triangles as sorted unique (object id, triangle) pairs. `pixels`,
+  /// when given, holds static triangle ids, or for a pixel won by an object NciPixels::miss with
+  /// the object's world depth. Edge bands (see above) span objects and scene: an object's triangle
+  /// is reported where it lies no farther than its pixel's first hit outside every band, whichever
+  /// mesh that hit belongs to.
+  /// Faces: an object's triangle counts where it faces the eye in the object's own frame. For a
+  /// mirrored transform (negative determinant) that is the world back face of the moved triangle:
+  /// the faces an engine draws when it flips its cull mode for such a transform, so a mirrored
+  /// closed mesh still shows its outside.
+  /// Transforms that cannot be used (a NaN or infinite entry, a bottom row other than (0, 0, 0, 1),
+  /// a singular linear part or one with condition number above 1e6) are rejected: the object is
+  /// reported whole (every triangle its index kept), hides nothing, and is counted in
+  /// `context.stats.moving_objects_rejected`. A degenerate camera (see select_visible) reports the
+  /// static scene and every object whole.
   /// pre: every `objects[k].index` is not null. Allocates a second context inside `context`.
   template <class ObjectIndex>
   void select_visible(const Camera& camera, const NciMovingObject<ObjectIndex>* objects, std::size_t object_count,
                       NciContext& context, VisibleSet& out, std::vector<NciObjectTriangle>& object_triangles,
                       NciPixels* pixels = nullptr) const {
-    object_triangles.clear();
-    const int width = camera.width, height = camera.height;
-    if (width <= 0 || height <= 0 || object_count == 0) {
-      detail::nci::select_frame(data_, camera, context, out, pixels, nullptr, nullptr);
-      return;
-    }
-    const std::size_t pixel_count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-    auto& scratch = detail::nci::ContextAccess::scratch(context);
-    if (!scratch.objects) scratch.objects = std::make_unique<detail::nci::MovingScratch>();
-    auto& o = *scratch.objects;
-    o.depth.assign(pixel_count, std::numeric_limits<float>::infinity());
-    o.solid.assign(pixel_count, std::numeric_limits<float>::infinity());
-    o.candidates.clear();
-    o.triangle.assign(pixel_count, NciPixels::miss);
-    o.object.assign(pixel_count, NciPixels::miss);
-    for (std::size_t k = 0; k < object_count; ++k) {
-      CULLKIT_ASSERT(objects[k].index != nullptr, "every moving object has an index");
-      if (!objects[k].index) continue;
-      const glm::dmat4 m(objects[k].local_to_world);
-      Camera local = camera;
-      local.eye = glm::vec3(glm::inverse(m) * glm::dvec4(glm::dvec3(camera.eye), 1.0));
-      local.view_proj = glm::mat4(glm::dmat4(camera.view_proj) * m);
-      objects[k].index->select_visible(local, o.context, o.set, &o.pixels);
-      const std::uint32_t id = objects[k].object_id;
-      const auto& object_scratch = detail::nci::ContextAccess::scratch(o.context);
-      const auto& solid = object_scratch.pixel_solid_t;
-      for (std::size_t p = 0; p < pixel_count; ++p) {
-        if (solid.size() == pixel_count) o.solid[p] = std::min(o.solid[p], solid[p]);
-        const std::uint32_t tri = o.pixels.triangle[p];
-        if (tri == NciPixels::miss) continue;
-        if (o.pixels.depth[p] <= o.solid[p])
-          o.candidates.push_back(detail::nci::MovingScratch::Candidate{id, tri, o.pixels.depth[p], static_cast<std::uint32_t>(p)});
-        if (o.pixels.depth[p] < o.depth[p]) {
-          o.depth[p] = o.pixels.depth[p];
-          o.triangle[p] = tri;
-          o.object[p] = id;
-        }
-      }
-      // The object's triangles beside its pixels' first hits (edge bands; see select_visible).
-      for (const auto& e : object_scratch.extras)
-        if (e.t <= o.solid[e.pixel]) o.candidates.push_back(detail::nci::MovingScratch::Candidate{id, e.tri, e.t, e.pixel});
-    }
-    detail::nci::select_frame(data_, camera, context, out, pixels, o.depth.data(), o.solid.data());
-    // An object's triangle is reported where it lies no farther than the pixel's solid depth after
-    // the static scene (then nothing certain hides it); the pixels keep the objects' first hits
-    // where no static triangle came in front.
-    const auto& solid = scratch.pixel_solid_t;
-    for (const auto& c : o.candidates)
-      if (solid.size() == pixel_count && c.t <= solid[c.pixel]) object_triangles.push_back(NciObjectTriangle{c.object, c.triangle});
-    for (std::size_t p = 0; p < pixel_count; ++p) {
-      if (o.object[p] == NciPixels::miss) continue;
-      if (scratch.pixel_tri.size() == pixel_count && scratch.pixel_tri[p] != detail::nci::no_triangle) continue;
-      if (pixels && pixels->depth.size() == pixel_count) pixels->depth[p] = o.depth[p];
-    }
-    std::sort(object_triangles.begin(), object_triangles.end());
-    object_triangles.erase(std::unique(object_triangles.begin(), object_triangles.end()), object_triangles.end());
+    detail::nci::select_with_objects(data_, camera, objects, object_count, context, out, object_triangles, pixels);
   }
-
 
  public:
   /// Build statistics (skipped triangles, classes, cells, build time).
