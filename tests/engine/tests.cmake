@@ -6,3 +6,5 @@ cullkit_add_test(test_engine_refit SOURCES ${_engine}/test_engine_refit.cpp LABE
 find_package(Threads REQUIRED)
 cullkit_add_test(test_engine_mesh_buffers SOURCES ${_engine}/test_engine_mesh_buffers.cpp LIBS Threads::Threads
                  LABELS engine)
+cullkit_add_test(test_engine_degenerate_camera SOURCES ${_engine}/test_engine_degenerate_camera.cpp
+                 LIBS Threads::Threads LABELS engine)

@@ -9,32 +9,26 @@
 #include <limits>
 
 #include <glm/mat4x4.hpp>
-#include <glm/matrix.hpp>
 
 #include "../../geometry/camera.hpp"
+#include "../../geometry/frustum.hpp"
 #include "context.hpp"
 #include "index_data.hpp"
 
 namespace cullkit::detail::nci {
 
-// True when the camera's pixel rays are undefined: a non-finite eye coordinate, a non-finite matrix
-// entry, or a matrix whose double inverse is singular or not finite. Then no pixel can decide
+// True when the camera's pixel rays are undefined: a non-finite eye coordinate, or a matrix that
+// Frustum::from_matrix also treats as deciding nothing (detail::degenerate_matrix: a non-finite
+// entry, singular or nearly so). Then no pixel can decide
 // anything, and the conservative answer is "every triangle may be visible" (as the frustum of such
 // a matrix keeps everything).
 [[nodiscard]] inline bool degenerate_camera(const Camera& camera) noexcept {
   for (int k = 0; k < 3; ++k)
     if (!std::isfinite(camera.eye[k])) return true;
-  const glm::dmat4 m(camera.view_proj);
+  double m[4][4];
   for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r)
-      if (!std::isfinite(m[c][r])) return true;
-  const double det = glm::determinant(m);
-  if (!(det != 0.0) || !std::isfinite(det)) return true;
-  const glm::dmat4 inv = glm::inverse(m);
-  for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r)
-      if (!std::isfinite(inv[c][r])) return true;
-  return false;
+    for (int r = 0; r < 4; ++r) m[r][c] = static_cast<double>(camera.view_proj[c][r]);
+  return detail::degenerate_matrix(m);
 }
 
 // The answer for a degenerate camera: every kept triangle (mesh numbering, sorted), none tested;
