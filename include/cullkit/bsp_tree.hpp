@@ -57,7 +57,7 @@ class BspTree {
   /// pre: mesh.vertices != nullptr when vertex_count > 0, mesh.indices likewise (asserted in debug
   /// builds; a null pointer is read as an empty buffer in release builds).
   explicit BspTree(MeshView<Vertex, Index> mesh, const BspParams& params = {}) {
-    mesh = checked_mesh(mesh);
+    mesh = detail::checked_mesh(mesh);
     const auto read = [&mesh](std::size_t t, glm::vec3 out[3]) {
       return triangle_positions<Traits>(mesh, t, out);
     };
@@ -69,7 +69,7 @@ class BspTree {
   /// MeshView constructor given the same positions and indices; `Vertex` is not read.
   /// pre: as StridedMesh's (asserted in debug builds; null buffers are read as empty in release).
   explicit BspTree(const StridedMesh& mesh, const BspParams& params = {}) {
-    const StridedMesh m = checked_mesh(mesh);
+    const StridedMesh m = detail::checked_mesh(mesh);
     const auto read = [&m](std::size_t t, glm::vec3 out[3]) { return triangle_positions(m, t, out); };
     detail::bsp::build(m.triangle_count(), read, params, data_);
   }

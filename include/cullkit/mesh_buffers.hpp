@@ -83,8 +83,9 @@ struct StridedMesh {
   return true;
 }
 
-/// The mesh with null buffers read as empty ones (the release-build answer to a violated
-/// precondition); asserts the precondition in debug builds.
+namespace detail {
+// The mesh with null buffers read as empty ones (the release-build answer to a violated
+// precondition); asserts the precondition in debug builds.
 [[nodiscard]] inline StridedMesh checked_mesh(StridedMesh mesh) noexcept {
   CULLKIT_ASSERT(mesh.positions.base != nullptr || mesh.vertex_count == 0, "positions present when vertex_count > 0");
   CULLKIT_ASSERT(mesh.indices.data != nullptr || mesh.indices.count == 0, "indices present when index count > 0");
@@ -93,7 +94,7 @@ struct StridedMesh {
   return mesh;
 }
 
-/// The same for a MeshView.
+// The same for a MeshView.
 template <class Vertex, class Index>
 [[nodiscard]] MeshView<Vertex, Index> checked_mesh(MeshView<Vertex, Index> mesh) noexcept {
   CULLKIT_ASSERT(mesh.vertices != nullptr || mesh.vertex_count == 0, "vertices present when vertex_count > 0");
@@ -102,5 +103,7 @@ template <class Vertex, class Index>
   if (mesh.indices == nullptr) mesh.index_count = 0;
   return mesh;
 }
+
+}  // namespace detail
 
 }  // namespace cullkit

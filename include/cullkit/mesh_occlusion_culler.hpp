@@ -70,7 +70,7 @@ class MeshOcclusionCuller {
                       const MeshOcclusionParams& params = {}) {
     static_assert(require_vertex_traits<Vertex, Traits>::value, "");
     if constexpr (has_vertex_traits_v<Vertex, Traits>) {
-      mesh = checked_mesh(mesh);
+      mesh = detail::checked_mesh(mesh);
       build(mesh.index_count / 3,
             [&mesh](std::size_t t, glm::vec3 p[3]) { return triangle_positions<Traits>(mesh, t, p); }, objects,
             object_count, params);
@@ -84,7 +84,7 @@ class MeshOcclusionCuller {
   /// buffers are read as empty in release builds).
   MeshOcclusionCuller(const StridedMesh& mesh, const MeshObject* objects, std::size_t object_count,
                       const MeshOcclusionParams& params = {}) {
-    const StridedMesh m = checked_mesh(mesh);
+    const StridedMesh m = detail::checked_mesh(mesh);
     build(m.triangle_count(), [&m](std::size_t t, glm::vec3 p[3]) { return triangle_positions(m, t, p); }, objects,
           object_count, params);
   }

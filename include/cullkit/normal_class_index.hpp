@@ -107,7 +107,7 @@ class NormalClassIndex {
   /// nothing. pre: mesh.vertices != nullptr when vertex_count > 0, mesh.indices likewise (asserted
   /// in debug builds; a null pointer is read as an empty buffer in release builds).
   explicit NormalClassIndex(MeshView<Vertex, Index> mesh, const NciParams& params = {}) {
-    mesh = checked_mesh(mesh);
+    mesh = detail::checked_mesh(mesh);
     const Vertex* vertices = mesh.vertices;
     const Index* indices = mesh.indices;
     construct([vertices](std::size_t i) { return glm::vec3(Traits::position(vertices[i])); }, mesh.vertex_count,
@@ -120,7 +120,7 @@ class NormalClassIndex {
   /// and `Index` are not read. pre: as StridedMesh's (asserted in debug builds; null buffers are
   /// read as empty in release builds).
   explicit NormalClassIndex(const StridedMesh& mesh, const NciParams& params = {}) {
-    const StridedMesh m = checked_mesh(mesh);
+    const StridedMesh m = detail::checked_mesh(mesh);
     construct([&m](std::size_t i) { return m.positions(static_cast<std::uint32_t>(i)); }, m.vertex_count,
               [&m](std::size_t i) { return std::uint64_t{m.indices[i]}; }, m.indices.count, params);
   }
