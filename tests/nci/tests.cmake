@@ -15,3 +15,5 @@ cullkit_add_test(test_nci_moving_narrow SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_n
                  LIBS Threads::Threads)
 cullkit_add_test(test_nci_warm_frames SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_warm_frames.cpp LIBS Threads::Threads)
 cullkit_add_test(test_nci_mesh_input SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_mesh_input.cpp LIBS Threads::Threads)
+cullkit_add_test(test_nci_moving_affine SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_moving_affine.cpp EMBREE
+                 LIBS Threads::Threads)
