@@ -20,6 +20,8 @@
 // tested count, the call's NciSelectStats (triangles met and those with no pixel centre) and the mean
 // wall time per frame (the first frame included); env CULLKIT_NCI_GRID / CULLKIT_NCI_TILE set
 // NciParams::grid / tile_size.
+// Env CULLKIT_NCI_PATH = walk | rays | auto sets NciParams::crowded_path for --profile, --hash and the
+// timing races (default: auto).
 // CULLKIT_BENCH_SMOKE=1: a tiny city at 64x48, one setting.
 #include <algorithm>
 #include <atomic>
@@ -193,6 +195,15 @@ std::vector<Camera> views(const Scene& s, int w, int h) {
   return cams;
 }
 
+// NciParams::crowded_path from env CULLKIT_NCI_PATH (walk, rays, auto), else left as it is.
+void path_from_env(NciParams& p) {
+  const char* v = std::getenv("CULLKIT_NCI_PATH");
+  if (!v) return;
+  if (!std::strcmp(v, "walk")) p.crowded_path = NciCrowdedPath::walk_only;
+  else if (!std::strcmp(v, "rays")) p.crowded_path = NciCrowdedPath::rays_only;
+  else p.crowded_path = NciCrowdedPath::automatic;
+}
+
 bool g_quick = false;  // --quick: precision at the default parameters only, timing at 640x480 only
 
 void precision_table(const std::string& name, const Scene& s, unsigned threads, bool smoke) {
@@ -238,6 +249,7 @@ void speed(const std::string& name, const Scene& s, unsigned threads, bool smoke
   NciParams p;
   p.threads = threads;
   p.build_threads = threads;
+  path_from_env(p);
   const NormalClassIndex<glm::vec3> index(s.mesh(), p);
   const std::vector<std::pair<int, int>> sizes =
       smoke     ? std::vector<std::pair<int, int>>{{64, 48}}
@@ -270,6 +282,7 @@ void pixel_hash(const std::string& name, const Scene& s, unsigned threads) {
   p.threads = threads;
   p.build_threads = threads;
   if (const char* tile = std::getenv("CULLKIT_NCI_TILE")) p.tile_size = std::atoi(tile);  // answers must not move
+  path_from_env(p);  // neither must they
   const NormalClassIndex<glm::vec3> index(s.mesh(), p);
   for (auto [w, h] : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}}) {
     const auto cams = views(s, w, h);
@@ -313,6 +326,7 @@ int profile(const std::string& name, int view, int frames) {
   p.build_threads = 1;
   if (const char* g = std::getenv("CULLKIT_NCI_GRID")) p.grid = std::atoi(g);
   if (const char* t = std::getenv("CULLKIT_NCI_TILE")) p.tile_size = std::atoi(t);
+  path_from_env(p);
   const NormalClassIndex<glm::vec3> index(s->mesh(), p);
   const auto cams = views(*s, 640, 480);
   NciContext ctx;
@@ -322,9 +336,9 @@ int profile(const std::string& name, int view, int frames) {
   const double ms = frames > 0 ? seconds_since(t0) * 1e3 / frames : 0.0;
   const NciSelectStats& st = ctx.stats;
   std::printf("profile,%s,view%d,grid=%d,frames=%d,ms_per_frame=%.2f,selected=%zu,tested=%zu,ray_tests=%zu,cells=%zu,"
-              "triangles_met=%zu,triangles_no_pixel=%zu,bytes_per_triangle=%.1f\n",
+              "triangles_met=%zu,triangles_no_pixel=%zu,cells_walked=%zu,cells_ray_cast=%zu,bytes_per_triangle=%.1f\n",
               name.c_str(), view, index.params().grid, frames, ms, out.triangles.size(), out.triangles_tested,
-              st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel,
+              st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel, st.cells_walked, st.cells_ray_cast,
               double(index.memory_bytes()) / double(std::max<std::size_t>(1, s->triangle_count())));
   return 0;
 }
