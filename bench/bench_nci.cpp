@@ -26,6 +26,8 @@
 // tested count, the call's NciSelectStats (triangles met and those with no pixel centre) and the mean
 // wall time per frame (the first frame included); env CULLKIT_NCI_GRID / CULLKIT_NCI_TILE set
 // NciParams::grid / tile_size.
+// Env CULLKIT_NCI_PATH = walk | rays | auto sets NciParams::crowded_path for --profile, and for --hash
+// and the timing races unless --path is given (default: auto).
 // CULLKIT_BENCH_SMOKE=1: a tiny city at 64x48, one setting.
 #include <algorithm>
 #include <atomic>
@@ -198,6 +200,15 @@ std::vector<Camera> views(const Scene& s, int w, int h) {
   cams.push_back(support::make_camera(b.min + e * glm::vec3(0.3f, 0.08f, 0.35f),
                                       b.min + e * glm::vec3(0.8f, 0.05f, 0.7f), 70, w, h, 0.1f, 0.0f));
   return cams;
+}
+
+// NciParams::crowded_path from env CULLKIT_NCI_PATH (walk, rays, auto), else left as it is.
+void path_from_env(NciParams& p) {
+  const char* v = std::getenv("CULLKIT_NCI_PATH");
+  if (!v) return;
+  if (!std::strcmp(v, "walk")) p.crowded_path = NciCrowdedPath::walk_only;
+  else if (!std::strcmp(v, "rays")) p.crowded_path = NciCrowdedPath::rays_only;
+  else p.crowded_path = NciCrowdedPath::automatic;
 }
 
 bool g_quick = false;  // --quick: precision at the default parameters only, timing at 640x480 only
@@ -381,6 +392,7 @@ int profile(const std::string& name, int view, int frames) {
   p.build_threads = 1;
   if (const char* g = std::getenv("CULLKIT_NCI_GRID")) p.grid = std::atoi(g);
   if (const char* t = std::getenv("CULLKIT_NCI_TILE")) p.tile_size = std::atoi(t);
+  path_from_env(p);
   const NormalClassIndex<glm::vec3> index(s->mesh(), p);
   const auto cams = views(*s, 640, 480);
   NciContext ctx;
@@ -390,9 +402,9 @@ int profile(const std::string& name, int view, int frames) {
   const double ms = frames > 0 ? seconds_since(t0) * 1e3 / frames : 0.0;
   const NciSelectStats& st = ctx.stats;
   std::printf("profile,%s,view%d,grid=%d,frames=%d,ms_per_frame=%.2f,selected=%zu,tested=%zu,ray_tests=%zu,cells=%zu,"
-              "triangles_met=%zu,triangles_no_pixel=%zu,bytes_per_triangle=%.1f\n",
+              "triangles_met=%zu,triangles_no_pixel=%zu,cells_walked=%zu,cells_ray_cast=%zu,bytes_per_triangle=%.1f\n",
               name.c_str(), view, index.params().grid, frames, ms, out.triangles.size(), out.triangles_tested,
-              st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel,
+              st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel, st.cells_walked, st.cells_ray_cast,
               double(index.memory_bytes()) / double(std::max<std::size_t>(1, s->triangle_count())));
   return 0;
 }
@@ -404,6 +416,13 @@ int main(int argc, char** argv) {
     return profile(argv[2], std::atoi(argv[3]), argc >= 5 ? std::max(1, std::atoi(argv[4])) : 1);
   const bool smoke = cullkit_bench::smoke();
   bool big = !smoke, small = true, precision = true, timing = true, hash = false;
+  if (std::getenv("CULLKIT_NCI_PATH")) {  // the environment's path, unless --path says otherwise
+    NciParams env;
+    path_from_env(env);
+    g_paths = {{env.crowded_path, env.crowded_path == NciCrowdedPath::walk_only   ? "walk"
+                                  : env.crowded_path == NciCrowdedPath::rays_only ? "rays"
+                                                                                   : "auto"}};
+  }
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--no-big")) big = false;
     if (!std::strcmp(argv[i], "--only-big")) small = precision = timing = false;

@@ -114,6 +114,8 @@ inline void merge_workers(const IndexData& data, NciContext& context, Scratch& s
     context.stats.slices_walked += worker.stats.slices_walked;
     context.stats.triangles_met += worker.stats.triangles_met;
     context.stats.triangles_no_pixel += worker.stats.triangles_no_pixel;
+    context.stats.cells_walked += worker.stats.cells_walked;
+    context.stats.cells_ray_cast += worker.stats.cells_ray_cast;
     for (const auto& e : worker.extra) scratch.extras.push_back(Extra{data.original(e.tri), e.t, e.pixel});
   }
   {
