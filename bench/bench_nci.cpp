@@ -415,7 +415,7 @@ int main(int argc, char** argv) {
   if (argc >= 4 && !std::strcmp(argv[1], "--profile"))
     return profile(argv[2], std::atoi(argv[3]), argc >= 5 ? std::max(1, std::atoi(argv[4])) : 1);
   const bool smoke = cullkit_bench::smoke();
-  bool big = !smoke, small = true, precision = true, timing = true, hash = false;
+  bool big = !smoke, small = true, precision = true, timing = true, hash = false, no_precision = false;
   if (std::getenv("CULLKIT_NCI_PATH")) {  // the environment's path, unless --path says otherwise
     NciParams env;
     path_from_env(env);
@@ -426,7 +426,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--no-big")) big = false;
     if (!std::strcmp(argv[i], "--only-big")) small = precision = timing = false;
-    if (!std::strcmp(argv[i], "--no-precision")) precision = false;
+    if (!std::strcmp(argv[i], "--no-precision")) precision = false, no_precision = true;
     if (!std::strcmp(argv[i], "--quick")) g_quick = true;
     if (!std::strcmp(argv[i], "--hash")) hash = true;
     if (!std::strcmp(argv[i], "--path") && (i + 1 >= argc || !parse_paths(argv[++i], g_paths))) {
@@ -472,7 +472,7 @@ int main(int argc, char** argv) {
       pixel_hash("bigcity", s, threads);
       return 0;
     }
-    precision_table("bigcity", s, threads, smoke);
+    if (!no_precision) precision_table("bigcity", s, threads, smoke);
     speed("bigcity", s, threads, smoke);
   }
   return 0;
