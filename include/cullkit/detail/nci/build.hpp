@@ -427,10 +427,9 @@ inline void make_chunk_boxes(IndexData& data, const std::vector<std::uint32_t>& 
   }
 }
 
-// One class's hierarchies, positions relative to the part (merge_hierarchies shifts them).
+// One class's hierarchies, node positions relative to the part (merge_hierarchies shifts them).
 struct HierarchyPart {
   std::vector<CellBvhNode> nodes;
-  std::vector<std::uint32_t> ids;  // internal triangle ids
   std::vector<std::uint32_t> cells, roots;
 };
 
@@ -441,68 +440,48 @@ inline void build_class_hierarchies(const IndexData& data, std::uint32_t c, std:
   std::vector<CellBvhItem> items;
   for (std::uint32_t cell = first_cell; cell < last_cell; ++cell) {
     const std::uint32_t e0 = data.cell_tri_begin[cell], e1 = data.cell_tri_begin[cell + 1];
-    if (e1 - e0 < data.crowded_min) continue;
+    if (e1 - e0 < data.crowded_min || e1 >= CellBvhNode::first_limit) continue;
     items.clear();
     for (std::uint32_t e = e0; e < e1; ++e) {
+      const std::uint32_t tri = data.entry_triangle(e, c);
       CellBvhItem it;
-      it.id = data.entry_triangle(e, c);
       for (int a = 0; a < 3; ++a) {
         it.lo[a] = std::numeric_limits<float>::infinity();
         it.hi[a] = -it.lo[a];
       }
       for (int k = 0; k < 3; ++k) {
-        const glm::vec3& p = data.corner(it.id, k);
+        const glm::vec3& p = data.corner(tri, k);
         for (int a = 0; a < 3; ++a) {
           it.lo[a] = std::min(it.lo[a], p[a]);
           it.hi[a] = std::max(it.hi[a], p[a]);
         }
       }
-      for (int a = 0; a < 3; ++a) it.centre2[a] = it.lo[a] + it.hi[a];
       items.push_back(it);
     }
-    CellBvhBuilder builder(out.nodes, out.ids);
+    CellBvhBuilder builder(out.nodes, items.data(), e0);
     out.cells.push_back(cell);
-    out.roots.push_back(builder.build(items.data(), items.size()));
+    out.roots.push_back(builder.build(items.size()));
   }
 }
 
-// Appends the classes' parts to the index, node and leaf positions shifted to the whole arrays
-// (in class order, so the index does not depend on the thread count). Lists beyond what a leaf
-// code can address get no hierarchy.
+// Appends the classes' parts to the index, node positions shifted to the whole array (in class
+// order, so the index does not depend on the thread count).
 inline void merge_hierarchies(IndexData& data, std::vector<HierarchyPart>& parts) {
-  std::size_t nodes = 0, ids = 0;
-  for (const auto& p : parts) {
-    nodes += p.nodes.size();
-    ids += p.ids.size();
-  }
+  std::size_t nodes = 0;
+  for (const auto& p : parts) nodes += p.nodes.size();
   if (nodes == 0) return;
   data.cell_bvh.assign(data.stats.cells, IndexData::no_bvh);
   data.bvh_nodes.reserve(nodes);
-  if (data.wide_tris) data.bvh_tris.reserve(ids);
-  else data.bvh_tris16.reserve(ids);
-  for (std::size_t c = 0; c < parts.size(); ++c) {
-    HierarchyPart& p = parts[c];
-    const std::size_t id_base = data.wide_tris ? data.bvh_tris.size() : data.bvh_tris16.size();
-    if (p.nodes.empty() || id_base + p.ids.size() >= CellBvhNode::first_limit) {
-      p = HierarchyPart{};
-      continue;
-    }
+  for (HierarchyPart& p : parts) {
     const std::uint32_t node_base = static_cast<std::uint32_t>(data.bvh_nodes.size());
     const auto shift = [&](std::uint32_t code) {
-      if (code == CellBvhNode::empty) return code;
-      if (CellBvhNode::is_leaf(code)) return code + (static_cast<std::uint32_t>(id_base) << 3);
-      return code + node_base;
+      return code == CellBvhNode::empty || CellBvhNode::is_leaf(code) ? code : code + node_base;
     };
     for (CellBvhNode& n : p.nodes) {
       for (auto& ch : n.child) ch = shift(ch);
       data.bvh_nodes.push_back(n);
     }
     for (std::size_t i = 0; i < p.cells.size(); ++i) data.cell_bvh[p.cells[i]] = shift(p.roots[i]);
-    if (data.wide_tris) {
-      data.bvh_tris.insert(data.bvh_tris.end(), p.ids.begin(), p.ids.end());
-    } else {
-      for (std::uint32_t t : p.ids) data.bvh_tris16.push_back(static_cast<std::uint16_t>(t - data.class_tri_begin[c]));
-    }
     p = HierarchyPart{};
   }
 }
@@ -590,8 +569,6 @@ inline void build(IndexData& data, std::vector<glm::vec3>& normals) {
   data.tri_original.shrink_to_fit();
   data.class_of.shrink_to_fit();
   data.bvh_nodes.shrink_to_fit();
-  data.bvh_tris.shrink_to_fit();
-  data.bvh_tris16.shrink_to_fit();
   report(data, 1.0f);
 }
 }  // namespace cullkit::detail::nci

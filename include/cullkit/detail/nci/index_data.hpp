@@ -75,17 +75,16 @@ struct IndexData {
   std::vector<std::uint32_t> grid_shift;  // (class, axis): X: cell = position - shift; else id at position - shift
   bool wide_ids = false;
   // Hierarchies over the crowded (class, cell) lists (cell_bvh.hpp, packet_cast.hpp): per cell its
-  // root node, or no_bvh; empty when no list has crowded_min entries. Leaves hold the lists'
-  // triangles in the lists' own form: class-local in 16 bits unless wide_tris.
+  // root node, or no_bvh; empty when no list has crowded_min entries. Leaves are runs of entries.
   static constexpr std::size_t crowded_min = 48;
   static constexpr std::uint32_t no_bvh = 0xFFFFFFFFu;
   // NciCrowdedPath::automatic casts a tile's rays through a cell's hierarchy when the cell holds
-  // more than cast_ratio entries per live pixel under it (measured: docs/nci_internals.md).
-  static constexpr double cast_ratio = 1.0;
+  // more than cast_ratio entries per live pixel under it. Swept at 1, 8 and 64 on a 2.5M-triangle
+  // city seen whole (docs/nci_internals.md): the packet path never beat the walk, so the rule only
+  // takes it for cells far more crowded than any measured.
+  static constexpr double cast_ratio = 256.0;
   std::vector<std::uint32_t> cell_bvh;
   std::vector<CellBvhNode> bvh_nodes;
-  std::vector<std::uint32_t> bvh_tris;
-  std::vector<std::uint16_t> bvh_tris16;
   // Width of the ray test's edge band (detail::watertight_hit_band) in units of the coordinates.
   float band = edge_band_units * 0x1p-24f;
 
@@ -95,10 +94,6 @@ struct IndexData {
   [[nodiscard]] const glm::vec3& corner(std::uint32_t tri, int k) const noexcept {
     const std::size_t i = 3 * std::size_t{tri} + static_cast<std::size_t>(k);
     return vertices[tri_vertices.empty() ? tri_vertices16[i] : tri_vertices[i]];
-  }
-  // The internal triangle at position j of the hierarchies' leaf list, in a cell of class c.
-  [[nodiscard]] std::uint32_t bvh_triangle(std::uint32_t j, std::uint32_t c) const noexcept {
-    return wide_tris ? bvh_tris[j] : class_tri_begin[c] + bvh_tris16[j];
   }
   // The internal triangle of entry e, which belongs to a cell of class c.
   [[nodiscard]] std::uint32_t entry_triangle(std::uint32_t e, std::uint32_t c) const noexcept {
@@ -118,7 +113,7 @@ struct IndexData {
            bytes(cell_tri_begin) + bytes(cell_tris) + bytes(cell_tris16) + bytes(chunk_box) + bytes(class_tri_begin) +
            bytes(grid_base) + bytes(slice_rows) + bytes(row_coord) + bytes(row_begin) + bytes(cell_col) +
            bytes(cell_id) + bytes(cell_id16) + bytes(grid_shift) + bytes(class_cell_base) + bytes(class_of) +
-           bytes(cell_bvh) + bytes(bvh_nodes) + bytes(bvh_tris) + bytes(bvh_tris16);
+           bytes(cell_bvh) + bytes(bvh_nodes);
   }
 
  private:

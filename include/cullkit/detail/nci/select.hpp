@@ -121,14 +121,16 @@ inline void merge_workers(const IndexData& data, NciContext& context, Scratch& s
   {
     // Every worker's lists grow to what any worker needed (the extras to this call's total), so
     // a later frame that spreads the same tiles over the workers differently does not allocate.
-    std::size_t cand = 0, unsure = 0;
+    std::size_t cand = 0, unsure = 0, queue = 0;
     for (unsigned i = 0; i < count; ++i) {
       cand = std::max(cand, scratch.workers[i].candidates.capacity());
       unsure = std::max(unsure, scratch.workers[i].edge_hits.capacity());
+      queue = std::max(queue, scratch.workers[i].cast_queue.capacity());
     }
     for (unsigned i = 0; i < count; ++i) {
       auto& worker = scratch.workers[i];
       worker.candidates.reserve(cand);
+      worker.cast_queue.reserve(queue);
       worker.edge_hits.reserve(unsure);
       worker.extra.reserve(scratch.extras.size());
       worker.active_classes.reserve(data.class_axis.size());

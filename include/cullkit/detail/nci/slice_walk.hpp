@@ -114,6 +114,7 @@ struct TileMasks {
 CULLKIT_FORCEINLINE glm::dvec3 setup_rays(const IndexData& data, const ViewSetup& f, int x0, int y0, int tw, int th,
                                           TileState& r, TileMasks& m) {
   r.any_dirty = true;
+  r.inverse_ready = false;
   r.beam = false;
   r.beam_eps = 0.0f;
   for (int k = 0; k < 4; ++k) r.beam_box[k] = -1;
@@ -382,7 +383,7 @@ CULLKIT_FORCEINLINE void visit_slice(TileWalk& w, const std::vector<std::uint16_
         const std::uint32_t root = data.cell_bvh.empty() ? IndexData::no_bvh : data.cell_bvh[cell];
         if (root != IndexData::no_bvh && cast_pays(w, root, e_end - e)) {
           ++w.worker.stats.cells_ray_cast;
-          cast_cell(w, k, root);
+          queue_cell(w, k, root);
         } else {
           ++w.worker.stats.cells_walked;
           visit_cell(w, k, e, e_end);
@@ -464,6 +465,7 @@ CULLKIT_FORCEINLINE void walk_slices(TileWalk& w, const std::vector<std::uint16_
       beam_cells(w, s0, s1, rlo, rhi, clo, chi);
       if (rlo <= rhi && clo <= chi) {
         visit_slice(w, active, s, rlo, rhi, clo, chi);
+        cast_queued(w);
         test_candidates(w);
       }
     }
