@@ -18,6 +18,11 @@
 #include <limits>
 #include <vector>
 
+#include "../../config.hpp"
+#if CULLKIT_HAS_SSE2
+#include <emmintrin.h>
+#endif
+
 namespace cullkit {
 namespace detail {
 namespace mesh_occlusion {
@@ -120,7 +125,10 @@ class CoverageGrid {
         std::swap(xl, xr);
       }
       if (xr + m < 0.0 || xl - m >= width_) continue;
-      const int i0 = clamp_cell(xl - m, width_), i1 = clamp_cell(xr + m, width_);
+      int i0 = clamp_cell(xl - m, width_), i1 = clamp_cell(xr + m, width_);
+      // A covered cell never changes again: its outline counter no longer matters (an edge that
+      // leaves the outline later skips it too, as it is still covered then).
+      if (!unfrozen_span(j, i0, i1)) continue;
       mark(j, i0, i1);
       std::int32_t* row = block_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
       const double qy = j + 0.5 - ya;
@@ -128,8 +136,9 @@ class CoverageGrid {
         const double qx = i + 0.5 - xa;
         const double s = dx * qy - dy * qx;  // orient2d(a, b, centre)
         const double tol = near_line + rounding * (std::fabs(qx) + std::fabs(qy));
-        if (std::fabs(s) <= tol) row[i] += 2 * delta;
-        else if (s * side > 0.0) row[i] += delta;
+        // Branch-free: which side a centre falls on is data, not a pattern.
+        const int inner = s * side > 0.0 ? delta : 0;
+        row[i] += std::fabs(s) <= tol ? 2 * delta : inner;
       }
     }
   }
@@ -144,6 +153,9 @@ class CoverageGrid {
     if (xmax + m < 0.0 || xmin - m >= width_ || ymax + m < 0.0 || ymin - m >= height_) return r;
     r = CellRect{clamp_cell(xmin - m, width_), clamp_cell(ymin - m, height_), clamp_cell(xmax + m, width_),
                  clamp_cell(ymax + m, height_)};
+    // Depth bounds alone never make a cell covered (counts and outline marks do, and those mark
+    // their rows for end_band), so rows are not marked here; the bounds only need clearing later.
+    grow(dirty_, r);
     const TriangleEdges edges = edges_of(x, y);
     // Every point of the triangle has w <= its largest corner w: 1/w >= lowest.
     const double w_max = std::max(std::max(w[0], w[1]), w[2]);
@@ -170,8 +182,7 @@ class CoverageGrid {
         float* row = bound_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
         const float start = static_cast<float>(v00 - err) + bf * static_cast<float>(j - r.y0);
         int i0, i1;
-        if (!row_span(edges, j, m, i0, i1)) continue;
-        mark(j, i0, i1);
+        if (!row_span(edges, j, m, i0, i1) || !unfrozen_span(j, i0, i1)) continue;
         for (int i = i0; i <= i1; ++i) {
           const float v = std::max(lowest, start + af * static_cast<float>(i - r.x0));
           row[i] = std::min(row[i], v);
@@ -181,8 +192,7 @@ class CoverageGrid {
       for (int j = r.y0; j <= r.y1; ++j) {
         float* row = bound_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
         int i0, i1;
-        if (!row_span(edges, j, m, i0, i1)) continue;
-        mark(j, i0, i1);
+        if (!row_span(edges, j, m, i0, i1) || !unfrozen_span(j, i0, i1)) continue;
         for (int i = i0; i <= i1; ++i) row[i] = std::min(row[i], lowest);
       }
     }
@@ -209,15 +219,52 @@ class CoverageGrid {
         run += diff_[c];
         diff_[c] = 0;
         count_[c] += run;
-        if (count_[c] - block_[c] >= 1 && depth_[c] == 0.0f) {
-          depth_[c] = bound_[c];
-          ++tile_frozen_[tile_of(i, j)];
-          ++covered;
-        }
       }
       grow(dirty_, CellRect{i0, j, i - 1, j});
+      covered += freeze(j, i0, i - 1);
     }
     band_rows_.clear();
+    return covered;
+  }
+
+  /// Freezes the cells of row j in [a, b] that are covered and not yet frozen at their running
+  /// bound. Cells outside the band's changed ranges never qualify (any change of their counters
+  /// was scanned at the end of its band), so whole aligned groups of four may be tested.
+  std::size_t freeze(int j, int a, int b) {
+    const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+    const std::int32_t* count = count_.data() + base;
+    const std::int32_t* block = block_.data() + base;
+    const float* bound = bound_.data() + base;
+    float* depth = depth_.data() + base;
+    std::int32_t* frozen = tile_frozen_.data() + static_cast<std::size_t>(j / tile) * static_cast<std::size_t>(tiles_x_);
+    std::size_t covered = 0;
+    const auto one = [&](int i) {
+      if (count[i] - block[i] >= 1 && depth[i] == 0.0f) {
+        depth[i] = bound[i];
+        ++frozen[i / tile];
+        ++covered;
+      }
+    };
+    int i = a;
+#if CULLKIT_HAS_SSE2
+    // Groups of four aligned on the row (a tile is two of them): the same comparisons, four at once.
+    for (; i <= b && (i & 3) != 0; ++i) one(i);
+    const __m128i zero_i = _mm_setzero_si128();
+    const __m128 zero_f = _mm_setzero_ps();
+    for (; i + 3 <= b; i += 4) {
+      const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i));
+      const __m128i k = _mm_loadu_si128(reinterpret_cast<const __m128i*>(block + i));
+      const __m128 d = _mm_loadu_ps(depth + i);
+      const __m128 fresh = _mm_and_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(_mm_sub_epi32(c, k), zero_i)), _mm_cmpeq_ps(d, zero_f));
+      const int mask = _mm_movemask_ps(fresh);
+      if (mask == 0) continue;
+      _mm_storeu_ps(depth + i, _mm_or_ps(_mm_and_ps(fresh, _mm_loadu_ps(bound + i)), _mm_andnot_ps(fresh, d)));
+      const int n = (mask & 1) + ((mask >> 1) & 1) + ((mask >> 2) & 1) + ((mask >> 3) & 1);
+      frozen[i / tile] += n;
+      covered += static_cast<std::size_t>(n);
+    }
+#endif
+    for (; i <= b; ++i) one(i);
     return covered;
   }
 
@@ -329,6 +376,19 @@ class CoverageGrid {
     i0 = clamp_cell(xl - m, width_);
     i1 = clamp_cell(xr + m, width_);
     return true;
+  }
+
+  // Narrows the cells [i0, i1] of row j by the wholly covered tiles at either end (a covered cell's
+  // depth is frozen and its counters no longer matter). False when nothing is left.
+  bool unfrozen_span(int j, int& i0, int& i1) const {
+    const std::size_t base = static_cast<std::size_t>(j / tile) * static_cast<std::size_t>(tiles_x_);
+    const auto full = [&](int i) {
+      const std::size_t t = base + static_cast<std::size_t>(i / tile);
+      return tile_frozen_[t] == tile_cells_[t];
+    };
+    while (i0 <= i1 && full(i0)) i0 = (i0 / tile + 1) * tile;
+    while (i1 >= i0 && full(i1)) i1 = (i1 / tile) * tile - 1;
+    return i0 <= i1;
   }
 
   [[nodiscard]] std::size_t tile_of(int i, int j) const {
