@@ -54,10 +54,8 @@ class CoverageGrid {
       tiles_x_ = (width + tile - 1) / tile;
       tiles_y_ = (height + tile - 1) / tile;
       tile_depth_.assign(static_cast<std::size_t>(tiles_x_) * static_cast<std::size_t>(tiles_y_), 0.0f);
-      tile_frozen_.assign(tile_depth_.size(), 0);
-      tile_cells_.assign(tile_depth_.size(), 0);
-      for (int j = 0; j < height; ++j)
-        for (int i = 0; i < width; ++i) ++tile_cells_[tile_of(i, j)];
+      words_ = (width + 63) / 64;
+      frozen_bits_.assign(static_cast<std::size_t>(words_) * static_cast<std::size_t>(height), 0);
       band_lo_.assign(static_cast<std::size_t>(height), width);
       band_hi_.assign(static_cast<std::size_t>(height), -1);
       band_rows_.clear();
@@ -236,18 +234,19 @@ class CoverageGrid {
     const std::int32_t* block = block_.data() + base;
     const float* bound = bound_.data() + base;
     float* depth = depth_.data() + base;
-    std::int32_t* frozen = tile_frozen_.data() + static_cast<std::size_t>(j / tile) * static_cast<std::size_t>(tiles_x_);
+    std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
     std::size_t covered = 0;
     const auto one = [&](int i) {
       if (count[i] - block[i] >= 1 && depth[i] == 0.0f) {
         depth[i] = bound[i];
-        ++frozen[i / tile];
+        frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
         ++covered;
       }
     };
     int i = a;
 #if CULLKIT_HAS_SSE2
-    // Groups of four aligned on the row (a tile is two of them): the same comparisons, four at once.
+    // Groups of four aligned on the row (a word of frozen bits holds 16 of them): the same
+    // comparisons, four at once.
     for (; i <= b && (i & 3) != 0; ++i) one(i);
     const __m128i zero_i = _mm_setzero_si128();
     const __m128 zero_f = _mm_setzero_ps();
@@ -259,9 +258,8 @@ class CoverageGrid {
       const int mask = _mm_movemask_ps(fresh);
       if (mask == 0) continue;
       _mm_storeu_ps(depth + i, _mm_or_ps(_mm_and_ps(fresh, _mm_loadu_ps(bound + i)), _mm_andnot_ps(fresh, d)));
-      const int n = (mask & 1) + ((mask >> 1) & 1) + ((mask >> 2) & 1) + ((mask >> 3) & 1);
-      frozen[i / tile] += n;
-      covered += static_cast<std::size_t>(n);
+      frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+      covered += static_cast<std::size_t>((mask & 1) + ((mask >> 1) & 1) + ((mask >> 2) & 1) + ((mask >> 3) & 1));
     }
 #endif
     for (; i <= b; ++i) one(i);
@@ -299,18 +297,14 @@ class CoverageGrid {
     return true;
   }
 
-  /// True when every cell the triangle's box touches (with a margin) is covered already, by
-  /// whole tiles (a cheap test; false when unsure).
+  /// True when every cell the triangle's box touches (with a margin) is covered already.
   [[nodiscard]] bool all_frozen(const double* x, const double* y) const {
     const double xmin = std::min(std::min(x[0], x[1]), x[2]), xmax = std::max(std::max(x[0], x[1]), x[2]);
     const double ymin = std::min(std::min(y[0], y[1]), y[2]), ymax = std::max(std::max(y[0], y[1]), y[2]);
     const CellRect r = cells_of(xmin, ymin, xmax, ymax);
     if (r.empty()) return false;
-    for (int ty = r.y0 / tile; ty <= r.y1 / tile; ++ty)
-      for (int tx = r.x0 / tile; tx <= r.x1 / tile; ++tx) {
-        const std::size_t t = static_cast<std::size_t>(ty) * static_cast<std::size_t>(tiles_x_) + static_cast<std::size_t>(tx);
-        if (tile_frozen_[t] != tile_cells_[t]) return false;
-      }
+    for (int j = r.y0; j <= r.y1; ++j)
+      if (!row_frozen(j, r.x0, r.x1)) return false;
     return true;
   }
 
@@ -378,21 +372,66 @@ class CoverageGrid {
     return true;
   }
 
-  // Narrows the cells [i0, i1] of row j by the wholly covered tiles at either end (a covered cell's
-  // depth is frozen and its counters no longer matter). False when nothing is left.
-  bool unfrozen_span(int j, int& i0, int& i1) const {
-    const std::size_t base = static_cast<std::size_t>(j / tile) * static_cast<std::size_t>(tiles_x_);
-    const auto full = [&](int i) {
-      const std::size_t t = base + static_cast<std::size_t>(i / tile);
-      return tile_frozen_[t] == tile_cells_[t];
-    };
-    while (i0 <= i1 && full(i0)) i0 = (i0 / tile + 1) * tile;
-    while (i1 >= i0 && full(i1)) i1 = (i1 / tile) * tile - 1;
-    return i0 <= i1;
+  // True when every cell of row j in [i0, i1] is covered (0 <= i0 <= i1 < width).
+  [[nodiscard]] bool row_frozen(int j, int i0, int i1) const {
+    const std::uint64_t* w = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+    const int a = i0 >> 6, b = i1 >> 6;
+    const std::uint64_t first = ~std::uint64_t{0} << (i0 & 63), last = ~std::uint64_t{0} >> (63 - (i1 & 63));
+    if (a == b) return (w[a] & first & last) == (first & last);
+    if ((w[a] & first) != first || (w[b] & last) != last) return false;
+    for (int k = a + 1; k < b; ++k)
+      if (w[k] != ~std::uint64_t{0}) return false;
+    return true;
   }
 
-  [[nodiscard]] std::size_t tile_of(int i, int j) const {
-    return static_cast<std::size_t>(j / tile) * static_cast<std::size_t>(tiles_x_) + static_cast<std::size_t>(i / tile);
+  // Narrows the cells [i0, i1] of row j to those between its first and last cell not yet covered
+  // (a covered cell's depth is frozen and its counters no longer matter). False when none is left.
+  bool unfrozen_span(int j, int& i0, int& i1) const {
+    const std::uint64_t* w = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+    for (;;) {
+      // Bits past the last column are clear, so they read as "not covered" and end the search.
+      const std::uint64_t open = ~w[i0 >> 6] >> (i0 & 63);
+      if (open != 0) {
+        i0 += lowest_bit(open);
+        break;
+      }
+      i0 = (i0 | 63) + 1;
+      if (i0 > i1) return false;
+    }
+    if (i0 > i1) return false;
+    for (;;) {  // ends: cell i0 is not covered
+      const std::uint64_t open = ~w[i1 >> 6] << (63 - (i1 & 63));
+      if (open != 0) {
+        i1 -= 63 - highest_bit(open);
+        return true;
+      }
+      i1 = (i1 & ~63) - 1;
+    }
+  }
+
+  static int lowest_bit(std::uint64_t v) {  // v != 0
+#if defined(__GNUC__) || defined(__clang__)
+    return __builtin_ctzll(v);
+#else
+    int n = 0;
+    while (!(v & 1)) {
+      v >>= 1;
+      ++n;
+    }
+    return n;
+#endif
+  }
+  static int highest_bit(std::uint64_t v) {  // v != 0
+#if defined(__GNUC__) || defined(__clang__)
+    return 63 - __builtin_clzll(v);
+#else
+    int n = 63;
+    while (!(v >> 63)) {
+      v <<= 1;
+      --n;
+    }
+    return n;
+#endif
   }
 
   // Cell range [i0, i1] of row j changed in this band: end_band scans it.
@@ -450,7 +489,8 @@ class CoverageGrid {
       std::fill(bound_.begin() + b, bound_.begin() + e, std::numeric_limits<float>::infinity());
       std::fill(depth_.begin() + b, depth_.begin() + e, 0.0f);
     }
-    std::fill(tile_frozen_.begin(), tile_frozen_.end(), 0);
+    std::fill(frozen_bits_.begin() + static_cast<std::ptrdiff_t>(dirty_.y0) * words_,
+              frozen_bits_.begin() + static_cast<std::ptrdiff_t>(dirty_.y1 + 1) * words_, 0);
     dirty_ = CellRect{width_, height_, -1, -1};
   }
 
@@ -459,7 +499,8 @@ class CoverageGrid {
   std::vector<float> bound_;   // running lower bound of 1/w over the triangles touching the cell
   std::vector<float> depth_;   // frozen lower bound of 1/w at the first hit; 0: not covered
   std::vector<float> tile_depth_;
-  std::vector<std::int32_t> tile_frozen_, tile_cells_;  // per tile: covered cells, cells
+  int words_ = 0;                            // words of frozen bits per row
+  std::vector<std::uint64_t> frozen_bits_;   // per row, a bit per covered (frozen) cell
   std::vector<int> band_lo_, band_hi_, band_rows_;  // per row: cells changed in the current band
   CellRect dirty_{0, 0, -1, -1};
 };
