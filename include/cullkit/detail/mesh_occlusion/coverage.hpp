@@ -71,9 +71,12 @@ class CoverageGrid {
 
 
   /// Adds a front-facing triangle's count: `sign` is +1 or -1 so that the triangle counts +1 inside.
-  /// (x, y) are grid coordinates of the corners in the triangle's own order.
-  void add_count(const double* x, const double* y, int sign) {
+  /// (x, y) are grid coordinates of the corners in the triangle's own order. Edges whose bit is set
+  /// in `skip` (bit k: corner k to the next) are left out: the caller passes the edges that the
+  /// same band's other triangles also leave out, whose crossings would cancel exactly.
+  void add_count(const double* x, const double* y, int sign, unsigned skip = 0) {
     for (int k = 0; k < 3; ++k) {
+      if ((skip >> k) & 1u) continue;
       const int l = k == 2 ? 0 : k + 1;
       // An edge's crossings are computed from its endpoints sorted by y, so the same edge seen from
       // its two triangles gives bit-identical crossings (and opposite signs).

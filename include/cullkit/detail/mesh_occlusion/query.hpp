@@ -270,17 +270,24 @@ inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionP
       probe.next(phase_bands);
       grid.add_depth(x, y, w);
       probe.next(phase_depth);
-      grid.add_count(x, y, orient);
+      std::uint32_t twin_band[3];
+      unsigned inner = 0;  // edges shared with a triangle of this band
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
+        const bool twin_here = twin != none && s.triangle_stamp[twin / 3] == s.frame;
+        twin_band[k] = twin_here ? s.triangle_band[twin / 3] : none;
+        if (twin_band[k] == my_band) inner |= 1u << k;
+      }
+      // An edge shared within the band adds crossings from both triangles that cancel bit for bit
+      // (the same endpoints, the same arithmetic, opposite signs): both leave them out.
+      grid.add_count(x, y, orient, inner);
       probe.next(phase_counts);
       for (int k = 0; k < 3; ++k) {
         const int l = k == 2 ? 0 : k + 1;
-        const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
-        const bool twin_here = twin != none && s.triangle_stamp[twin / 3] == s.frame;
-        const std::uint32_t twin_band = twin_here ? s.triangle_band[twin / 3] : none;
-        if (twin_band == my_band) continue;  // cancels within the band
+        if ((inner >> k) & 1u) continue;  // cancels within the band
         // The twin in an earlier band: its edge (l -> k, as its triangle runs) leaves the
         // outline, and this one never joins it.
-        if (twin_band < my_band) grid.touch_edge(x[l], y[l], x[k], y[k], orient, -1);
+        if (twin_band[k] < my_band) grid.touch_edge(x[l], y[l], x[k], y[k], orient, -1);
         else grid.touch_edge(x[k], y[k], x[l], y[l], orient, 1);
       }
       probe.next(phase_edges);
