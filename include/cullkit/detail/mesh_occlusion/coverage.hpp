@@ -58,8 +58,8 @@ class CoverageGrid {
       frozen_bits_.assign(static_cast<std::size_t>(words_) * static_cast<std::size_t>(height), 0);
       band_lo_.assign(static_cast<std::size_t>(height), width);
       band_hi_.assign(static_cast<std::size_t>(height), -1);
-      band_rows_.clear();
-      band_rows_.reserve(static_cast<std::size_t>(height));
+      band_rows_.assign(static_cast<std::size_t>(height), 0);
+      band_row_count_ = 0;
       dirty_ = CellRect{width, height, -1, -1};
       return;
     }
@@ -205,7 +205,8 @@ class CoverageGrid {
   /// Returns how many cells it covered.
   std::size_t end_band() {
     std::size_t covered = 0;
-    for (int j : band_rows_) {
+    for (int n = 0; n < band_row_count_; ++n) {
+      const int j = band_rows_[static_cast<std::size_t>(n)];
       const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
       const int i0 = band_lo_[static_cast<std::size_t>(j)], i1 = band_hi_[static_cast<std::size_t>(j)];
       band_lo_[static_cast<std::size_t>(j)] = width_;
@@ -224,7 +225,7 @@ class CoverageGrid {
       grow(dirty_, CellRect{i0, j, i - 1, j});
       covered += freeze(j, i0, i - 1);
     }
-    band_rows_.clear();
+    band_row_count_ = 0;
     return covered;
   }
 
@@ -440,7 +441,7 @@ class CoverageGrid {
   // Cell range [i0, i1] of row j changed in this band: end_band scans it.
   void mark(int j, int i0, int i1) {
     const auto r = static_cast<std::size_t>(j);
-    if (band_hi_[r] < 0) band_rows_.push_back(j);
+    if (band_hi_[r] < 0) band_rows_[static_cast<std::size_t>(band_row_count_++)] = j;  // each row once per band
     band_lo_[r] = std::min(band_lo_[r], i0);
     band_hi_[r] = std::max(band_hi_[r], i1);
   }
@@ -505,6 +506,7 @@ class CoverageGrid {
   int words_ = 0;                            // words of frozen bits per row
   std::vector<std::uint64_t> frozen_bits_;   // per row, a bit per covered (frozen) cell
   std::vector<int> band_lo_, band_hi_, band_rows_;  // per row: cells changed in the current band
+  int band_row_count_ = 0;                          // rows listed in band_rows_
   CellRect dirty_{0, 0, -1, -1};
 };
 
