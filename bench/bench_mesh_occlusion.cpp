@@ -17,12 +17,23 @@
 //               frame once (one ray per pixel, one thread).
 // Ratios are of medians within this run: culler / frustum, culler / old, Embree / culler.
 //
-// Usage: bench_mesh_occlusion [cameras=60] [width=1920] [height=1080] [reps=3]
+// Usage: bench_mesh_occlusion [cameras=60] [width=1920] [height=1080] [reps=3] [flags]
+// Flags (anywhere on the line):
+//   --hash         the culler only (no Embree check, no peers): per scene, an FNV-1a hash of the kept
+//                  sets over the cameras (each sorted), the kept share, and the cull time, median (min-max)
+//                  of each camera's fastest of `reps`, in this thread's CPU time where the platform has
+//                  it (a shared machine's preemption then does not count). Two builds with the same hash
+//                  gave the same answers.
+//   --phases       with --hash: also where the time of `cull` goes, per named step (an extra, separately
+//                  timed pass with the step probes on; shares of that pass times the median above).
+//   --scene=TEXT   only the scenes whose name contains TEXT.
+//   --grid=WxH     the culler's grid size (default: MeshOcclusionParams's).
 // CULLKIT_BENCH_SMOKE=1: the small generated city, 2 cameras, 320x180, 1 rep.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <string>
 #include <vector>
 
@@ -32,6 +43,7 @@
 #include "../tests/mesh_occlusion/walk_cameras.hpp"
 #include "../tests/occlusion/scene_cull.hpp"
 #include "race.hpp"
+#include "cullkit/detail/mesh_occlusion/phase_times.hpp"
 
 using namespace cullkit;
 using namespace mesh_occlusion_test;
@@ -197,25 +209,126 @@ void print(const std::vector<Row>& rows) {
   std::fflush(stdout);
 }
 
+// ---- --hash / --phases: the culler alone, its answers as a hash and its time per step ----
+
+/// This thread's CPU time in ms (wall time where POSIX thread clocks are missing).
+double thread_ms() {
+#if defined(CLOCK_THREAD_CPUTIME_ID)
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+#else
+  return std::chrono::duration<double, std::milli>(Clock::now().time_since_epoch()).count();
+#endif
+}
+
+struct Flags {
+  bool hash = false, phases = false;
+  std::string scene;
+  int grid_width = 0, grid_height = 0;
+};
+
+void culler_only(const std::string& name, const CullScene& cs, const std::vector<Camera>& cams, int reps,
+                 const Flags& flags) {
+  namespace mo = cullkit::detail::mesh_occlusion;
+  const ObjectMap map(cs.scene);
+  MeshOcclusionParams params;
+  if (flags.grid_width > 0) {
+    params.grid_width = flags.grid_width;
+    params.grid_height = flags.grid_height;
+  }
+  const MeshOcclusionCuller<glm::vec3> culler(cs.scene.mesh(), map.objects.data(), map.objects.size(), params);
+  MeshOcclusionContext context;
+  std::vector<std::uint32_t> kept;
+  std::vector<double> ms;
+  std::uint64_t hash = 1469598103934665603ull;
+  double share = 0, occluder_triangles = 0;
+  std::size_t pairs = 0;
+  const double total = static_cast<double>(std::max<std::size_t>(cs.scene.triangle_count(), 1));
+  for (const Camera& cam : cams) {
+    double best = 1e300;
+    for (int r = 0; r < reps; ++r) {
+      const double t0 = thread_ms();
+      culler.cull(cam, context, kept);
+      best = std::min(best, thread_ms() - t0);
+    }
+    ms.push_back(best);
+    std::sort(kept.begin(), kept.end());
+    for (std::uint32_t o : kept) hash = (hash ^ o) * 1099511628211ull;
+    hash = (hash ^ 0xffffffffull) * 1099511628211ull;
+    pairs += kept.size();
+    share += triangles_of(map, kept) / total;
+    occluder_triangles += static_cast<double>(context.stats().occluder_triangles);
+  }
+  const double n = static_cast<double>(std::max<std::size_t>(cams.size(), 1));
+  std::printf("hash,%s,%dx%d,%016llx,kept_pairs=%zu,kept_pct=%.3f,occluder_triangles=%.0f,culler_ms=%s\n", name.c_str(),
+              params.grid_width, params.grid_height, static_cast<unsigned long long>(hash), pairs, 100 * share / n,
+              occluder_triangles / n, ms_text(ms).c_str());
+  if (!flags.phases) return;
+  mo::PhaseTimes& times = mo::phase_times();
+  times = mo::PhaseTimes{};
+  times.enabled = true;
+  for (const Camera& cam : cams)
+    for (int r = 0; r < reps; ++r) culler.cull(cam, context, kept);
+  times.enabled = false;
+  static const char* const names[mo::phase_count] = {"frustum walk", "object boxes", "occluder choice",
+                                                     "triangle setup and sort", "vertex projection", "bands",
+                                                     "depths", "counts", "edge marking", "band ends",
+                                                     "finish", "object tests"};
+  std::uint64_t sum = 0;
+  for (std::uint64_t t : times.ticks) sum += t;
+  const double median = spread(ms).median;
+  for (int p = 0; p < mo::phase_count; ++p) {
+    // The triangle setup's time includes the vertex projection it calls: shown apart.
+    const std::uint64_t t = p == mo::phase_gather ? times.ticks[p] - times.ticks[mo::phase_project] : times.ticks[p];
+    const double part = sum ? static_cast<double>(t) / static_cast<double>(sum) : 0.0;
+    std::printf("phase,%s,%s,%.1f%%,%.3f ms\n", name.c_str(), names[p], 100 * part, part * median);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const bool smoke = cullkit_bench::smoke();
   int cameras = smoke ? 2 : 60, width = smoke ? 320 : 1920, height = smoke ? 180 : 1080, reps = smoke ? 1 : 3;
   int* slots[4] = {&cameras, &width, &height, &reps};
-  for (int i = 1; i < argc && i <= 4; ++i) {
+  Flags flags;
+  int positional = 0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.rfind("--", 0) == 0) {
+      if (arg == "--hash") flags.hash = true;
+      else if (arg == "--phases") flags.hash = flags.phases = true;
+      else if (arg.rfind("--scene=", 0) == 0) flags.scene = arg.substr(8);
+      else if (arg.rfind("--grid=", 0) == 0 && std::sscanf(arg.c_str() + 7, "%dx%d", &flags.grid_width, &flags.grid_height) == 2 &&
+               flags.grid_width > 0 && flags.grid_height > 0) {
+      } else {
+        std::fprintf(stderr, "unknown flag %s\n", arg.c_str());
+        return 2;
+      }
+      continue;
+    }
+    if (positional >= 4) continue;
     const int v = std::atoi(argv[i]);
     if (v <= 0) {
       std::fprintf(stderr, "usage: %s [cameras=60] [width=1920] [height=1080] [reps=3]\n", argv[0]);
       return 2;
     }
-    *slots[i - 1] = v;
+    *slots[positional++] = v;
   }
   std::printf("%d walk cameras per scene, %dx%d, %d alternating reps per camera, one thread.\n", cameras, width, height,
               reps);
   const auto t_all = Clock::now();
   std::vector<Row> rows;
   const auto run = [&](const std::string& name, support::Scene scene, std::uint64_t seed) {
+    if (name.find(flags.scene) == std::string::npos) return;
+    if (flags.hash) {
+      const CullScene cs(std::move(scene));
+      const auto cams = walk(walk_spec(name, cs.scene, cs.embree, seed), cs.scene, cs.embree, cameras, 4, width, height,
+                             seed + 1);
+      culler_only(name, cs, cams, reps, flags);
+      return;
+    }
     const bool generated = name == "city" || name == "office";
     const CullScene cs(std::move(scene));
     const WalkSpec spec = walk_spec(name, cs.scene, cs.embree, seed);
@@ -234,6 +347,10 @@ int main(int argc, char** argv) {
     run("office", support::make_office(1, 10, 8), 13);
     std::uint64_t seed = 101;
     for (const auto& file : support::real_scene_files()) {
+      if (file.find(flags.scene) == std::string::npos) {
+        ++seed;  // the other scenes keep their cameras
+        continue;
+      }
       auto s = support::load_obj(support::scenes_dir() + "/" + file);
       if (!s) {
         std::fprintf(stderr, "%s: could not be loaded, skipped\n", file.c_str());
@@ -242,6 +359,7 @@ int main(int argc, char** argv) {
       run(file, std::move(*s), seed++);
     }
   }
+  if (flags.hash) return 0;
   print(rows);
   long false_culls = 0;
   for (const Row& r : rows) false_culls += r.culler_false;
