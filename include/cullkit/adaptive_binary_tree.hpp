@@ -48,6 +48,7 @@
 #include "detail/abt_build.hpp"
 #include "detail/abt_leaf.hpp"
 #include "detail/abt_split.hpp"
+#include "detail/abt_views.hpp"
 #include "geometry/aabb.hpp"
 #include "geometry/convex_volume.hpp"
 #include "geometry/frustum.hpp"
@@ -168,7 +169,8 @@ class AdaptiveBinaryTree {
     CULLKIT_ASSERT(frusta != nullptr || view_count == 0, "frusta points to view_count frusta");
     if (frusta == nullptr || view_count == 0 || nodes_.empty()) return;
     const auto views = static_cast<std::uint32_t>(std::min<std::size_t>(view_count, 32));
-    walk_views(frusta, views, out, view_bits);
+    detail::abt_cull_views<depth_limit + 2>(nodes_.data(), order_.data(), leaf_boxes_, scan_below_, frusta, views,
+                                             out, view_bits);
   }
 
   /// Frustum and occlusion culling: clears `out`, then appends, in front-to-back order from
@@ -529,97 +531,6 @@ class AdaptiveBinaryTree {
       }
       stack[top++] = Entry{node.left + 1, mask};
       stack[top++] = Entry{node.left, mask};
-    }
-  }
-
-  // The multi-view walk: each stack entry carries the views that may still meet the node and,
-  // per view, the planes it straddles. A node inside every view still alive is one range.
-  void walk_views(const Frustum* frusta, std::uint32_t views, std::vector<std::uint32_t>& out,
-                  std::vector<std::uint32_t>& view_bits) const {
-    struct Entry {
-      std::uint32_t node;
-      std::uint32_t alive;
-      PlaneMask masks[32];
-    };
-    Entry stack[depth_limit + 2];
-    std::uint32_t top = 0;
-    Entry& root = stack[top++];
-    root.node = 0;
-    root.alive = views >= 32 ? ~std::uint32_t{0} : ((std::uint32_t{1} << views) - 1u);
-    for (std::uint32_t v = 0; v < views; ++v) root.masks[v] = frusta[v].active_mask();
-    const AbtNode* nodes = nodes_.data();
-    while (top > 0) {
-      --top;
-      const AbtNode& node = nodes[stack[top].node];
-      std::uint32_t alive = stack[top].alive;
-      std::uint32_t straddling = 0;
-      PlaneMask masks[32];
-      for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
-        const int v = detail::abt_lowest_bit(rest);
-        std::uint32_t m = stack[top].masks[v];
-        if (detail::abt_node_outside(&frusta[v].plane(0), m, node.bounds, node.sphere)) {
-          alive &= ~(std::uint32_t{1} << v);
-          continue;
-        }
-        masks[v] = static_cast<PlaneMask>(m);
-        if (m != 0) straddling |= std::uint32_t{1} << v;
-      }
-      if (alive == 0) continue;
-      if (straddling == 0) {
-        out.insert(out.end(), order_.begin() + node.begin, order_.begin() + node.end);
-        view_bits.resize(view_bits.size() + node.count(), alive);
-        continue;
-      }
-      if (node.is_leaf() || node.count() <= scan_below_) {
-        views_leaf(frusta, alive, straddling, masks, node.begin, node.end, out, view_bits);
-        continue;
-      }
-      const std::uint32_t left = node.left;
-      Entry& r = stack[top++];  // reuses the popped slot: everything needed was read above
-      r.node = left + 1;
-      r.alive = alive;
-      Entry& l = stack[top++];
-      l.node = left;
-      l.alive = alive;
-      for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
-        const int v = detail::abt_lowest_bit(rest);
-        r.masks[v] = l.masks[v] = masks[v];
-      }
-    }
-  }
-
-  // Objects of a straddling leaf (or small subtree), 16 at a time: per view a mask of the lanes
-  // not outside it, then one output entry per lane that some view keeps.
-  void views_leaf(const Frustum* frusta, std::uint32_t alive, std::uint32_t straddling, const PlaneMask* masks,
-                  std::uint32_t begin, std::uint32_t end, std::vector<std::uint32_t>& out,
-                  std::vector<std::uint32_t>& view_bits) const {
-    constexpr std::uint32_t lanes = detail::AbtLeafBoxes::lanes;
-    constexpr std::uint32_t all_lanes = (std::uint32_t{1} << lanes) - 1u;
-    std::uint32_t visible[32];
-    for (std::uint32_t rest = alive & ~straddling; rest != 0; rest &= rest - 1u)
-      visible[detail::abt_lowest_bit(rest)] = all_lanes;  // views the node is inside of
-    for (std::uint32_t base = begin; base < end; base += lanes) {
-      std::uint32_t any = 0;
-      for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) {
-        const int v = detail::abt_lowest_bit(rest);
-        std::uint32_t outside = 0, cross = 0;
-        leaf_boxes_.classify_lanes(&frusta[v].plane(0), masks[v], base, outside, cross);
-        visible[v] = ~outside & all_lanes;
-        any |= visible[v];
-      }
-      if (alive != straddling) any = all_lanes;
-      const std::uint32_t count = end - base < lanes ? end - base : lanes;
-      if (count < lanes) any &= (std::uint32_t{1} << count) - 1u;
-      for (; any != 0; any &= any - 1u) {
-        const int i = detail::abt_lowest_bit(any);
-        std::uint32_t bits = 0;
-        for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
-          const int v = detail::abt_lowest_bit(rest);
-          bits |= ((visible[v] >> i) & 1u) << v;
-        }
-        out.push_back(order_[base + std::uint32_t(i)]);
-        view_bits.push_back(bits);
-      }
     }
   }
 
