@@ -46,6 +46,7 @@
 #include "abt_params.hpp"
 #include "config.hpp"
 #include "detail/abt_build.hpp"
+#include "detail/abt_dynamic.hpp"
 #include "detail/abt_leaf.hpp"
 #include "detail/abt_split.hpp"
 #include "detail/abt_views.hpp"
@@ -167,10 +168,10 @@ class AdaptiveBinaryTree {
     view_bits.clear();
     CULLKIT_ASSERT(view_count <= 32, "view_count <= 32");
     CULLKIT_ASSERT(frusta != nullptr || view_count == 0, "frusta points to view_count frusta");
-    if (frusta == nullptr || view_count == 0 || nodes_.empty()) return;
+    if (frusta == nullptr || view_count == 0 || order_.empty()) return;
     const auto views = static_cast<std::uint32_t>(std::min<std::size_t>(view_count, 32));
-    detail::abt_cull_views<depth_limit + 2>(nodes_.data(), order_.data(), leaf_boxes_, scan_below_, frusta, views,
-                                             out, view_bits);
+    detail::abt_cull_views<depth_limit + 2>(nodes_, order_, leaf_boxes_, dyn_, scan_below_, frusta, views, out,
+                                            view_bits);
   }
 
   /// Frustum and occlusion culling: clears `out`, then appends, in front-to-back order from
@@ -187,9 +188,17 @@ class AdaptiveBinaryTree {
   template <class Occlusion>
   void cull(const Frustum& frustum, const Occlusion& occlusion, std::vector<std::uint32_t>& out) const {
     out.clear();
-    if (nodes_.empty()) return;
     const glm::vec3 eye = occlusion.eye();
     const Plane* planes = &frustum.plane(0);
+    const auto consider = [&](std::uint32_t i, std::uint32_t mask, bool alone) {
+      if (dyn_.is_hole(i)) return;
+      if (mask != 0 && detail::abt_box_outside(planes, mask, bounds_[i])) return;
+      if (!alone && !is_unbounded(bounds_[i]) && occlusion.is_occluded(bounds_[i])) return;
+      out.push_back(order_[i]);
+    };
+    // Objects inserted since the last rebuild come first (they have no place in the tree's order).
+    for (std::size_t i = dyn_.tree_end; i < order_.size(); ++i) consider(std::uint32_t(i), frustum.active_mask(), false);
+    if (nodes_.empty()) return;
     struct Entry {
       std::uint32_t node;
       std::uint32_t mask;
@@ -204,12 +213,7 @@ class AdaptiveBinaryTree {
       if (detail::abt_node_outside(planes, mask, node.bounds, node.sphere)) continue;
       if (!is_unbounded(node.bounds) && occlusion.is_occluded(node.bounds)) continue;
       if (node.is_leaf()) {
-        for (std::uint32_t i = node.begin; i < node.end; ++i) {
-          std::uint32_t m = mask;
-          if (m != 0 && detail::abt_box_outside(planes, m, bounds_[i])) continue;
-          if (node.count() > 1 && !is_unbounded(bounds_[i]) && occlusion.is_occluded(bounds_[i])) continue;
-          out.push_back(order_[i]);
-        }
+        for (std::uint32_t i = node.begin; i < node.end; ++i) consider(i, mask, node.count() == 1);
         continue;
       }
       const bool left_first = near_is_left(node, eye);
@@ -292,7 +296,9 @@ class AdaptiveBinaryTree {
     static_assert(is_bounds_getter_v<std::decay_t<Getter>>,
                   "cullkit: refit_from_getter needs a callable get_bounds(std::uint32_t) returning cullkit::Aabb");
     stats_.refit_invalid = 0;
+    dyn_.pending_box = Aabb::empty();
     for (std::size_t i = 0; i < order_.size(); ++i) {
+      if (dyn_.is_hole(static_cast<std::uint32_t>(i))) continue;
       Aabb b = get_bounds(order_[i]);
       if (!is_valid(b)) {
         ++stats_.refit_invalid;
@@ -300,6 +306,7 @@ class AdaptiveBinaryTree {
       }
       bounds_[i] = b;
       leaf_boxes_.set(static_cast<std::uint32_t>(i), b);
+      if (i >= dyn_.tree_end) dyn_.pending_box = merge(dyn_.pending_box, b);
     }
     stats_.unbounded = stats_.refit_invalid;
     // Children always follow their parent in the array, so a reverse sweep is bottom-up.
@@ -327,7 +334,12 @@ class AdaptiveBinaryTree {
   std::uint32_t repair(double rebuild_threshold) {
     stats_.subtrees_rebuilt = 0;
     stats_.objects_rebuilt = 0;
-    if (!(rebuild_threshold > 0.0 && rebuild_threshold < 1.0) || nodes_.empty()) return 0;
+    if (!(rebuild_threshold > 0.0 && rebuild_threshold < 1.0) || order_.empty()) return 0;
+    if (dyn_.dead != 0 || dyn_.tree_end < order_.size()) {  // holes or pending: one full rebuild
+      stats_.objects_rebuilt = static_cast<std::uint32_t>(size());
+      rebuild_live();
+      return stats_.subtrees_rebuilt = 1;
+    }
     struct Visit {
       std::uint32_t node, depth;
     };
@@ -395,6 +407,122 @@ class AdaptiveBinaryTree {
   }
 
   // ---------------------------------------------------------------------------------------------
+  // Incremental changes (ids are stable: the objects of the build have ids 0..count-1, their input
+  // index; every cull reports ids)
+  // ---------------------------------------------------------------------------------------------
+
+  /// Returned by `insert` when no id is left (2^32 - 2 ids in use).
+  static constexpr std::uint32_t invalid_id = detail::abt_no_position;
+
+  /// Adds an object with `bounds` and returns its id: the most recently removed id if there is
+  /// one, else the next unused (`input_count()` before the call). Bounds that are not `is_valid`
+  /// make it unbounded (reported by every cull, counted in `stats().unbounded`). Every cull
+  /// reports it from now on. Cost: amortized O(log n) (see `maintain`); allocates amortized O(1).
+  /// Not thread-safe with queries.
+  std::uint32_t insert(const Aabb& bounds) {
+    std::uint32_t id;
+    if (!dyn_.free_ids.empty()) {
+      id = dyn_.free_ids.back();
+      dyn_.free_ids.pop_back();
+    } else {
+      if (input_count_ >= std::numeric_limits<std::uint32_t>::max() - 1u) return invalid_id;
+      id = static_cast<std::uint32_t>(input_count_++);
+      dyn_.pos_of.resize(input_count_, detail::abt_no_position);
+    }
+    const Aabb b = held_box(bounds);
+    dyn_.pos_of[id] = static_cast<std::uint32_t>(order_.size());
+    order_.push_back(id);
+    bounds_.push_back(b);
+    leaf_boxes_.append(b);
+    dyn_.pending_box = merge(dyn_.pending_box, b);
+    ++stats_.objects;
+    after_change();
+    return id;
+  }
+
+  /// Removes the object `id`: no cull reports it from now on, and `insert` may hand the id out
+  /// again. Returns false (and changes nothing) for an id that is not held: never given out,
+  /// or already removed. Cost: amortized O(log n). Not thread-safe with queries.
+  bool remove(std::uint32_t id) {
+    if (!contains(id)) return false;
+    const std::uint32_t p = dyn_.pos_of[id];
+    dyn_.pos_of[id] = detail::abt_no_position;
+    dyn_.free_ids.push_back(id);
+    if (is_unbounded_marker(bounds_[p])) --stats_.unbounded;
+    if (p >= dyn_.tree_end) {  // pending: the last pending object takes its place
+      const std::size_t last = order_.size() - 1;
+      order_[p] = order_[last];
+      bounds_[p] = bounds_[last];
+      leaf_boxes_.set(p, bounds_[p]);
+      dyn_.pos_of[order_[p]] = p;
+      order_.pop_back();
+      bounds_.pop_back();
+      leaf_boxes_.pop_back();
+    } else {  // a hole in the tree's range, counted on its path
+      dyn_.prepare_holes(order_.size(), nodes_.size());
+      order_[p] = detail::abt_removed_slot;
+      dyn_.dead_bits[p >> 5] |= std::uint32_t{1} << (p & 31u);
+      ++dyn_.dead;
+      std::uint32_t path[depth_limit + 2];
+      const std::uint32_t len = detail::abt_path_to(nodes_, p, path);
+      for (std::uint32_t i = 0; i < len; ++i) ++dyn_.dead_in[path[i]];
+    }
+    --stats_.objects;
+    after_change();
+    return true;
+  }
+
+  /// New bounds for the object `id` (a moving object): its box, and the boxes of the nodes on its
+  /// path, follow at once. Returns false for an id that is not held. Invalid bounds make it
+  /// unbounded until a later update. The tree's quality is kept bounded by `maintain`.
+  /// Cost: amortized O(log n + leaf size). Not thread-safe with queries.
+  bool update(std::uint32_t id, const Aabb& bounds) {
+    if (!contains(id)) return false;
+    const std::uint32_t p = dyn_.pos_of[id];
+    if (is_unbounded_marker(bounds_[p])) --stats_.unbounded;
+    bounds_[p] = held_box(bounds);
+    leaf_boxes_.set(p, bounds_[p]);
+    if (p >= dyn_.tree_end) {
+      dyn_.pending_box = merge(dyn_.pending_box, bounds_[p]);
+    } else {
+      std::uint32_t path[depth_limit + 2];
+      for (std::uint32_t i = detail::abt_path_to(nodes_, p, path); i-- > 0;) {
+        AbtNode& node = nodes_[path[i]];
+        Aabb box = Aabb::empty();
+        if (node.is_leaf()) {
+          for (std::uint32_t j = node.begin; j < node.end; ++j) box = merge(box, bounds_[j]);
+        } else {
+          box = merge(nodes_[node.left].bounds, nodes_[node.left + 1].bounds);
+        }
+        node.bounds = box;
+        node.sphere = bounding_sphere(box);
+      }
+      refitted_ = true;
+    }
+    after_change();
+    return true;
+  }
+
+  /// True when `id` is held (given out by the build or `insert`, and not removed since).
+  [[nodiscard]] bool contains(std::uint32_t id) const noexcept {
+    return id < dyn_.pos_of.size() && dyn_.pos_of[id] != detail::abt_no_position;
+  }
+
+  /// Restores the tree's shape after changes; run by insert, remove and update on their own once
+  /// the changes since the last run reach max(64, size() / 8). With removed holes or inserted
+  /// objects pending, the tree is rebuilt from the live objects (their ids kept, with the build's
+  /// split settings, on the calling thread); after updates alone, `repair(0.2)` rebuilds the
+  /// subtrees that degraded. Cost O(n log n) at most, so O(log n) amortized per change.
+  void maintain() {
+    dyn_.ops = 0;
+    if (dyn_.dead != 0 || dyn_.tree_end < order_.size()) {
+      rebuild_live();
+    } else if (repair(0.2) != 0) {
+      for (std::size_t p = 0; p < order_.size(); ++p) dyn_.pos_of[order_[p]] = static_cast<std::uint32_t>(p);
+    }
+  }
+
+  // ---------------------------------------------------------------------------------------------
   // Read-only views
   // ---------------------------------------------------------------------------------------------
 
@@ -405,8 +533,8 @@ class AdaptiveBinaryTree {
   /// Bounds of the object at each position of `order()` (as of the build or the last refit).
   [[nodiscard]] const std::vector<Aabb>& object_bounds() const noexcept { return bounds_; }
   /// Objects held (including those without valid bounds; skipped ones excluded).
-  [[nodiscard]] std::size_t size() const noexcept { return order_.size(); }
-  [[nodiscard]] bool empty() const noexcept { return order_.empty(); }
+  [[nodiscard]] std::size_t size() const noexcept { return order_.size() - dyn_.dead; }
+  [[nodiscard]] bool empty() const noexcept { return size() == 0; }
   /// Number of objects given to the build (held + skipped).
   [[nodiscard]] std::size_t input_count() const noexcept { return input_count_; }
   [[nodiscard]] const AbtStats& stats() const noexcept { return stats_; }
@@ -435,14 +563,21 @@ class AdaptiveBinaryTree {
   /// position, depth within the limit, split planes separate centroids (until the first refit).
   /// Cost O(n + nodes), allocates a little. For tests and debugging.
   [[nodiscard]] bool validate() const {
-    if (bounds_.size() != order_.size()) return false;
-    if (nodes_.empty()) return order_.empty();
-    const auto n = static_cast<std::uint32_t>(order_.size());
+    if (bounds_.size() != order_.size() || dyn_.pos_of.size() != input_count_) return false;
     std::vector<std::uint8_t> seen(input_count_, 0);
-    for (const std::uint32_t idx : order_) {
-      if (idx >= input_count_ || seen[idx]) return false;
+    std::uint32_t holes = 0;
+    for (std::uint32_t p = 0; p < order_.size(); ++p) {
+      const std::uint32_t idx = order_[p];
+      if (dyn_.is_hole(p)) {
+        holes += idx == detail::abt_removed_slot;
+        continue;
+      }
+      if (idx >= input_count_ || seen[idx] || dyn_.pos_of[idx] != p) return false;
       seen[idx] = 1;
     }
+    if (holes != dyn_.dead || size() != stats_.objects) return false;
+    const std::uint32_t n = dyn_.tree_end;
+    if (nodes_.empty()) return n == 0;
     if (nodes_[0].begin != 0 || nodes_[0].end != n) return false;
     std::vector<std::uint32_t> depth(nodes_.size(), 0);
     std::uint32_t leaves = 0, max_depth = 0;
@@ -504,6 +639,17 @@ class AdaptiveBinaryTree {
   // subtree that straddles tests its objects 16 at a time from the SoA copy.
   template <class Visitor>
   void walk(const Plane* planes, std::uint32_t plane_mask, Visitor&& visitor) const {
+    const auto emit_range = [&](std::uint32_t k, std::uint32_t b, std::uint32_t e) {
+      if (!dyn_.node_has_holes(k)) return call(visitor, b, e, Containment::inside);
+      return dyn_.live_runs(b, e, [&](std::uint32_t rb, std::uint32_t re) { return call(visitor, rb, re, Containment::inside); });
+    };
+    const auto emit_one = [&](std::uint32_t i, Containment c) { return dyn_.is_hole(i) || call(visitor, i, i + 1, c); };
+    const auto n = static_cast<std::uint32_t>(order_.size());
+    if (dyn_.tree_end < n) {  // objects inserted since the last rebuild
+      const bool go_on = plane_mask == 0 ? emit_range(~0u, dyn_.tree_end, n)
+                                         : leaf_boxes_.test(planes, plane_mask, dyn_.tree_end, n, emit_one);
+      if (!go_on) return;
+    }
     if (nodes_.empty()) return;
     struct Entry {
       std::uint32_t node;
@@ -519,13 +665,11 @@ class AdaptiveBinaryTree {
       std::uint32_t mask = entry.mask;
       if (detail::abt_node_outside(planes, mask, node.bounds, node.sphere)) continue;
       if (mask == 0) {
-        if (!call(visitor, node.begin, node.end, Containment::inside)) return;
+        if (!emit_range(entry.node, node.begin, node.end)) return;
         continue;
       }
       if (node.is_leaf() || node.count() <= scan_below_) {
-        const bool go_on = leaf_boxes_.test(planes, mask, node.begin, node.end, [&](std::uint32_t i, Containment c) {
-          return call(visitor, i, i + 1, c);
-        });
+        const bool go_on = leaf_boxes_.test(planes, mask, node.begin, node.end, emit_one);
         if (!go_on) return;
         continue;
       }
@@ -553,6 +697,23 @@ class AdaptiveBinaryTree {
 
   template <class Visitor>
   void traverse(const glm::vec3& eye, bool front_first, Visitor& visitor) const {
+    if (front_first) visit_pending(visitor);
+    traverse_tree(eye, front_first, visitor);
+    if (!front_first) visit_pending(visitor);
+  }
+
+  // Objects inserted since the last rebuild, shown to node visitors as one extra leaf with index
+  // nodes().size() (a valid node index never reaches it).
+  template <class Visitor>
+  void visit_pending(Visitor& visitor) const {
+    const auto n = static_cast<std::uint32_t>(order_.size());
+    if (dyn_.tree_end >= n) return;
+    const AbtNode pending{dyn_.pending_box, bounding_sphere(dyn_.pending_box), dyn_.tree_end, n, 0, 0, 0.0f};
+    call(visitor, static_cast<std::uint32_t>(nodes_.size()), pending);
+  }
+
+  template <class Visitor>
+  void traverse_tree(const glm::vec3& eye, bool front_first, Visitor& visitor) const {
     if (nodes_.empty()) return;
     std::uint32_t stack[depth_limit + 2];
     std::uint32_t top = 0;
@@ -617,6 +778,7 @@ class AdaptiveBinaryTree {
     build_context_.leaf_size = std::max<std::uint32_t>(1u, params.max_leaf_size);
     build_context_.max_depth = std::min(params.max_depth, depth_limit);
     if (n == 0) {
+      dyn_.reset(order_, input_count_);
       if (params.progress) params.progress(1.0f);
       build_area_ = 0.0;
       return;
@@ -649,13 +811,68 @@ class AdaptiveBinaryTree {
     ref_split_.resize(nodes_.size());
     for (std::size_t k = 0; k < nodes_.size(); ++k) ref_split_[k] = split_ratio(static_cast<std::uint32_t>(k));
     build_area_ = total_area();
+    dyn_.reset(order_, input_count_);
     if (params.progress) params.progress(1.0f);
+  }
+
+  static bool is_unbounded_marker(const Aabb& b) noexcept {
+    return b.min == unbounded_box().min && b.max == unbounded_box().max;
+  }
+
+  // The box held for `bounds` (unbounded_box() for bad bounds, counted).
+  Aabb held_box(const Aabb& bounds) {
+    if (is_valid(bounds)) return bounds;
+    ++stats_.unbounded;
+    return unbounded_box();
+  }
+
+  void after_change() {
+    if (++dyn_.ops >= std::max<std::size_t>(64, size() / 8)) maintain();
+  }
+
+  // Rebuild from the live objects, their ids and the build's split settings kept.
+  void rebuild_live() {
+    std::vector<detail::AbtBuildItem> items;
+    items.reserve(size());
+    for (std::size_t p = 0; p < order_.size(); ++p)
+      if (!dyn_.is_hole(static_cast<std::uint32_t>(p)))
+        items.push_back(detail::AbtBuildItem{bounds_[p], detail::abt_centroid(bounds_[p]), order_[p]});
+    const auto n = static_cast<std::uint32_t>(items.size());
+    std::vector<std::uint32_t> free_ids = std::move(dyn_.free_ids);
+    const AbtStats keep = stats_;
+    nodes_.clear();
+    stats_ = AbtStats{};
+    stats_.unbounded = keep.unbounded;
+    stats_.skipped = keep.skipped;
+    std::vector<AbtNode> raw;
+    if (n > 0) {
+      detail::AbtBuildContext ctx = build_context_;
+      ctx.items = items.data();
+      raw = detail::abt_build_raw(ctx, 0, n, 0, 1, 0);
+      std::vector<std::uint32_t> from;
+      detail::abt_relayout(raw, nodes_, from, stats_);
+    }
+    stats_.objects = n;
+    order_.resize(n);
+    bounds_.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+      order_[i] = items[i].index;
+      bounds_[i] = items[i].box;
+    }
+    leaf_boxes_.assign(bounds_);
+    ref_split_.resize(nodes_.size());
+    for (std::size_t k = 0; k < nodes_.size(); ++k) ref_split_[k] = split_ratio(static_cast<std::uint32_t>(k));
+    build_area_ = total_area();
+    refitted_ = false;
+    dyn_.reset(order_, input_count_);
+    dyn_.free_ids = std::move(free_ids);
   }
 
   std::vector<AbtNode> nodes_;
   std::vector<std::uint32_t> order_;
   std::vector<Aabb> bounds_;
-  detail::AbtLeafBoxes leaf_boxes_;  // bounds_ again, as padded SoA for the leaf tests
+  detail::AbtLeafBoxes leaf_boxes_;
+  detail::AbtDynamic dyn_;           // holes, pending objects, ids (insert, remove, update)  // bounds_ again, as padded SoA for the leaf tests
   std::vector<double> ref_split_;    // per node: split_ratio when it was last (re)built
   detail::AbtBuildContext build_context_;  // the build's split settings, for repairs
   std::size_t input_count_ = 0;

@@ -9,7 +9,9 @@
 // half extents are rounded exactly as Frustum::classify rounds them.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -90,6 +92,24 @@ class AbtLeafBoxes {
     data_.assign(std::size_t{stride_} * 6, 0.0f);
     for (std::uint32_t i = 0; i < n_; ++i) set(i, boxes[i]);
   }
+  /// One more box at position size(); the columns grow geometrically (amortized O(1)).
+  void append(const Aabb& b) {
+    if (n_ + 1 + lanes > stride_) {
+      const std::uint32_t stride = std::max<std::uint32_t>(2 * stride_, n_ + 1 + lanes);
+      std::vector<float> grown(std::size_t{stride} * 6, 0.0f);
+      for (std::size_t k = 0; k < 6; ++k)
+        std::copy(data_.begin() + std::ptrdiff_t(k * stride_), data_.begin() + std::ptrdiff_t(k * stride_ + n_),
+                  grown.begin() + std::ptrdiff_t(k * stride));
+      data_.swap(grown);
+      stride_ = stride;
+    }
+    set(n_++, b);
+  }
+  /// Drops the box at the last position.
+  void pop_back() noexcept {
+    if (n_ > 0) set(--n_, Aabb{glm::vec3(0.0f), glm::vec3(0.0f)});
+  }
+
   void set(std::uint32_t i, const Aabb& b) {
     const glm::vec3 c = (b.min + b.max) * 0.5f;
     const glm::vec3 e = (b.max - b.min) * 0.5f;

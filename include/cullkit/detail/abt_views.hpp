@@ -27,6 +27,7 @@
 #include "../config.hpp"
 #include "../geometry/aabb.hpp"
 #include "../geometry/frustum.hpp"
+#include "abt_dynamic.hpp"
 #include "abt_leaf.hpp"
 
 #if CULLKIT_HAS_SSE2
@@ -271,8 +272,8 @@ CULLKIT_FORCEINLINE void abt_transpose_lanes(std::uint32_t straddling, const std
 /// some alive view keeps, with its view mask.
 inline void abt_views_leaf(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes, std::uint32_t alive,
                            std::uint32_t straddling, const std::uint32_t* masks, std::uint32_t begin,
-                           std::uint32_t end, const std::uint32_t* order, std::vector<std::uint32_t>& out,
-                           std::vector<std::uint32_t>& view_bits) {
+                           std::uint32_t end, const std::uint32_t* order, const AbtDynamic& dyn,
+                           std::vector<std::uint32_t>& out, std::vector<std::uint32_t>& view_bits) {
   constexpr std::uint32_t lanes = AbtLeafBoxes::lanes;
   constexpr std::uint32_t all_lanes = (std::uint32_t{1} << lanes) - 1u;
   const std::uint32_t inside_views = alive & ~straddling;
@@ -295,7 +296,7 @@ inline void abt_views_leaf(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes, s
     const std::uint32_t valid = end - base < lanes ? (std::uint32_t{1} << (end - base)) - 1u : all_lanes;
     std::uint32_t any = inside_views != 0 ? valid : 0u;
     for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) any |= ~outside[abt_lowest_bit(rest)];
-    any &= valid;
+    any &= valid & ~dyn.holes16(base);
     if (any == 0) continue;
     std::uint32_t lane_bits[lanes];
     abt_transpose_lanes(straddling, outside, inside_views, lane_bits);
@@ -308,11 +309,38 @@ inline void abt_views_leaf(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes, s
 }
 
 /// The whole multi-view walk over a tree's arrays. `views` in [1, 32]; `StackSize` bounds depth.
+/// Objects [begin, end) of the pending part (inserted since the last rebuild), for every view.
+inline void abt_views_pending(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes, std::uint32_t all,
+                              std::uint32_t begin, std::uint32_t end, const std::uint32_t* order,
+                              const AbtDynamic& dyn, std::vector<std::uint32_t>& out,
+                              std::vector<std::uint32_t>& view_bits) {
+  if (begin >= end) return;
+  std::uint32_t masks[32];
+  std::uint32_t straddling = 0;
+  for (std::uint32_t v = 0; v < vp.views(); ++v) {
+    masks[v] = vp.frustum(v).active_mask();
+    if (masks[v] != 0) straddling |= std::uint32_t{1} << v;
+  }
+  if (straddling == 0) {
+    out.insert(out.end(), order + begin, order + end);
+    view_bits.insert(view_bits.end(), end - begin, all);
+    return;
+  }
+  abt_views_leaf(vp, boxes, all, straddling, masks, begin, end, order, dyn, out, view_bits);
+}
+
 template <std::uint32_t StackSize>
-void abt_cull_views(const AbtNode* nodes, const std::uint32_t* order, const AbtLeafBoxes& boxes,
-                    std::uint32_t scan_below, const Frustum* frusta, std::uint32_t views,
-                    std::vector<std::uint32_t>& out, std::vector<std::uint32_t>& view_bits) {
+void abt_cull_views(const std::vector<AbtNode>& tree, const std::vector<std::uint32_t>& order_v,
+                    const AbtLeafBoxes& boxes, const AbtDynamic& dyn, std::uint32_t scan_below,
+                    const Frustum* frusta, std::uint32_t views, std::vector<std::uint32_t>& out,
+                    std::vector<std::uint32_t>& view_bits) {
   const AbtViewPlanes vp(frusta, views);
+  const std::uint32_t all = views >= 32 ? ~std::uint32_t{0} : ((std::uint32_t{1} << views) - 1u);
+  const std::uint32_t* order = order_v.data();
+  abt_views_pending(vp, boxes, all, dyn.tree_end, static_cast<std::uint32_t>(order_v.size()), order, dyn, out,
+                    view_bits);
+  if (tree.empty()) return;
+  const AbtNode* nodes = tree.data();
   struct Entry {
     std::uint32_t node;
     std::uint32_t alive;
@@ -322,11 +350,12 @@ void abt_cull_views(const AbtNode* nodes, const std::uint32_t* order, const AbtL
   std::uint32_t top = 0;
   Entry& root = stack[top++];
   root.node = 0;
-  root.alive = views >= 32 ? ~std::uint32_t{0} : ((std::uint32_t{1} << views) - 1u);
+  root.alive = all;
   for (std::uint32_t v = 0; v < views; ++v) root.masks[v] = frusta[v].active_mask();
   while (top > 0) {
     --top;
-    const AbtNode& node = nodes[stack[top].node];
+    const std::uint32_t k = stack[top].node;
+    const AbtNode& node = nodes[k];
     std::uint32_t alive = stack[top].alive;
     std::uint32_t masks[32];
     for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
@@ -341,12 +370,20 @@ void abt_cull_views(const AbtNode* nodes, const std::uint32_t* order, const AbtL
       if (masks[v] != 0) straddling |= std::uint32_t{1} << v;
     }
     if (straddling == 0) {  // inside every view still alive: one range, one mask
-      out.insert(out.end(), order + node.begin, order + node.end);
-      view_bits.insert(view_bits.end(), node.count(), alive);
+      if (!dyn.node_has_holes(k)) {
+        out.insert(out.end(), order + node.begin, order + node.end);
+        view_bits.insert(view_bits.end(), node.count(), alive);
+      } else {
+        dyn.live_runs(node.begin, node.end, [&](std::uint32_t b, std::uint32_t e) {
+          out.insert(out.end(), order + b, order + e);
+          view_bits.insert(view_bits.end(), e - b, alive);
+          return true;
+        });
+      }
       continue;
     }
     if (node.is_leaf() || node.count() <= scan_below) {
-      abt_views_leaf(vp, boxes, alive, straddling, masks, node.begin, node.end, order, out, view_bits);
+      abt_views_leaf(vp, boxes, alive, straddling, masks, node.begin, node.end, order, dyn, out, view_bits);
       continue;
     }
     const std::uint32_t left = node.left;
