@@ -48,7 +48,9 @@
 #include "detail/abt_build.hpp"
 #include "detail/abt_dynamic.hpp"
 #include "detail/abt_leaf.hpp"
+#include "detail/abt_repair.hpp"
 #include "detail/abt_split.hpp"
+#include "detail/abt_validate.hpp"
 #include "detail/abt_views.hpp"
 #include "geometry/aabb.hpp"
 #include "geometry/convex_volume.hpp"
@@ -340,59 +342,9 @@ class AdaptiveBinaryTree {
       rebuild_live();
       return stats_.subtrees_rebuilt = 1;
     }
-    struct Visit {
-      std::uint32_t node, depth;
-    };
-    std::vector<Visit> roots, stack;
-    stack.push_back(Visit{0, 0});
-    while (!stack.empty()) {
-      const Visit v = stack.back();
-      stack.pop_back();
-      const AbtNode& node = nodes_[v.node];
-      if (node.is_leaf()) continue;
-      const double ref = ref_split_[v.node];
-      if (split_ratio(v.node) > ref + rebuild_threshold * (2.0 - ref)) {
-        roots.push_back(v);
-        continue;
-      }
-      stack.push_back(Visit{node.left + 1, v.depth + 1});
-      stack.push_back(Visit{node.left, v.depth + 1});
-    }
-    if (roots.empty()) return 0;
-    std::vector<AbtNode> raw = nodes_;
-    std::vector<double> raw_ref = ref_split_;
-    const double fresh = std::numeric_limits<double>::quiet_NaN();  // measured after the layout
-    std::vector<detail::AbtBuildItem> items;
-    for (const Visit& v : roots) {
-      const std::uint32_t b = nodes_[v.node].begin, e = nodes_[v.node].end;
-      items.clear();
-      for (std::uint32_t i = b; i < e; ++i)
-        items.push_back(detail::AbtBuildItem{bounds_[i], detail::abt_centroid(bounds_[i]), order_[i]});
-      detail::AbtBuildContext ctx = build_context_;
-      ctx.items = items.data();
-      std::vector<AbtNode> sub = detail::abt_build_raw(ctx, 0, e - b, v.depth, 1, 0);
-      for (AbtNode& nd : sub) {
-        nd.begin += b;
-        nd.end += b;
-      }
-      detail::abt_stitch(raw, v.node, sub);
-      raw_ref[v.node] = fresh;
-      raw_ref.resize(raw.size(), fresh);
-      for (std::uint32_t i = b; i < e; ++i) {
-        order_[i] = items[i - b].index;
-        bounds_[i] = items[i - b].box;
-        leaf_boxes_.set(i, bounds_[i]);
-      }
-      ++stats_.subtrees_rebuilt;
-      stats_.objects_rebuilt += e - b;
-    }
-    std::vector<std::uint32_t> from;
-    detail::abt_relayout(raw, nodes_, from, stats_);
-    ref_split_.resize(nodes_.size());
-    for (std::size_t k = 0; k < nodes_.size(); ++k) {
-      const double r = raw_ref[from[k]];
-      ref_split_[k] = std::isnan(r) ? split_ratio(static_cast<std::uint32_t>(k)) : r;
-    }
+    detail::abt_repair(rebuild_threshold, build_context_, nodes_, ref_split_, order_, bounds_, leaf_boxes_, stats_);
+    if (stats_.subtrees_rebuilt != 0)
+      for (std::size_t p = 0; p < order_.size(); ++p) dyn_.pos_of[order_[p]] = static_cast<std::uint32_t>(p);
     return stats_.subtrees_rebuilt;
   }
 
@@ -444,7 +396,7 @@ class AdaptiveBinaryTree {
   /// again. Returns false (and changes nothing) for an id that is not held: never given out,
   /// or already removed. Cost: amortized O(log n). Not thread-safe with queries.
   bool remove(std::uint32_t id) {
-    if (!contains(id)) return false;
+    if (!holds(id)) return false;
     const std::uint32_t p = dyn_.pos_of[id];
     dyn_.pos_of[id] = detail::abt_no_position;
     dyn_.free_ids.push_back(id);
@@ -477,7 +429,7 @@ class AdaptiveBinaryTree {
   /// unbounded until a later update. The tree's quality is kept bounded by `maintain`.
   /// Cost: amortized O(log n + leaf size). Not thread-safe with queries.
   bool update(std::uint32_t id, const Aabb& bounds) {
-    if (!contains(id)) return false;
+    if (!holds(id)) return false;
     const std::uint32_t p = dyn_.pos_of[id];
     if (is_unbounded_marker(bounds_[p])) --stats_.unbounded;
     bounds_[p] = held_box(bounds);
@@ -504,7 +456,7 @@ class AdaptiveBinaryTree {
   }
 
   /// True when `id` is held (given out by the build or `insert`, and not removed since).
-  [[nodiscard]] bool contains(std::uint32_t id) const noexcept {
+  [[nodiscard]] bool holds(std::uint32_t id) const noexcept {
     return id < dyn_.pos_of.size() && dyn_.pos_of[id] != detail::abt_no_position;
   }
 
@@ -517,8 +469,8 @@ class AdaptiveBinaryTree {
     dyn_.ops = 0;
     if (dyn_.dead != 0 || dyn_.tree_end < order_.size()) {
       rebuild_live();
-    } else if (repair(0.2) != 0) {
-      for (std::size_t p = 0; p < order_.size(); ++p) dyn_.pos_of[order_[p]] = static_cast<std::uint32_t>(p);
+    } else {
+      repair(0.2);
     }
   }
 
@@ -563,60 +515,9 @@ class AdaptiveBinaryTree {
   /// position, depth within the limit, split planes separate centroids (until the first refit).
   /// Cost O(n + nodes), allocates a little. For tests and debugging.
   [[nodiscard]] bool validate() const {
-    if (bounds_.size() != order_.size() || dyn_.pos_of.size() != input_count_) return false;
-    std::vector<std::uint8_t> seen(input_count_, 0);
-    std::uint32_t holes = 0;
-    for (std::uint32_t p = 0; p < order_.size(); ++p) {
-      const std::uint32_t idx = order_[p];
-      if (dyn_.is_hole(p)) {
-        holes += idx == detail::abt_removed_slot;
-        continue;
-      }
-      if (idx >= input_count_ || seen[idx] || dyn_.pos_of[idx] != p) return false;
-      seen[idx] = 1;
-    }
-    if (holes != dyn_.dead || size() != stats_.objects) return false;
-    const std::uint32_t n = dyn_.tree_end;
-    if (nodes_.empty()) return n == 0;
-    if (nodes_[0].begin != 0 || nodes_[0].end != n) return false;
-    std::vector<std::uint32_t> depth(nodes_.size(), 0);
-    std::uint32_t leaves = 0, max_depth = 0;
-    std::vector<std::uint8_t> reached(nodes_.size(), 0);
-    reached[0] = 1;
-    for (std::size_t k = 0; k < nodes_.size(); ++k) {
-      const AbtNode& node = nodes_[k];
-      if (!reached[k]) return false;
-      if (node.begin >= node.end || node.end > n) return false;
-      if (!sphere_encloses(node.sphere, node.bounds)) return false;
-      max_depth = std::max(max_depth, depth[k]);
-      if (node.is_leaf()) {
-        ++leaves;
-        for (std::uint32_t i = node.begin; i < node.end; ++i) {
-          if (!contains(node.bounds, bounds_[i])) return false;
-        }
-        continue;
-      }
-      const std::size_t l = node.left;
-      if (l <= k || l + 1 >= nodes_.size() || reached[l] || reached[l + 1]) return false;
-      reached[l] = reached[l + 1] = 1;
-      depth[l] = depth[l + 1] = depth[k] + 1;
-      const AbtNode& a = nodes_[l];
-      const AbtNode& b = nodes_[l + 1];
-      if (a.begin != node.begin || a.end != b.begin || b.end != node.end) return false;
-      if (!contains(node.bounds, a.bounds) || !contains(node.bounds, b.bounds)) return false;
-      if (node.axis > 2) return false;
-      if (!refitted_) {
-        for (std::uint32_t i = a.begin; i < a.end; ++i) {
-          if (!(detail::abt_centroid(bounds_[i])[node.axis] < node.split)) return false;
-        }
-        for (std::uint32_t i = b.begin; i < b.end; ++i) {
-          if (detail::abt_centroid(bounds_[i])[node.axis] < node.split) return false;
-        }
-      }
-    }
-    if (max_depth > depth_limit) return false;
-    return leaves == stats_.leaves && max_depth == stats_.depth && nodes_.size() == stats_.nodes;
+    return detail::abt_validate(nodes_, order_, bounds_, dyn_, input_count_, stats_, refitted_, depth_limit);
   }
+
 
  private:
   template <class Visitor, class... Args>
@@ -682,19 +583,6 @@ class AdaptiveBinaryTree {
     return eye[node.axis] < node.split;
   }
 
-  static bool sphere_encloses(const Sphere& s, const Aabb& b) {
-    for (int c = 0; c < 8; ++c) {
-      const glm::vec3 p = corner(b, c);
-      double d2 = 0.0;
-      for (int a = 0; a < 3; ++a) {
-        const double d = double(p[a]) - double(s.center[a]);
-        d2 += d * d;
-      }
-      if (!(d2 <= double(s.radius) * double(s.radius))) return false;
-    }
-    return true;
-  }
-
   template <class Visitor>
   void traverse(const glm::vec3& eye, bool front_first, Visitor& visitor) const {
     if (front_first) visit_pending(visitor);
@@ -731,13 +619,8 @@ class AdaptiveBinaryTree {
 
   // (area of the children) / (own area) of an inner node; 0 for leaves and for nodes without a
   // measurable area (flat, or unbounded).
-  [[nodiscard]] double split_ratio(std::uint32_t k) const noexcept {
-    const AbtNode& node = nodes_[k];
-    if (node.is_leaf()) return 0.0;
-    const double own = detail::abt_measured_area(node.bounds);
-    if (!(own > 0.0)) return 0.0;
-    return (detail::abt_measured_area(nodes_[node.left].bounds) + detail::abt_measured_area(nodes_[node.left + 1].bounds)) / own;
-  }
+  [[nodiscard]] double split_ratio(std::uint32_t k) const noexcept { return detail::abt_split_ratio(nodes_, k); }
+
 
   [[nodiscard]] double total_area() const noexcept {
     double sum = 0.0;
