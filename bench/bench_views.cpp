@@ -145,6 +145,100 @@ void refit_race(std::size_t count) {
                         }}},
                       15);
 }
+// Incremental changes: the same random insert / remove / move operations applied to an
+// AdaptiveBinaryTree (insert, remove, update) and to Bullet's btDbvt (insert, remove, update), then
+// a cull of each after the churn against a fresh build of the same objects.
+void churn_race(std::size_t count) {
+  std::vector<Aabb> boxes = random_boxes(count);
+  support::Rng rng(99);
+  AdaptiveBinaryTree<Aabb> abt(boxes.data(), boxes.size());
+  DbvtPeer dbvt(boxes);
+  std::vector<std::uint32_t> abt_ids(count), dbvt_ids(count);
+  for (std::uint32_t i = 0; i < count; ++i) abt_ids[i] = dbvt_ids[i] = i;
+  struct Op {
+    int kind;
+    double pick;
+    Aabb box;
+  };
+  const auto make_ops = [&](std::size_t n) {
+    std::vector<Op> ops(n);
+    for (Op& op : ops) {
+      op.kind = rng.range(0, 5);  // 0 insert, 1 remove, 2..5 move
+      op.pick = rng.uniform();
+      const glm::vec3 c(rng.uniform(-500, 500), rng.uniform(0, 50), rng.uniform(-500, 500));
+      const glm::vec3 h(rng.uniform(0.5f, 5), rng.uniform(0.5f, 10), rng.uniform(0.5f, 5));
+      op.box = Aabb{c - h, c + h};
+    }
+    return ops;
+  };
+  // A move is a short step (an object in motion); remove and insert keep the count steady.
+  const auto apply_abt = [&](const std::vector<Op>& ops) {
+    for (const Op& op : ops) {
+      const std::size_t j = std::size_t(op.pick * double(abt_ids.size() - 1));
+      if (op.kind == 0) {
+        abt_ids.push_back(abt.insert(op.box));
+      } else if (op.kind == 1) {
+        abt.remove(abt_ids[j]);
+        abt_ids[j] = abt_ids.back();
+        abt_ids.pop_back();
+      } else {
+        const glm::vec3 step = (op.box.center() - glm::vec3(0, 25, 0)) * 0.004f;
+        Aabb moved = boxes[abt_ids[j] % boxes.size()];
+        moved = Aabb{moved.min + step, moved.max + step};
+        abt.update(abt_ids[j], moved);
+      }
+    }
+  };
+  const auto apply_dbvt = [&](const std::vector<Op>& ops) {
+    for (const Op& op : ops) {
+      const std::size_t j = std::size_t(op.pick * double(dbvt_ids.size() - 1));
+      if (op.kind == 0) {
+        dbvt_ids.push_back(dbvt.insert(op.box));
+      } else if (op.kind == 1) {
+        dbvt.remove(dbvt_ids[j]);
+        dbvt_ids[j] = dbvt_ids.back();
+        dbvt_ids.pop_back();
+      } else {
+        const glm::vec3 step = (op.box.center() - glm::vec3(0, 25, 0)) * 0.004f;
+        Aabb moved = boxes[dbvt_ids[j] % boxes.size()];
+        moved = Aabb{moved.min + step, moved.max + step};
+        dbvt.update(dbvt_ids[j], moved);
+      }
+    }
+  };
+  const std::size_t batch = cullkit_bench::smoke() ? 100 : 1000;
+  std::vector<Op> ops = make_ops(batch);
+  const auto r = cullkit_bench::race("churn_ops_" + std::to_string(count),
+                                     {{"cullkit_insert_remove_update", [&] { apply_abt(ops); }},
+                                      {"bullet_btdbvt_insert_remove_update", [&] { apply_dbvt(ops); }}},
+                                     cullkit_bench::smoke() ? 2 : 21);
+  std::fprintf(stderr, "churn_ops_%zu: %zu operations per repetition: cullkit %.0f ns/op, btDbvt %.0f ns/op\n", count,
+               batch, r[0].median_ns / double(batch), r[1].median_ns / double(batch));
+  // 10,000 more operations, then cull: after churn, fresh rebuild, btDbvt after the same churn.
+  ops = make_ops(cullkit_bench::smoke() ? 500 : 10000);
+  apply_abt(ops);
+  apply_dbvt(ops);
+  std::vector<Aabb> live;
+  for (std::size_t p = 0; p < abt.order().size(); ++p)
+    if (abt.order()[p] != detail::abt_removed_slot) live.push_back(abt.object_bounds()[p]);
+  const AdaptiveBinaryTree<Aabb> fresh(live.data(), live.size());
+  double area = 0, fresh_area = 0;
+  for (const AbtNode& n : abt.nodes()) area += detail::abt_measured_area(n.bounds);
+  for (const AbtNode& n : fresh.nodes()) fresh_area += detail::abt_measured_area(n.bounds);
+  const glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(90.0f), 1.0f, 0.1f, 600.0f);
+  const Frustum f = Frustum::from_matrix(proj * view_matrix(glm::vec3(-520, 30, -520), glm::vec3(0, 10, 0)),
+                                         DepthRange::zero_to_one);
+  std::vector<std::uint32_t> o1, o2, o3;
+  const auto c = cullkit_bench::race("churn_cull_" + std::to_string(count),
+                                     {{"cullkit_after_churn", [&] { abt.cull(f, o1); }},
+                                      {"cullkit_fresh_build", [&] { fresh.cull(f, o2); }},
+                                      {"bullet_btdbvt_after_churn", [&] { dbvt.cull(f, o3); }}});
+  std::fprintf(stderr,
+               "churn_cull_%zu: after churn %zu objects (%zu pending, %zu held in the tree), node area / fresh build "
+               "%.3f, cull time / fresh build %.3f, / btDbvt %.3f\n",
+               count, abt.size(), abt.order().size() - abt.nodes().front().end, std::size_t(abt.nodes().front().end),
+               area / fresh_area, c[0].median_ns / c[1].median_ns, c[0].median_ns / c[2].median_ns);
+}
 }  // namespace
 
 int main() {
@@ -157,6 +251,7 @@ int main() {
   stereo_and_cascades("random_60k", random, glm::vec3(-520, 30, -520), glm::vec3(0, 10, 0));
   stereo_and_cascades("random_60k_overhead", random, glm::vec3(0, 400, 0.1f), glm::vec3(0, 0, 0));
   refit_race(cullkit_bench::smoke() ? 2000 : 20000);
+  churn_race(cullkit_bench::smoke() ? 3000 : 60000);
   std::fprintf(stderr, "\nsummary (median time ratios, same run):\n");
   for (const Summary& s : summaries)
     std::fprintf(stderr, "  %-34s cull_views / separate culls %.3f   cull_views / btDbvt %.3f\n", s.name.c_str(),
