@@ -358,10 +358,8 @@ class AdaptiveBinaryTree {
     return total_area() / build_area_;
   }
 
-  // ---------------------------------------------------------------------------------------------
-  // Incremental changes (ids are stable: the objects of the build have ids 0..count-1, their input
-  // index; every cull reports ids)
-  // ---------------------------------------------------------------------------------------------
+  // ---- Incremental changes. Ids are stable: the build's objects have ids 0..count-1 (their input
+  // ---- index), `insert` hands out more; every cull reports ids. Internals: detail/abt_dynamic.hpp.
 
   /// Returned by `insert` when no id is left (2^32 - 2 ids in use).
   static constexpr std::uint32_t invalid_id = detail::abt_no_position;
@@ -381,12 +379,7 @@ class AdaptiveBinaryTree {
       id = static_cast<std::uint32_t>(input_count_++);
       dyn_.pos_of.resize(input_count_, detail::abt_no_position);
     }
-    const Aabb b = held_box(bounds);
-    dyn_.pos_of[id] = static_cast<std::uint32_t>(order_.size());
-    order_.push_back(id);
-    bounds_.push_back(b);
-    leaf_boxes_.append(b);
-    dyn_.pending_box = merge(dyn_.pending_box, b);
+    append_pending(id, held_box(bounds));
     ++stats_.objects;
     after_change();
     return id;
@@ -411,34 +404,42 @@ class AdaptiveBinaryTree {
       bounds_.pop_back();
       leaf_boxes_.pop_back();
     } else {  // a hole in the tree's range, counted on its path
-      dyn_.prepare_holes(order_.size(), nodes_.size());
-      order_[p] = detail::abt_removed_slot;
-      dyn_.dead_bits[p >> 5] |= std::uint32_t{1} << (p & 31u);
-      ++dyn_.dead;
       std::uint32_t path[depth_limit + 2];
-      const std::uint32_t len = detail::abt_path_to(nodes_, p, path);
-      for (std::uint32_t i = 0; i < len; ++i) ++dyn_.dead_in[path[i]];
+      detail::abt_make_hole(dyn_, order_, nodes_.size(), p, path, detail::abt_path_to(nodes_, p, path));
     }
     --stats_.objects;
     after_change();
     return true;
   }
 
-  /// New bounds for the object `id` (a moving object): its box, and the boxes of the nodes on its
-  /// path, follow at once. Returns false for an id that is not held. Invalid bounds make it
-  /// unbounded until a later update. The tree's quality is kept bounded by `maintain`.
-  /// Cost: amortized O(log n + leaf size). Not thread-safe with queries.
+  /// New bounds for the object `id` (a moving object). A box that stays near its leaf (the leaf's
+  /// box grown to it has at most 1.5 times its area) is refitted in place: its box and the boxes
+  /// of the nodes on its path follow at once. A box that jumped away (or became unbounded) leaves
+  /// a hole and joins the pending objects, so one teleport cannot stretch a path of boxes across
+  /// the scene. Returns false for an id that is not held. Invalid bounds make it unbounded until a
+  /// later update. Cost: amortized O(log n + leaf size). Not thread-safe with queries.
   bool update(std::uint32_t id, const Aabb& bounds) {
     if (!holds(id)) return false;
     const std::uint32_t p = dyn_.pos_of[id];
     if (is_unbounded_marker(bounds_[p])) --stats_.unbounded;
-    bounds_[p] = held_box(bounds);
-    leaf_boxes_.set(p, bounds_[p]);
+    const Aabb b = held_box(bounds);
+    std::uint32_t path[depth_limit + 2], len = 0;
+    if (p < dyn_.tree_end) {
+      len = detail::abt_path_to(nodes_, p, path);
+      const double leaf = detail::abt_measured_area(nodes_[path[len - 1]].bounds);
+      if (is_unbounded(b) || !(detail::abt_measured_area(merge(nodes_[path[len - 1]].bounds, b)) <= 1.5 * leaf)) {
+        detail::abt_make_hole(dyn_, order_, nodes_.size(), p, path, len);
+        append_pending(id, b);
+        after_change();
+        return true;
+      }
+    }
+    bounds_[p] = b;
+    leaf_boxes_.set(p, b);
     if (p >= dyn_.tree_end) {
-      dyn_.pending_box = merge(dyn_.pending_box, bounds_[p]);
+      dyn_.pending_box = merge(dyn_.pending_box, b);
     } else {
-      std::uint32_t path[depth_limit + 2];
-      for (std::uint32_t i = detail::abt_path_to(nodes_, p, path); i-- > 0;) {
+      for (std::uint32_t i = len; i-- > 0;) {
         AbtNode& node = nodes_[path[i]];
         Aabb box = Aabb::empty();
         if (node.is_leaf()) {
@@ -460,11 +461,10 @@ class AdaptiveBinaryTree {
     return id < dyn_.pos_of.size() && dyn_.pos_of[id] != detail::abt_no_position;
   }
 
-  /// Restores the tree's shape after changes; run by insert, remove and update on their own once
-  /// the changes since the last run reach max(64, size() / 8). With removed holes or inserted
-  /// objects pending, the tree is rebuilt from the live objects (their ids kept, with the build's
-  /// split settings, on the calling thread); after updates alone, `repair(0.2)` rebuilds the
-  /// subtrees that degraded. Cost O(n log n) at most, so O(log n) amortized per change.
+  /// Restores the tree's shape; run by insert, remove and update once the changes since the last
+  /// run reach max(64, size() / 8). With holes or pending objects, the tree is rebuilt from the live
+  /// objects (ids kept, the build's split settings, calling thread); after updates alone,
+  /// `repair(0.2)`. Cost O(n log n) at most: O(log n) amortized per change.
   void maintain() {
     dyn_.ops = 0;
     if (dyn_.dead != 0 || dyn_.tree_end < order_.size()) {
@@ -698,15 +698,21 @@ class AdaptiveBinaryTree {
     if (params.progress) params.progress(1.0f);
   }
 
-  static bool is_unbounded_marker(const Aabb& b) noexcept {
-    return b.min == unbounded_box().min && b.max == unbounded_box().max;
-  }
+  static bool is_unbounded_marker(const Aabb& b) noexcept { return b.min == unbounded_box().min && b.max == unbounded_box().max; }
 
   // The box held for `bounds` (unbounded_box() for bad bounds, counted).
   Aabb held_box(const Aabb& bounds) {
     if (is_valid(bounds)) return bounds;
     ++stats_.unbounded;
     return unbounded_box();
+  }
+
+  void append_pending(std::uint32_t id, const Aabb& b) {
+    dyn_.pos_of[id] = static_cast<std::uint32_t>(order_.size());
+    order_.push_back(id);
+    bounds_.push_back(b);
+    leaf_boxes_.append(b);
+    dyn_.pending_box = merge(dyn_.pending_box, b);
   }
 
   void after_change() {

@@ -222,7 +222,7 @@ void churn_quality() {
   const AdaptiveBinaryTree<Aabb> fresh(now.data(), now.size());
   for (const AbtNode& n : fresh.nodes()) fresh_area += detail::abt_measured_area(n.bounds);
   std::printf("churn: %zu objects, node area after 10,000 operations / fresh build %.3f\n", now.size(), area / fresh_area);
-  CHECK(area / fresh_area < 3.0);
+  CHECK(area / fresh_area < 1.5);
 }
 
 }  // namespace

@@ -85,6 +85,16 @@ struct AbtDynamic {
   }
 };
 
+/// Turns tree position p into a hole, counted on its path (`path`, `len` from abt_path_to).
+inline void abt_make_hole(AbtDynamic& dyn, std::vector<std::uint32_t>& order, std::size_t nodes, std::uint32_t p,
+                          const std::uint32_t* path, std::uint32_t len) {
+  dyn.prepare_holes(order.size(), nodes);
+  order[p] = abt_removed_slot;
+  dyn.dead_bits[p >> 5] |= std::uint32_t{1} << (p & 31u);
+  ++dyn.dead;
+  for (std::uint32_t i = 0; i < len; ++i) ++dyn.dead_in[path[i]];
+}
+
 /// The nodes from the root to the leaf whose range holds position p (p < the root's end), root
 /// first. Returns how many.
 inline std::uint32_t abt_path_to(const std::vector<AbtNode>& nodes, std::uint32_t p, std::uint32_t* path) noexcept {
