@@ -5,15 +5,14 @@
 // does the arithmetic of separate culls plus the cost of writing a view mask per object: measured,
 // no faster than separate culls. The saving comes from views that look alike. The two eyes of a
 // headset have the same orientation, so plane i of one eye has the same normal as plane i of the
-// other, bit for bit, and only the offset d differs; shadow cascades of one camera share their side
-// planes. So planes are grouped by equal normals (per plane index for the leaf test, per group of
-// four planes for the node test): the expensive part of a plane test -- dot(n, c) without d,
-// |n| . e, and the magnitude that sets the rounding tolerance -- is computed once per box and
-// group, and each view then adds its own d and compares (a handful of operations). The sums are
-// formed in exactly the order of the single-view rule (Frustum::classify and the SoA leaf test),
-// so every view's answer is the single-view cull's answer, bit for bit. Four planes (node tests) or
-// four objects (leaf tests) go through SSE2 at once; without SSE2 the scalar single-view tests run
-// per view.
+// other, bit for bit, and only the offset d differs; shadow cascades of one camera share theirs
+// too. Views whose active planes have the same normals form a *family*. For a family, the
+// expensive part of the plane test -- dot(n, c) without d, |n| . e, and the magnitude that sets the
+// rounding tolerance -- is computed once per box and plane; each view then adds its own d and
+// compares (a handful of operations). The sums are formed in exactly the order of the single-view
+// rule (Frustum::classify and the SoA leaf test), so every view's answer is the single-view cull's
+// answer, bit for bit. Four planes (node tests) or four objects (leaf tests) go through SSE2 at
+// once, without a branch per plane; without SSE2 the scalar single-view tests run per view.
 //
 // Nodes inside every view still alive are written as one range of `order()` with one mask.
 #pragma once
@@ -37,10 +36,8 @@
 
 namespace cullkit::detail {
 
-/// The planes of up to 32 views as structure-of-arrays, grouped by equal normals (see the file
-/// comment): per plane index p, the views whose plane p has the same normal as an earlier view's
-/// share that view's arithmetic; the node test shares it per group of four planes (the four side
-/// planes; near and far). Built per call on the stack (about 6 KB).
+/// The planes of up to 32 views as structure-of-arrays, with the views grouped into families of
+/// equal normals (see the file comment). Built per call on the stack (about 5 KB).
 class AbtViewPlanes {
  public:
   static constexpr std::uint32_t width = 8;  // planes per view, padded: two groups of four
@@ -51,68 +48,58 @@ class AbtViewPlanes {
       for (std::uint32_t i = 0; i < width; ++i) {
         const bool has = i < std::uint32_t(Frustum::max_planes) && f.has_plane(int(i));
         const Plane p = has ? f.plane(int(i)) : Plane{glm::vec3(0.0f), 0.0f};
-        n_[v][0][i] = p.normal.x;
-        n_[v][1][i] = p.normal.y;
-        n_[v][2][i] = p.normal.z;
         d_[v][i] = p.d;
         ad_[v][i] = std::fabs(p.d);
       }
-      for (std::uint32_t p = 0; p < std::uint32_t(Frustum::max_planes); ++p) group(v, p, 1u << p, plane_);
-      for (std::uint32_t q = 0; q < 2; ++q) group(v, q, 15u << (4 * q), quad_);
+      std::uint32_t head = v;
+      for (std::uint32_t u = 0; u < v && head == v; ++u) {
+        if (family_of_[u] != u || frusta[u].active_mask() != f.active_mask()) continue;
+        bool same = true;
+        for (std::uint32_t rest = f.active_mask(); rest != 0 && same; rest &= rest - 1u) {
+          const int i = abt_lowest_bit(rest);
+          same = frusta[u].plane(i).normal == f.plane(i).normal;
+        }
+        if (same) head = u;
+      }
+      family_of_[v] = head;
+      if (head == v) {
+        heads_ |= std::uint32_t{1} << v;
+        for (std::uint32_t i = 0; i < width; ++i) {
+          const bool has = i < std::uint32_t(Frustum::max_planes) && f.has_plane(int(i));
+          const glm::vec3 n = has ? f.plane(int(i)).normal : glm::vec3(0.0f);
+          n_[v][0][i] = n.x;
+          n_[v][1][i] = n.y;
+          n_[v][2][i] = n.z;
+        }
+      }
+      members_[head] |= std::uint32_t{1} << v;
     }
   }
 
-  /// Views sharing normals, by key (a plane index, or a group of four planes): `heads` has one bit
-  /// per group (its first view), `members[h]` the views of the group headed by h.
-  struct Groups {
-    std::uint32_t heads = 0;
-    std::uint32_t members[32] = {};
-  };
-
   [[nodiscard]] std::uint32_t views() const noexcept { return views_; }
-  [[nodiscard]] const Groups& plane_groups(std::uint32_t p) const noexcept { return plane_[p]; }
-  [[nodiscard]] const Groups& quad_groups(std::uint32_t q) const noexcept { return quad_[q]; }
-  /// Normal component a (0 x, 1 y, 2 z) of the planes of view v, `width` floats.
-  [[nodiscard]] const float* normal(std::uint32_t v, int a) const noexcept { return n_[v][a]; }
+  /// One bit per family: its first view.
+  [[nodiscard]] std::uint32_t heads() const noexcept { return heads_; }
+  /// The views of the family whose first view is `head`.
+  [[nodiscard]] std::uint32_t members(std::uint32_t head) const noexcept { return members_[head]; }
+  /// Normal component a (0 x, 1 y, 2 z) of the planes of family `head`, `width` floats.
+  [[nodiscard]] const float* normal(std::uint32_t head, int a) const noexcept { return n_[head][a]; }
   [[nodiscard]] const float* d(std::uint32_t v) const noexcept { return d_[v]; }
   [[nodiscard]] const float* abs_d(std::uint32_t v) const noexcept { return ad_[v]; }
   [[nodiscard]] const Frustum& frustum(std::uint32_t v) const noexcept { return frusta_[v]; }
 
  private:
-  // Puts view v in the group of the first earlier view with the same active planes and normals in
-  // `planes` (a bit set), or makes it a head.
-  template <std::size_t N>
-  void group(std::uint32_t v, std::uint32_t key, std::uint32_t planes, Groups (&groups)[N]) noexcept {
-    Groups& g = groups[key];
-    const std::uint32_t mine = frusta_[v].active_mask() & planes;
-    for (std::uint32_t rest = g.heads; rest != 0; rest &= rest - 1u) {
-      const auto u = static_cast<std::uint32_t>(abt_lowest_bit(rest));
-      if ((frusta_[u].active_mask() & planes) != mine) continue;
-      bool same = true;
-      for (std::uint32_t m = mine; m != 0 && same; m &= m - 1u) {
-        const int i = abt_lowest_bit(m);
-        same = n_[u][0][i] == n_[v][0][i] && n_[u][1][i] == n_[v][1][i] && n_[u][2][i] == n_[v][2][i];
-      }
-      if (same) {
-        g.members[u] |= std::uint32_t{1} << v;
-        return;
-      }
-    }
-    g.heads |= std::uint32_t{1} << v;
-    g.members[v] = std::uint32_t{1} << v;
-  }
-
   const Frustum* frusta_;
   std::uint32_t views_;
-  Groups plane_[Frustum::max_planes];
-  Groups quad_[2];
+  std::uint32_t heads_ = 0;
+  std::uint32_t family_of_[32] = {};
+  std::uint32_t members_[32] = {};
   float n_[32][3][width];
   float d_[32][width];
   float ad_[32][width];
 };
 
 #if CULLKIT_HAS_SSE2
-/// The part of a plane test shared by a group of views, for four planes (or four objects) at once:
+/// The part of a plane test shared by a family, for four planes (or four objects) at once:
 /// s = (nx cx + ny cy) + nz cz, and the magnitude |nx cx| + |ny cy| + |nz cz| of the tolerance.
 struct AbtShared {
   __m128 s, mag, r;
@@ -140,12 +127,12 @@ CULLKIT_FORCEINLINE void abt_verdict(const AbtShared& sh, __m128 d, __m128 ad, _
   in = static_cast<std::uint32_t>(_mm_movemask_ps(_mm_cmpge_ps(_mm_sub_ps(dc, r), slack)));
 }
 
-/// The node test (`abt_node_outside`: sphere, then box) for every alive view. Views found outside
-/// leave `alive`; `masks` lose the planes the node is inside of.
-inline void abt_views_node_sse(const AbtViewPlanes& vp, const Aabb& box, const Sphere& sphere, std::uint32_t& alive,
-                               std::uint32_t* masks) noexcept {
+/// The node test (`abt_node_outside`: sphere, then box) for every alive view of one family.
+/// Views found outside leave `alive`; `masks` lose the planes the node is inside of.
+inline void abt_family_node(const AbtViewPlanes& vp, std::uint32_t head, const Aabb& box, const Sphere& sphere,
+                            std::uint32_t& alive, std::uint32_t* masks) noexcept {
   std::uint32_t todo = 0;
-  for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
+  for (std::uint32_t rest = alive & vp.members(head); rest != 0; rest &= rest - 1u) {
     const int v = abt_lowest_bit(rest);
     if (masks[v] != 0) todo |= std::uint32_t{1} << v;
   }
@@ -154,95 +141,81 @@ inline void abt_views_node_sse(const AbtViewPlanes& vp, const Aabb& box, const S
     alive &= ~todo;
     return;
   }
-  std::uint32_t out[32], in[32];
+  AbtShared sh[2];
+  __m128 ex[3] = {};
   for (int pass = 0; pass < 2 && todo != 0; ++pass) {  // pass 0: the sphere, pass 1: the box
-    glm::vec3 c = sphere.center, e(0.0f);
+    glm::vec3 c = sphere.center;
     if (pass == 1) {
       c = (box.min + box.max) * 0.5f;
-      e = (box.max - box.min) * 0.5f;
+      const glm::vec3 e = (box.max - box.min) * 0.5f;
+      ex[0] = _mm_set1_ps(e.x);
+      ex[1] = _mm_set1_ps(e.y);
+      ex[2] = _mm_set1_ps(e.z);
     }
     const __m128 cx = _mm_set1_ps(c.x), cy = _mm_set1_ps(c.y), cz = _mm_set1_ps(c.z);
-    const __m128 ex = _mm_set1_ps(e.x), ey = _mm_set1_ps(e.y), ez = _mm_set1_ps(e.z);
-    for (std::uint32_t rest = todo; rest != 0; rest &= rest - 1u) out[abt_lowest_bit(rest)] = in[abt_lowest_bit(rest)] = 0;
     for (std::uint32_t q = 0; q < 2; ++q) {
-      const AbtViewPlanes::Groups& g = vp.quad_groups(q);
-      for (std::uint32_t heads = g.heads; heads != 0; heads &= heads - 1u) {
-        const auto h = static_cast<std::uint32_t>(abt_lowest_bit(heads));
-        std::uint32_t views = 0;
-        for (std::uint32_t rest = g.members[h] & todo; rest != 0; rest &= rest - 1u) {
-          const int v = abt_lowest_bit(rest);
-          if ((masks[v] >> (4 * q)) & 15u) views |= std::uint32_t{1} << v;
-        }
-        if (views == 0) continue;
-        const __m128 nx = _mm_loadu_ps(vp.normal(h, 0) + 4 * q), ny = _mm_loadu_ps(vp.normal(h, 1) + 4 * q);
-        const __m128 nz = _mm_loadu_ps(vp.normal(h, 2) + 4 * q);
-        AbtShared sh = abt_shared(nx, ny, nz, cx, cy, cz);
-        sh.r = pass == 0 ? _mm_set1_ps(sphere.radius)
-                         : _mm_add_ps(_mm_add_ps(_mm_mul_ps(abt_abs(nx), ex), _mm_mul_ps(abt_abs(ny), ey)),
-                                      _mm_mul_ps(abt_abs(nz), ez));
-        for (; views != 0; views &= views - 1u) {
-          const auto v = static_cast<std::uint32_t>(abt_lowest_bit(views));
-          std::uint32_t o = 0, i = 0;
-          abt_verdict(sh, _mm_loadu_ps(vp.d(v) + 4 * q), _mm_loadu_ps(vp.abs_d(v) + 4 * q), sh.r, o, i);
-          out[v] |= o << (4 * q);
-          in[v] |= i << (4 * q);
-        }
-      }
+      const __m128 nx = _mm_loadu_ps(vp.normal(head, 0) + 4 * q);
+      const __m128 ny = _mm_loadu_ps(vp.normal(head, 1) + 4 * q);
+      const __m128 nz = _mm_loadu_ps(vp.normal(head, 2) + 4 * q);
+      sh[q] = abt_shared(nx, ny, nz, cx, cy, cz);
+      sh[q].r = pass == 0 ? _mm_set1_ps(sphere.radius)
+                          : _mm_add_ps(_mm_add_ps(_mm_mul_ps(abt_abs(nx), ex[0]), _mm_mul_ps(abt_abs(ny), ex[1])),
+                                       _mm_mul_ps(abt_abs(nz), ex[2]));
     }
     std::uint32_t next = 0;
     for (std::uint32_t rest = todo; rest != 0; rest &= rest - 1u) {
       const int v = abt_lowest_bit(rest);
-      if (out[v] & masks[v]) {
+      std::uint32_t out = 0, in = 0;
+      for (std::uint32_t q = 0; q < 2; ++q) {
+        std::uint32_t o = 0, i = 0;
+        abt_verdict(sh[q], _mm_loadu_ps(vp.d(std::uint32_t(v)) + 4 * q), _mm_loadu_ps(vp.abs_d(std::uint32_t(v)) + 4 * q),
+                    sh[q].r, o, i);
+        out |= o << (4 * q);
+        in |= i << (4 * q);
+      }
+      if (out & masks[v]) {
         alive &= ~(std::uint32_t{1} << v);
         continue;
       }
-      masks[v] &= ~in[v];
+      masks[v] &= ~in;
       if (masks[v] != 0) next |= std::uint32_t{1} << v;
     }
     todo = next;
   }
 }
 
-/// Leaf test for the straddling views, 16 objects from `base`: bit i of outside[v] set when
-/// object base + i is outside view v (the SoA leaf test's rule, bit for bit).
-inline void abt_views_lanes_sse(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes, std::uint32_t base,
-                                std::uint32_t straddling, const std::uint32_t* masks, std::uint32_t* outside) noexcept {
+/// Leaf test for the straddling views of one family, 16 objects from `base`: bit i of outside[v]
+/// set when object base + i is outside view v (the SoA leaf test's rule, bit for bit).
+inline void abt_family_lanes(const AbtViewPlanes& vp, std::uint32_t head, const AbtLeafBoxes& boxes,
+                             std::uint32_t base, std::uint32_t views, const std::uint32_t* masks,
+                             std::uint32_t* outside) noexcept {
   std::uint32_t planes = 0;
-  for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) planes |= masks[abt_lowest_bit(rest)];
+  for (std::uint32_t rest = views; rest != 0; rest &= rest - 1u) planes |= masks[abt_lowest_bit(rest)];
   const float* col[6];
   for (int k = 0; k < 6; ++k) col[k] = boxes.column(k) + base;
   for (; planes != 0; planes &= planes - 1u) {
-    const auto p = static_cast<std::uint32_t>(abt_lowest_bit(planes));
-    const AbtViewPlanes::Groups& g = vp.plane_groups(p);
-    for (std::uint32_t heads = g.heads; heads != 0; heads &= heads - 1u) {
-      const auto h = static_cast<std::uint32_t>(abt_lowest_bit(heads));
-      std::uint32_t views = 0;
-      for (std::uint32_t rest = g.members[h] & straddling; rest != 0; rest &= rest - 1u) {
-        const int v = abt_lowest_bit(rest);
-        if ((masks[v] >> p) & 1u) views |= std::uint32_t{1} << v;
-      }
-      if (views == 0) continue;
-      const __m128 nx = _mm_set1_ps(vp.normal(h, 0)[p]), ny = _mm_set1_ps(vp.normal(h, 1)[p]);
-      const __m128 nz = _mm_set1_ps(vp.normal(h, 2)[p]);
-      const __m128 ax = abt_abs(nx), ay = abt_abs(ny), az = abt_abs(nz);
-      AbtShared sh[4];
+    const int p = abt_lowest_bit(planes);
+    const __m128 nx = _mm_set1_ps(vp.normal(head, 0)[p]), ny = _mm_set1_ps(vp.normal(head, 1)[p]);
+    const __m128 nz = _mm_set1_ps(vp.normal(head, 2)[p]);
+    const __m128 ax = abt_abs(nx), ay = abt_abs(ny), az = abt_abs(nz);
+    AbtShared sh[4];
+    for (std::uint32_t q = 0; q < 4; ++q) {
+      const std::uint32_t o = 4 * q;
+      sh[q] = abt_shared(nx, ny, nz, _mm_loadu_ps(col[0] + o), _mm_loadu_ps(col[1] + o), _mm_loadu_ps(col[2] + o));
+      sh[q].r = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, _mm_loadu_ps(col[3] + o)), _mm_mul_ps(ay, _mm_loadu_ps(col[4] + o))),
+                           _mm_mul_ps(az, _mm_loadu_ps(col[5] + o)));
+    }
+    for (std::uint32_t rest = views; rest != 0; rest &= rest - 1u) {
+      const int v = abt_lowest_bit(rest);
+      if (!((masks[v] >> p) & 1u)) continue;
+      const __m128 d = _mm_set1_ps(vp.d(std::uint32_t(v))[p]), ad = _mm_set1_ps(vp.abs_d(std::uint32_t(v))[p]);
+      std::uint32_t bits = 0;
       for (std::uint32_t q = 0; q < 4; ++q) {
-        const std::uint32_t o = 4 * q;
-        sh[q] = abt_shared(nx, ny, nz, _mm_loadu_ps(col[0] + o), _mm_loadu_ps(col[1] + o), _mm_loadu_ps(col[2] + o));
-        sh[q].r = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, _mm_loadu_ps(col[3] + o)), _mm_mul_ps(ay, _mm_loadu_ps(col[4] + o))),
-                             _mm_mul_ps(az, _mm_loadu_ps(col[5] + o)));
+        std::uint32_t o = 0, in = 0;
+        abt_verdict(sh[q], d, ad, sh[q].r, o, in);
+        bits |= o << (4 * q);
       }
-      for (; views != 0; views &= views - 1u) {
-        const auto v = static_cast<std::uint32_t>(abt_lowest_bit(views));
-        const __m128 d = _mm_set1_ps(vp.d(v)[p]), ad = _mm_set1_ps(vp.abs_d(v)[p]);
-        std::uint32_t bits = 0;
-        for (std::uint32_t q = 0; q < 4; ++q) {
-          std::uint32_t o = 0, in = 0;
-          abt_verdict(sh[q], d, ad, sh[q].r, o, in);
-          bits |= o << (4 * q);
-        }
-        outside[v] |= bits;
-      }
+      outside[v] |= bits;
     }
   }
 }
@@ -252,7 +225,10 @@ inline void abt_views_lanes_sse(const AbtViewPlanes& vp, const AbtLeafBoxes& box
 CULLKIT_FORCEINLINE std::uint32_t abt_views_node(const AbtViewPlanes& vp, const AbtNode& node, std::uint32_t alive,
                                                  std::uint32_t* masks) noexcept {
 #if CULLKIT_HAS_SSE2
-  abt_views_node_sse(vp, node.bounds, node.sphere, alive, masks);
+  for (std::uint32_t rest = vp.heads(); rest != 0; rest &= rest - 1u) {
+    const auto head = static_cast<std::uint32_t>(abt_lowest_bit(rest));
+    if (alive & vp.members(head)) abt_family_node(vp, head, node.bounds, node.sphere, alive, masks);
+  }
 #else
   for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
     const int v = abt_lowest_bit(rest);
@@ -305,7 +281,11 @@ inline void abt_views_leaf(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes, s
   for (std::uint32_t base = begin; base < end; base += lanes) {
     for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) outside[abt_lowest_bit(rest)] = 0;
 #if CULLKIT_HAS_SSE2
-    abt_views_lanes_sse(vp, boxes, base, straddling, masks, outside);
+    for (std::uint32_t rest = vp.heads(); rest != 0; rest &= rest - 1u) {
+      const auto head = static_cast<std::uint32_t>(abt_lowest_bit(rest));
+      const std::uint32_t views = straddling & vp.members(head);
+      if (views != 0) abt_family_lanes(vp, head, boxes, base, views, masks, outside);
+    }
 #else
     for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) {
       const int v = abt_lowest_bit(rest);
