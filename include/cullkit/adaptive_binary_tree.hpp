@@ -26,8 +26,8 @@
 // Views beyond one frustum: `cull(ConvexVolume)` (portals, shadow casters, user planes) and
 // `cull_views` (up to 32 frusta in one walk, a bit per view: stereo eyes, shadow cascades).
 //
-// Thread safety: a built tree is immutable except through `refit`; concurrent `const` queries are
-// safe. The build may use worker threads (`AbtParams::threads`); its result never depends on them.
+// Thread safety: a built tree changes only through `refit`, `insert`, `remove` and `update`
+// (stable ids, O(log n) amortized); concurrent `const` queries are safe. The build may use worker threads (`AbtParams::threads`); its result never depends on them.
 #pragma once
 
 #include <algorithm>

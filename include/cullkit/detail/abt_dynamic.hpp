@@ -23,6 +23,7 @@
 
 #include "../abt_params.hpp"
 #include "../geometry/aabb.hpp"
+#include "abt_leaf.hpp"
 
 namespace cullkit::detail {
 
@@ -73,13 +74,21 @@ struct AbtDynamic {
     return static_cast<std::uint32_t>(bits >> s) & 0xFFFFu;
   }
   /// Calls f(b, e) for the runs of [begin, end) without holes; stops when f returns false.
+  /// pre: end <= tree_end. Skips 32 positions per step where there are no holes.
   template <class F>
   bool live_runs(std::uint32_t begin, std::uint32_t end, F&& f) const {
     std::uint32_t run = begin;
-    for (std::uint32_t p = begin; p < end; ++p) {
-      if (!is_hole(p)) continue;
-      if (p > run && !f(run, p)) return false;
-      run = p + 1;
+    for (std::uint32_t p = begin; p < end && dead != 0;) {
+      const std::uint32_t w = p >> 5;
+      const std::uint32_t bits = dead_bits[w] & (~std::uint32_t{0} << (p & 31u));
+      if (bits == 0) {
+        p = (w + 1) << 5;
+        continue;
+      }
+      const std::uint32_t hole = (w << 5) + static_cast<std::uint32_t>(abt_lowest_bit(bits));
+      if (hole >= end) break;
+      if (hole > run && !f(run, hole)) return false;
+      run = p = hole + 1;
     }
     return run >= end || f(run, end);
   }
