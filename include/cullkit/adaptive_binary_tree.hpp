@@ -462,7 +462,8 @@ class AdaptiveBinaryTree {
   }
 
   /// Restores the tree's shape; run by insert, remove and update once the changes since the last
-  /// run reach max(64, size() / 8). With holes or pending objects, the tree is rebuilt from the live
+  /// run reach max(64, size() / 8). Afterwards there are no holes and nothing pending (needed by
+  /// code that walks nodes() and order() itself, such as cull_with_occlusion). With holes or pending objects, the tree is rebuilt from the live
   /// objects (ids kept, the build's split settings, calling thread); after updates alone,
   /// `repair(0.2)`. Cost O(n log n) at most: O(log n) amortized per change.
   void maintain() {
