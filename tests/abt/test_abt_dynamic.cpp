@@ -188,8 +188,8 @@ void random_sequences() {
   // Non-vacuity: views cut, removed objects were in view, bad ids were offered.
   CHECK(t.meets > 0 && t.kept < 40 * t.meets + 1);
   CHECK(t.removed_in_view > 0 && t.unbounded_seen > 0 && rejected > 0);
-  std::printf("dynamic: %zu kept, %zu meet, %zu removed ids in view never reported, %zu unbounded, %zu bad ids\n",
-              t.kept, t.meets, t.removed_in_view, t.unbounded_seen, rejected);
+  std::printf("dynamic: %zu kept, %zu meet, %zu removed ids in view never reported, %zu unbounded, %zu bad ids, "
+              "%zu rebuilds seen\n", t.kept, t.meets, t.removed_in_view, t.unbounded_seen, rejected, maintained);
 }
 
 // Quality after 10,000 random insert / remove / move operations against a fresh build.
