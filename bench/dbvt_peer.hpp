@@ -22,13 +22,24 @@ namespace cullkit::bench {
 class DbvtPeer {
  public:
   explicit DbvtPeer(const std::vector<Aabb>& boxes) {
-    for (std::size_t i = 0; i < boxes.size(); ++i) {
-      const btDbvtVolume v = btDbvtVolume::FromMM(btVector3(boxes[i].min.x, boxes[i].min.y, boxes[i].min.z),
-                                                  btVector3(boxes[i].max.x, boxes[i].max.y, boxes[i].max.z));
-      tree_.insert(v, reinterpret_cast<void*>(static_cast<std::uintptr_t>(i)));
-    }
+    for (std::size_t i = 0; i < boxes.size(); ++i) leaves_.push_back(tree_.insert(volume(boxes[i]), tag(i)));
     tree_.optimizeTopDown();
   }
+  // Incremental use, btDbvt's own operations (ids: positions in leaves_, never reused here).
+  std::uint32_t insert(const Aabb& b) {
+    leaves_.push_back(tree_.insert(volume(b), tag(leaves_.size())));
+    return static_cast<std::uint32_t>(leaves_.size() - 1);
+  }
+  void remove(std::uint32_t id) {
+    tree_.remove(leaves_[id]);
+    leaves_[id] = nullptr;
+  }
+  void update(std::uint32_t id, const Aabb& b) {
+    btDbvtVolume v = volume(b);
+    tree_.update(leaves_[id], v);
+  }
+  // Bullet's per-frame incremental re-optimization (a few leaf reinsertions).
+  void optimize(int passes) { tree_.optimizeIncremental(passes); }
   void cull(const Frustum& f, std::vector<std::uint32_t>& out) {
     btVector3 normals[6];
     btScalar offsets[6];
@@ -51,7 +62,12 @@ class DbvtPeer {
   }
 
  private:
+  static btDbvtVolume volume(const Aabb& b) {
+    return btDbvtVolume::FromMM(btVector3(b.min.x, b.min.y, b.min.z), btVector3(b.max.x, b.max.y, b.max.z));
+  }
+  static void* tag(std::size_t i) { return reinterpret_cast<void*>(static_cast<std::uintptr_t>(i)); }
   btDbvt tree_;
+  std::vector<btDbvtNode*> leaves_;
 };
 
 inline std::vector<Aabb> random_boxes(std::size_t n) {

@@ -26,8 +26,8 @@
 // Views beyond one frustum: `cull(ConvexVolume)` (portals, shadow casters, user planes) and
 // `cull_views` (up to 32 frusta in one walk, a bit per view: stereo eyes, shadow cascades).
 //
-// Thread safety: a built tree is immutable except through `refit`; concurrent `const` queries are
-// safe. The build may use worker threads (`AbtParams::threads`); its result never depends on them.
+// Thread safety: a built tree changes only through `refit`, `insert`, `remove` and `update`
+// (stable ids, O(log n) amortized); concurrent `const` queries are safe. The build may use worker threads (`AbtParams::threads`); its result never depends on them.
 #pragma once
 
 #include <algorithm>
@@ -46,8 +46,12 @@
 #include "abt_params.hpp"
 #include "config.hpp"
 #include "detail/abt_build.hpp"
+#include "detail/abt_dynamic.hpp"
 #include "detail/abt_leaf.hpp"
+#include "detail/abt_repair.hpp"
 #include "detail/abt_split.hpp"
+#include "detail/abt_validate.hpp"
+#include "detail/abt_views.hpp"
 #include "geometry/aabb.hpp"
 #include "geometry/convex_volume.hpp"
 #include "geometry/frustum.hpp"
@@ -166,9 +170,10 @@ class AdaptiveBinaryTree {
     view_bits.clear();
     CULLKIT_ASSERT(view_count <= 32, "view_count <= 32");
     CULLKIT_ASSERT(frusta != nullptr || view_count == 0, "frusta points to view_count frusta");
-    if (frusta == nullptr || view_count == 0 || nodes_.empty()) return;
+    if (frusta == nullptr || view_count == 0 || order_.empty()) return;
     const auto views = static_cast<std::uint32_t>(std::min<std::size_t>(view_count, 32));
-    walk_views(frusta, views, out, view_bits);
+    detail::abt_cull_views<depth_limit + 2>(nodes_, order_, leaf_boxes_, dyn_, scan_below_, frusta, views, out,
+                                            view_bits);
   }
 
   /// Frustum and occlusion culling: clears `out`, then appends, in front-to-back order from
@@ -185,9 +190,17 @@ class AdaptiveBinaryTree {
   template <class Occlusion>
   void cull(const Frustum& frustum, const Occlusion& occlusion, std::vector<std::uint32_t>& out) const {
     out.clear();
-    if (nodes_.empty()) return;
     const glm::vec3 eye = occlusion.eye();
     const Plane* planes = &frustum.plane(0);
+    const auto consider = [&](std::uint32_t i, std::uint32_t mask, bool alone) {
+      if (dyn_.is_hole(i)) return;
+      if (mask != 0 && detail::abt_box_outside(planes, mask, bounds_[i])) return;
+      if (!alone && !is_unbounded(bounds_[i]) && occlusion.is_occluded(bounds_[i])) return;
+      out.push_back(order_[i]);
+    };
+    // Objects inserted since the last rebuild come first (they have no place in the tree's order).
+    for (std::size_t i = dyn_.tree_end; i < order_.size(); ++i) consider(std::uint32_t(i), frustum.active_mask(), false);
+    if (nodes_.empty()) return;
     struct Entry {
       std::uint32_t node;
       std::uint32_t mask;
@@ -202,12 +215,7 @@ class AdaptiveBinaryTree {
       if (detail::abt_node_outside(planes, mask, node.bounds, node.sphere)) continue;
       if (!is_unbounded(node.bounds) && occlusion.is_occluded(node.bounds)) continue;
       if (node.is_leaf()) {
-        for (std::uint32_t i = node.begin; i < node.end; ++i) {
-          std::uint32_t m = mask;
-          if (m != 0 && detail::abt_box_outside(planes, m, bounds_[i])) continue;
-          if (node.count() > 1 && !is_unbounded(bounds_[i]) && occlusion.is_occluded(bounds_[i])) continue;
-          out.push_back(order_[i]);
-        }
+        for (std::uint32_t i = node.begin; i < node.end; ++i) consider(i, mask, node.count() == 1);
         continue;
       }
       const bool left_first = near_is_left(node, eye);
@@ -290,7 +298,9 @@ class AdaptiveBinaryTree {
     static_assert(is_bounds_getter_v<std::decay_t<Getter>>,
                   "cullkit: refit_from_getter needs a callable get_bounds(std::uint32_t) returning cullkit::Aabb");
     stats_.refit_invalid = 0;
+    dyn_.pending_box = Aabb::empty();
     for (std::size_t i = 0; i < order_.size(); ++i) {
+      if (dyn_.is_hole(static_cast<std::uint32_t>(i))) continue;
       Aabb b = get_bounds(order_[i]);
       if (!is_valid(b)) {
         ++stats_.refit_invalid;
@@ -298,6 +308,7 @@ class AdaptiveBinaryTree {
       }
       bounds_[i] = b;
       leaf_boxes_.set(static_cast<std::uint32_t>(i), b);
+      if (i >= dyn_.tree_end) dyn_.pending_box = merge(dyn_.pending_box, b);
     }
     stats_.unbounded = stats_.refit_invalid;
     // Children always follow their parent in the array, so a reverse sweep is bottom-up.
@@ -325,60 +336,15 @@ class AdaptiveBinaryTree {
   std::uint32_t repair(double rebuild_threshold) {
     stats_.subtrees_rebuilt = 0;
     stats_.objects_rebuilt = 0;
-    if (!(rebuild_threshold > 0.0 && rebuild_threshold < 1.0) || nodes_.empty()) return 0;
-    struct Visit {
-      std::uint32_t node, depth;
-    };
-    std::vector<Visit> roots, stack;
-    stack.push_back(Visit{0, 0});
-    while (!stack.empty()) {
-      const Visit v = stack.back();
-      stack.pop_back();
-      const AbtNode& node = nodes_[v.node];
-      if (node.is_leaf()) continue;
-      const double ref = ref_split_[v.node];
-      if (split_ratio(v.node) > ref + rebuild_threshold * (2.0 - ref)) {
-        roots.push_back(v);
-        continue;
-      }
-      stack.push_back(Visit{node.left + 1, v.depth + 1});
-      stack.push_back(Visit{node.left, v.depth + 1});
+    if (!(rebuild_threshold > 0.0 && rebuild_threshold < 1.0) || order_.empty()) return 0;
+    if (dyn_.dead != 0 || dyn_.tree_end < order_.size()) {  // holes or pending: one full rebuild
+      stats_.objects_rebuilt = static_cast<std::uint32_t>(size());
+      rebuild_live();
+      return stats_.subtrees_rebuilt = 1;
     }
-    if (roots.empty()) return 0;
-    std::vector<AbtNode> raw = nodes_;
-    std::vector<double> raw_ref = ref_split_;
-    const double fresh = std::numeric_limits<double>::quiet_NaN();  // measured after the layout
-    std::vector<detail::AbtBuildItem> items;
-    for (const Visit& v : roots) {
-      const std::uint32_t b = nodes_[v.node].begin, e = nodes_[v.node].end;
-      items.clear();
-      for (std::uint32_t i = b; i < e; ++i)
-        items.push_back(detail::AbtBuildItem{bounds_[i], detail::abt_centroid(bounds_[i]), order_[i]});
-      detail::AbtBuildContext ctx = build_context_;
-      ctx.items = items.data();
-      std::vector<AbtNode> sub = detail::abt_build_raw(ctx, 0, e - b, v.depth, 1, 0);
-      for (AbtNode& nd : sub) {
-        nd.begin += b;
-        nd.end += b;
-      }
-      detail::abt_stitch(raw, v.node, sub);
-      raw_ref[v.node] = fresh;
-      raw_ref.resize(raw.size(), fresh);
-      for (std::uint32_t i = b; i < e; ++i) {
-        order_[i] = items[i - b].index;
-        bounds_[i] = items[i - b].box;
-        leaf_boxes_.set(i, bounds_[i]);
-      }
-      ++stats_.subtrees_rebuilt;
-      stats_.objects_rebuilt += e - b;
-    }
-    std::vector<std::uint32_t> from;
-    detail::abt_relayout(raw, nodes_, from, stats_);
-    ref_split_.resize(nodes_.size());
-    for (std::size_t k = 0; k < nodes_.size(); ++k) {
-      const double r = raw_ref[from[k]];
-      ref_split_[k] = std::isnan(r) ? split_ratio(static_cast<std::uint32_t>(k)) : r;
-    }
+    detail::abt_repair(rebuild_threshold, build_context_, nodes_, ref_split_, order_, bounds_, leaf_boxes_, stats_);
+    if (stats_.subtrees_rebuilt != 0)
+      for (std::size_t p = 0; p < order_.size(); ++p) dyn_.pos_of[order_[p]] = static_cast<std::uint32_t>(p);
     return stats_.subtrees_rebuilt;
   }
 
@@ -392,6 +358,123 @@ class AdaptiveBinaryTree {
     return total_area() / build_area_;
   }
 
+  // ---- Incremental changes. Ids are stable: the build's objects have ids 0..count-1 (their input
+  // ---- index), `insert` hands out more; every cull reports ids. Internals: detail/abt_dynamic.hpp.
+
+  /// Returned by `insert` when no id is left (2^32 - 2 ids in use).
+  static constexpr std::uint32_t invalid_id = detail::abt_no_position;
+
+  /// Adds an object with `bounds` and returns its id: the most recently removed id if there is
+  /// one, else the next unused (`input_count()` before the call). Bounds that are not `is_valid`
+  /// make it unbounded (reported by every cull, counted in `stats().unbounded`). Every cull
+  /// reports it from now on. Cost: amortized O(log n) (see `maintain`); allocates amortized O(1).
+  /// Not thread-safe with queries.
+  std::uint32_t insert(const Aabb& bounds) {
+    std::uint32_t id;
+    if (!dyn_.free_ids.empty()) {
+      id = dyn_.free_ids.back();
+      dyn_.free_ids.pop_back();
+    } else {
+      if (input_count_ >= std::numeric_limits<std::uint32_t>::max() - 1u) return invalid_id;
+      id = static_cast<std::uint32_t>(input_count_++);
+      dyn_.pos_of.resize(input_count_, detail::abt_no_position);
+    }
+    append_pending(id, held_box(bounds));
+    ++stats_.objects;
+    after_change();
+    return id;
+  }
+
+  /// Removes the object `id`: no cull reports it from now on, and `insert` may hand the id out
+  /// again. Returns false (and changes nothing) for an id that is not held: never given out,
+  /// or already removed. Cost: amortized O(log n). Not thread-safe with queries.
+  bool remove(std::uint32_t id) {
+    if (!holds(id)) return false;
+    const std::uint32_t p = dyn_.pos_of[id];
+    dyn_.pos_of[id] = detail::abt_no_position;
+    dyn_.free_ids.push_back(id);
+    if (is_unbounded_marker(bounds_[p])) --stats_.unbounded;
+    if (p >= dyn_.tree_end) {  // pending: the last pending object takes its place
+      const std::size_t last = order_.size() - 1;
+      order_[p] = order_[last];
+      bounds_[p] = bounds_[last];
+      leaf_boxes_.set(p, bounds_[p]);
+      dyn_.pos_of[order_[p]] = p;
+      order_.pop_back();
+      bounds_.pop_back();
+      leaf_boxes_.pop_back();
+    } else {  // a hole in the tree's range, counted on its path
+      std::uint32_t path[depth_limit + 2];
+      detail::abt_make_hole(dyn_, order_, nodes_.size(), p, path, detail::abt_path_to(nodes_, p, path));
+    }
+    --stats_.objects;
+    after_change();
+    return true;
+  }
+
+  /// New bounds for the object `id` (a moving object). A box that stays near its leaf (the leaf's
+  /// box grown to it has at most 1.5 times its area) is refitted in place: its box and the boxes
+  /// of the nodes on its path follow at once. A box that jumped away (or became unbounded) leaves
+  /// a hole and joins the pending objects, so one teleport cannot stretch a path of boxes across
+  /// the scene. Returns false for an id that is not held. Invalid bounds make it unbounded until a
+  /// later update. Cost: amortized O(log n + leaf size). Not thread-safe with queries.
+  bool update(std::uint32_t id, const Aabb& bounds) {
+    if (!holds(id)) return false;
+    const std::uint32_t p = dyn_.pos_of[id];
+    if (is_unbounded_marker(bounds_[p])) --stats_.unbounded;
+    const Aabb b = held_box(bounds);
+    std::uint32_t path[depth_limit + 2], len = 0;
+    if (p < dyn_.tree_end) {
+      len = detail::abt_path_to(nodes_, p, path);
+      const double leaf = detail::abt_measured_area(nodes_[path[len - 1]].bounds);
+      if (is_unbounded(b) || !(detail::abt_measured_area(merge(nodes_[path[len - 1]].bounds, b)) <= 1.5 * leaf)) {
+        detail::abt_make_hole(dyn_, order_, nodes_.size(), p, path, len);
+        append_pending(id, b);
+        after_change();
+        return true;
+      }
+    }
+    bounds_[p] = b;
+    leaf_boxes_.set(p, b);
+    if (p >= dyn_.tree_end) {
+      dyn_.pending_box = merge(dyn_.pending_box, b);
+    } else {
+      for (std::uint32_t i = len; i-- > 0;) {
+        AbtNode& node = nodes_[path[i]];
+        Aabb box = Aabb::empty();
+        if (node.is_leaf()) {
+          for (std::uint32_t j = node.begin; j < node.end; ++j) box = merge(box, bounds_[j]);
+        } else {
+          box = merge(nodes_[node.left].bounds, nodes_[node.left + 1].bounds);
+        }
+        node.bounds = box;
+        node.sphere = bounding_sphere(box);
+      }
+      refitted_ = true;
+    }
+    after_change();
+    return true;
+  }
+
+  /// True when `id` is held (given out by the build or `insert`, and not removed since).
+  [[nodiscard]] bool holds(std::uint32_t id) const noexcept {
+    return id < dyn_.pos_of.size() && dyn_.pos_of[id] != detail::abt_no_position;
+  }
+
+  /// Restores the tree's shape; run by insert, remove and update once the changes since the last
+  /// run reach max(64, size() / 8). Afterwards there are no holes and nothing pending (needed by
+  /// code that walks nodes() and order() itself, such as cull_with_occlusion). With holes or pending objects, the tree is rebuilt from the live
+  /// objects (ids kept, the build's split settings, calling thread); after updates alone,
+  /// `repair(0.2)`. Cost O(n log n) at most: O(log n) amortized per change.
+  void maintain() {
+    dyn_.ops = 0;
+    if (dyn_.dead != 0 || dyn_.tree_end < order_.size()) {
+      rebuild_live();
+    } else {
+      repair(0.2);
+    }
+  }
+
   // ---------------------------------------------------------------------------------------------
   // Read-only views
   // ---------------------------------------------------------------------------------------------
@@ -403,8 +486,8 @@ class AdaptiveBinaryTree {
   /// Bounds of the object at each position of `order()` (as of the build or the last refit).
   [[nodiscard]] const std::vector<Aabb>& object_bounds() const noexcept { return bounds_; }
   /// Objects held (including those without valid bounds; skipped ones excluded).
-  [[nodiscard]] std::size_t size() const noexcept { return order_.size(); }
-  [[nodiscard]] bool empty() const noexcept { return order_.empty(); }
+  [[nodiscard]] std::size_t size() const noexcept { return order_.size() - dyn_.dead; }
+  [[nodiscard]] bool empty() const noexcept { return size() == 0; }
   /// Number of objects given to the build (held + skipped).
   [[nodiscard]] std::size_t input_count() const noexcept { return input_count_; }
   [[nodiscard]] const AbtStats& stats() const noexcept { return stats_; }
@@ -433,53 +516,9 @@ class AdaptiveBinaryTree {
   /// position, depth within the limit, split planes separate centroids (until the first refit).
   /// Cost O(n + nodes), allocates a little. For tests and debugging.
   [[nodiscard]] bool validate() const {
-    if (bounds_.size() != order_.size()) return false;
-    if (nodes_.empty()) return order_.empty();
-    const auto n = static_cast<std::uint32_t>(order_.size());
-    std::vector<std::uint8_t> seen(input_count_, 0);
-    for (const std::uint32_t idx : order_) {
-      if (idx >= input_count_ || seen[idx]) return false;
-      seen[idx] = 1;
-    }
-    if (nodes_[0].begin != 0 || nodes_[0].end != n) return false;
-    std::vector<std::uint32_t> depth(nodes_.size(), 0);
-    std::uint32_t leaves = 0, max_depth = 0;
-    std::vector<std::uint8_t> reached(nodes_.size(), 0);
-    reached[0] = 1;
-    for (std::size_t k = 0; k < nodes_.size(); ++k) {
-      const AbtNode& node = nodes_[k];
-      if (!reached[k]) return false;
-      if (node.begin >= node.end || node.end > n) return false;
-      if (!sphere_encloses(node.sphere, node.bounds)) return false;
-      max_depth = std::max(max_depth, depth[k]);
-      if (node.is_leaf()) {
-        ++leaves;
-        for (std::uint32_t i = node.begin; i < node.end; ++i) {
-          if (!contains(node.bounds, bounds_[i])) return false;
-        }
-        continue;
-      }
-      const std::size_t l = node.left;
-      if (l <= k || l + 1 >= nodes_.size() || reached[l] || reached[l + 1]) return false;
-      reached[l] = reached[l + 1] = 1;
-      depth[l] = depth[l + 1] = depth[k] + 1;
-      const AbtNode& a = nodes_[l];
-      const AbtNode& b = nodes_[l + 1];
-      if (a.begin != node.begin || a.end != b.begin || b.end != node.end) return false;
-      if (!contains(node.bounds, a.bounds) || !contains(node.bounds, b.bounds)) return false;
-      if (node.axis > 2) return false;
-      if (!refitted_) {
-        for (std::uint32_t i = a.begin; i < a.end; ++i) {
-          if (!(detail::abt_centroid(bounds_[i])[node.axis] < node.split)) return false;
-        }
-        for (std::uint32_t i = b.begin; i < b.end; ++i) {
-          if (detail::abt_centroid(bounds_[i])[node.axis] < node.split) return false;
-        }
-      }
-    }
-    if (max_depth > depth_limit) return false;
-    return leaves == stats_.leaves && max_depth == stats_.depth && nodes_.size() == stats_.nodes;
+    return detail::abt_validate(nodes_, order_, bounds_, dyn_, input_count_, stats_, refitted_, depth_limit);
   }
+
 
  private:
   template <class Visitor, class... Args>
@@ -502,6 +541,17 @@ class AdaptiveBinaryTree {
   // subtree that straddles tests its objects 16 at a time from the SoA copy.
   template <class Visitor>
   void walk(const Plane* planes, std::uint32_t plane_mask, Visitor&& visitor) const {
+    const auto emit_range = [&](std::uint32_t k, std::uint32_t b, std::uint32_t e) {
+      if (!dyn_.node_has_holes(k)) return call(visitor, b, e, Containment::inside);
+      return dyn_.live_runs(b, e, [&](std::uint32_t rb, std::uint32_t re) { return call(visitor, rb, re, Containment::inside); });
+    };
+    const auto emit_one = [&](std::uint32_t i, Containment c) { return dyn_.is_hole(i) || call(visitor, i, i + 1, c); };
+    const auto n = static_cast<std::uint32_t>(order_.size());
+    if (dyn_.tree_end < n) {  // objects inserted since the last rebuild
+      const bool go_on = plane_mask == 0 ? emit_range(~0u, dyn_.tree_end, n)
+                                         : leaf_boxes_.test(planes, plane_mask, dyn_.tree_end, n, emit_one);
+      if (!go_on) return;
+    }
     if (nodes_.empty()) return;
     struct Entry {
       std::uint32_t node;
@@ -517,13 +567,11 @@ class AdaptiveBinaryTree {
       std::uint32_t mask = entry.mask;
       if (detail::abt_node_outside(planes, mask, node.bounds, node.sphere)) continue;
       if (mask == 0) {
-        if (!call(visitor, node.begin, node.end, Containment::inside)) return;
+        if (!emit_range(entry.node, node.begin, node.end)) return;
         continue;
       }
       if (node.is_leaf() || node.count() <= scan_below_) {
-        const bool go_on = leaf_boxes_.test(planes, mask, node.begin, node.end, [&](std::uint32_t i, Containment c) {
-          return call(visitor, i, i + 1, c);
-        });
+        const bool go_on = leaf_boxes_.test(planes, mask, node.begin, node.end, emit_one);
         if (!go_on) return;
         continue;
       }
@@ -532,116 +580,29 @@ class AdaptiveBinaryTree {
     }
   }
 
-  // The multi-view walk: each stack entry carries the views that may still meet the node and,
-  // per view, the planes it straddles. A node inside every view still alive is one range.
-  void walk_views(const Frustum* frusta, std::uint32_t views, std::vector<std::uint32_t>& out,
-                  std::vector<std::uint32_t>& view_bits) const {
-    struct Entry {
-      std::uint32_t node;
-      std::uint32_t alive;
-      PlaneMask masks[32];
-    };
-    Entry stack[depth_limit + 2];
-    std::uint32_t top = 0;
-    Entry& root = stack[top++];
-    root.node = 0;
-    root.alive = views >= 32 ? ~std::uint32_t{0} : ((std::uint32_t{1} << views) - 1u);
-    for (std::uint32_t v = 0; v < views; ++v) root.masks[v] = frusta[v].active_mask();
-    const AbtNode* nodes = nodes_.data();
-    while (top > 0) {
-      --top;
-      const AbtNode& node = nodes[stack[top].node];
-      std::uint32_t alive = stack[top].alive;
-      std::uint32_t straddling = 0;
-      PlaneMask masks[32];
-      for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
-        const int v = detail::abt_lowest_bit(rest);
-        std::uint32_t m = stack[top].masks[v];
-        if (detail::abt_node_outside(&frusta[v].plane(0), m, node.bounds, node.sphere)) {
-          alive &= ~(std::uint32_t{1} << v);
-          continue;
-        }
-        masks[v] = static_cast<PlaneMask>(m);
-        if (m != 0) straddling |= std::uint32_t{1} << v;
-      }
-      if (alive == 0) continue;
-      if (straddling == 0) {
-        out.insert(out.end(), order_.begin() + node.begin, order_.begin() + node.end);
-        view_bits.resize(view_bits.size() + node.count(), alive);
-        continue;
-      }
-      if (node.is_leaf() || node.count() <= scan_below_) {
-        views_leaf(frusta, alive, straddling, masks, node.begin, node.end, out, view_bits);
-        continue;
-      }
-      const std::uint32_t left = node.left;
-      Entry& r = stack[top++];  // reuses the popped slot: everything needed was read above
-      r.node = left + 1;
-      r.alive = alive;
-      Entry& l = stack[top++];
-      l.node = left;
-      l.alive = alive;
-      for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
-        const int v = detail::abt_lowest_bit(rest);
-        r.masks[v] = l.masks[v] = masks[v];
-      }
-    }
-  }
-
-  // Objects of a straddling leaf (or small subtree), 16 at a time: per view a mask of the lanes
-  // not outside it, then one output entry per lane that some view keeps.
-  void views_leaf(const Frustum* frusta, std::uint32_t alive, std::uint32_t straddling, const PlaneMask* masks,
-                  std::uint32_t begin, std::uint32_t end, std::vector<std::uint32_t>& out,
-                  std::vector<std::uint32_t>& view_bits) const {
-    constexpr std::uint32_t lanes = detail::AbtLeafBoxes::lanes;
-    constexpr std::uint32_t all_lanes = (std::uint32_t{1} << lanes) - 1u;
-    std::uint32_t visible[32];
-    for (std::uint32_t rest = alive & ~straddling; rest != 0; rest &= rest - 1u)
-      visible[detail::abt_lowest_bit(rest)] = all_lanes;  // views the node is inside of
-    for (std::uint32_t base = begin; base < end; base += lanes) {
-      std::uint32_t any = 0;
-      for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) {
-        const int v = detail::abt_lowest_bit(rest);
-        std::uint32_t outside = 0, cross = 0;
-        leaf_boxes_.classify_lanes(&frusta[v].plane(0), masks[v], base, outside, cross);
-        visible[v] = ~outside & all_lanes;
-        any |= visible[v];
-      }
-      if (alive != straddling) any = all_lanes;
-      const std::uint32_t count = end - base < lanes ? end - base : lanes;
-      if (count < lanes) any &= (std::uint32_t{1} << count) - 1u;
-      for (; any != 0; any &= any - 1u) {
-        const int i = detail::abt_lowest_bit(any);
-        std::uint32_t bits = 0;
-        for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
-          const int v = detail::abt_lowest_bit(rest);
-          bits |= ((visible[v] >> i) & 1u) << v;
-        }
-        out.push_back(order_[base + std::uint32_t(i)]);
-        view_bits.push_back(bits);
-      }
-    }
-  }
-
   static bool near_is_left(const AbtNode& node, const glm::vec3& eye) noexcept {
     return eye[node.axis] < node.split;
   }
 
-  static bool sphere_encloses(const Sphere& s, const Aabb& b) {
-    for (int c = 0; c < 8; ++c) {
-      const glm::vec3 p = corner(b, c);
-      double d2 = 0.0;
-      for (int a = 0; a < 3; ++a) {
-        const double d = double(p[a]) - double(s.center[a]);
-        d2 += d * d;
-      }
-      if (!(d2 <= double(s.radius) * double(s.radius))) return false;
-    }
-    return true;
+  template <class Visitor>
+  void traverse(const glm::vec3& eye, bool front_first, Visitor& visitor) const {
+    if (front_first) visit_pending(visitor);
+    traverse_tree(eye, front_first, visitor);
+    if (!front_first) visit_pending(visitor);
+  }
+
+  // Objects inserted since the last rebuild, shown to node visitors as one extra leaf with index
+  // nodes().size() (a valid node index never reaches it).
+  template <class Visitor>
+  void visit_pending(Visitor& visitor) const {
+    const auto n = static_cast<std::uint32_t>(order_.size());
+    if (dyn_.tree_end >= n) return;
+    const AbtNode pending{dyn_.pending_box, bounding_sphere(dyn_.pending_box), dyn_.tree_end, n, 0, 0, 0.0f};
+    call(visitor, static_cast<std::uint32_t>(nodes_.size()), pending);
   }
 
   template <class Visitor>
-  void traverse(const glm::vec3& eye, bool front_first, Visitor& visitor) const {
+  void traverse_tree(const glm::vec3& eye, bool front_first, Visitor& visitor) const {
     if (nodes_.empty()) return;
     std::uint32_t stack[depth_limit + 2];
     std::uint32_t top = 0;
@@ -659,13 +620,8 @@ class AdaptiveBinaryTree {
 
   // (area of the children) / (own area) of an inner node; 0 for leaves and for nodes without a
   // measurable area (flat, or unbounded).
-  [[nodiscard]] double split_ratio(std::uint32_t k) const noexcept {
-    const AbtNode& node = nodes_[k];
-    if (node.is_leaf()) return 0.0;
-    const double own = detail::abt_measured_area(node.bounds);
-    if (!(own > 0.0)) return 0.0;
-    return (detail::abt_measured_area(nodes_[node.left].bounds) + detail::abt_measured_area(nodes_[node.left + 1].bounds)) / own;
-  }
+  [[nodiscard]] double split_ratio(std::uint32_t k) const noexcept { return detail::abt_split_ratio(nodes_, k); }
+
 
   [[nodiscard]] double total_area() const noexcept {
     double sum = 0.0;
@@ -706,6 +662,7 @@ class AdaptiveBinaryTree {
     build_context_.leaf_size = std::max<std::uint32_t>(1u, params.max_leaf_size);
     build_context_.max_depth = std::min(params.max_depth, depth_limit);
     if (n == 0) {
+      dyn_.reset(order_, input_count_);
       if (params.progress) params.progress(1.0f);
       build_area_ = 0.0;
       return;
@@ -738,13 +695,74 @@ class AdaptiveBinaryTree {
     ref_split_.resize(nodes_.size());
     for (std::size_t k = 0; k < nodes_.size(); ++k) ref_split_[k] = split_ratio(static_cast<std::uint32_t>(k));
     build_area_ = total_area();
+    dyn_.reset(order_, input_count_);
     if (params.progress) params.progress(1.0f);
+  }
+
+  static bool is_unbounded_marker(const Aabb& b) noexcept { return b.min == unbounded_box().min && b.max == unbounded_box().max; }
+
+  // The box held for `bounds` (unbounded_box() for bad bounds, counted).
+  Aabb held_box(const Aabb& bounds) {
+    if (is_valid(bounds)) return bounds;
+    ++stats_.unbounded;
+    return unbounded_box();
+  }
+
+  void append_pending(std::uint32_t id, const Aabb& b) {
+    dyn_.pos_of[id] = static_cast<std::uint32_t>(order_.size());
+    order_.push_back(id);
+    bounds_.push_back(b);
+    leaf_boxes_.append(b);
+    dyn_.pending_box = merge(dyn_.pending_box, b);
+  }
+
+  void after_change() {
+    if (++dyn_.ops >= std::max<std::size_t>(64, size() / 8)) maintain();
+  }
+
+  // Rebuild from the live objects, their ids and the build's split settings kept.
+  void rebuild_live() {
+    std::vector<detail::AbtBuildItem> items;
+    items.reserve(size());
+    for (std::size_t p = 0; p < order_.size(); ++p)
+      if (!dyn_.is_hole(static_cast<std::uint32_t>(p)))
+        items.push_back(detail::AbtBuildItem{bounds_[p], detail::abt_centroid(bounds_[p]), order_[p]});
+    const auto n = static_cast<std::uint32_t>(items.size());
+    std::vector<std::uint32_t> free_ids = std::move(dyn_.free_ids);
+    const AbtStats keep = stats_;
+    nodes_.clear();
+    stats_ = AbtStats{};
+    stats_.unbounded = keep.unbounded;
+    stats_.skipped = keep.skipped;
+    std::vector<AbtNode> raw;
+    if (n > 0) {
+      detail::AbtBuildContext ctx = build_context_;
+      ctx.items = items.data();
+      raw = detail::abt_build_raw(ctx, 0, n, 0, 1, 0);
+      std::vector<std::uint32_t> from;
+      detail::abt_relayout(raw, nodes_, from, stats_);
+    }
+    stats_.objects = n;
+    order_.resize(n);
+    bounds_.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+      order_[i] = items[i].index;
+      bounds_[i] = items[i].box;
+    }
+    leaf_boxes_.assign(bounds_);
+    ref_split_.resize(nodes_.size());
+    for (std::size_t k = 0; k < nodes_.size(); ++k) ref_split_[k] = split_ratio(static_cast<std::uint32_t>(k));
+    build_area_ = total_area();
+    refitted_ = false;
+    dyn_.reset(order_, input_count_);
+    dyn_.free_ids = std::move(free_ids);
   }
 
   std::vector<AbtNode> nodes_;
   std::vector<std::uint32_t> order_;
   std::vector<Aabb> bounds_;
-  detail::AbtLeafBoxes leaf_boxes_;  // bounds_ again, as padded SoA for the leaf tests
+  detail::AbtLeafBoxes leaf_boxes_;
+  detail::AbtDynamic dyn_;           // holes, pending objects, ids (insert, remove, update)  // bounds_ again, as padded SoA for the leaf tests
   std::vector<double> ref_split_;    // per node: split_ratio when it was last (re)built
   detail::AbtBuildContext build_context_;  // the build's split settings, for repairs
   std::size_t input_count_ = 0;

@@ -9,7 +9,9 @@
 // half extents are rounded exactly as Frustum::classify rounds them.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -90,6 +92,24 @@ class AbtLeafBoxes {
     data_.assign(std::size_t{stride_} * 6, 0.0f);
     for (std::uint32_t i = 0; i < n_; ++i) set(i, boxes[i]);
   }
+  /// One more box at position size(); the columns grow geometrically (amortized O(1)).
+  void append(const Aabb& b) {
+    if (n_ + 1 + lanes > stride_) {
+      const std::uint32_t stride = std::max<std::uint32_t>(2 * stride_, n_ + 1 + lanes);
+      std::vector<float> grown(std::size_t{stride} * 6, 0.0f);
+      for (std::size_t k = 0; k < 6; ++k)
+        std::copy(data_.begin() + std::ptrdiff_t(k * stride_), data_.begin() + std::ptrdiff_t(k * stride_ + n_),
+                  grown.begin() + std::ptrdiff_t(k * stride));
+      data_.swap(grown);
+      stride_ = stride;
+    }
+    set(n_++, b);
+  }
+  /// Drops the box at the last position.
+  void pop_back() noexcept {
+    if (n_ > 0) set(--n_, Aabb{glm::vec3(0.0f), glm::vec3(0.0f)});
+  }
+
   void set(std::uint32_t i, const Aabb& b) {
     const glm::vec3 c = (b.min + b.max) * 0.5f;
     const glm::vec3 e = (b.max - b.min) * 0.5f;
@@ -139,6 +159,27 @@ class AbtLeafBoxes {
     }
     outside_bits = ob;
     straddle_bits = cb;
+  }
+
+  /// The six columns (cx, cy, cz, ex, ey, ez), each padded by `lanes` zero boxes past the end.
+  [[nodiscard]] const float* column(int k) const noexcept { return data_.data() + std::size_t(k) * stride_; }
+
+  /// The exact rule of `classify_lanes` for the one box at `position`: true when it is outside one
+  /// of the planes in `mask`. Same operations in the same order, so the same answer bit for bit.
+  [[nodiscard]] bool outside_one(const Plane* planes, std::uint32_t mask, std::uint32_t position) const noexcept {
+    constexpr float k = 8.0f * std::numeric_limits<float>::epsilon();
+    const float cx = column(0)[position], cy = column(1)[position], cz = column(2)[position];
+    const float ex = column(3)[position], ey = column(4)[position], ez = column(5)[position];
+    for (std::uint32_t rest = mask; rest != 0; rest &= rest - 1u) {
+      const Plane& pl = planes[abt_lowest_bit(rest)];
+      const float nx = pl.normal.x, ny = pl.normal.y, nz = pl.normal.z, pd = pl.d;
+      const float px = nx * cx, py = ny * cy, pz = nz * cz;
+      const float dc = px + py + pz + pd;
+      const float r = std::fabs(nx) * ex + std::fabs(ny) * ey + std::fabs(nz) * ez;
+      const float slack = (std::fabs(px) + std::fabs(py) + std::fabs(pz) + std::fabs(pd) + r) * k;
+      if (dc + r < -slack) return true;
+    }
+    return false;
   }
 
   /// Calls `emit(position, containment)` for every box in [begin, end) not outside the planes in
