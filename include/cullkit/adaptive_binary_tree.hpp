@@ -113,9 +113,7 @@ class AdaptiveBinaryTree {
     return tree;
   }
 
-  // ---------------------------------------------------------------------------------------------
-  // Queries
-  // ---------------------------------------------------------------------------------------------
+  // ---- Queries
 
   /// Clears `out`, then appends the input index of every held object whose box may meet the
   /// frustum, each once, grouped by subtree (not sorted). Never leaves out an object whose box
@@ -242,9 +240,7 @@ class AdaptiveBinaryTree {
     traverse(eye, false, visitor);
   }
 
-  // ---------------------------------------------------------------------------------------------
-  // Moving objects
-  // ---------------------------------------------------------------------------------------------
+  // ---- Moving objects
 
   /// After objects moved: re-reads every held object's bounds from `objects` (the same array layout
   /// as at build, at least as long) and recomputes every node's box and sphere bottom-up. The
@@ -462,9 +458,9 @@ class AdaptiveBinaryTree {
   }
 
   /// Restores the tree's shape; run by insert, remove and update once the changes since the last
-  /// run reach max(64, size() / 8). Afterwards there are no holes and nothing pending (needed by
-  /// code that walks nodes() and order() itself, such as cull_with_occlusion). With holes or pending objects, the tree is rebuilt from the live
-  /// objects (ids kept, the build's split settings, calling thread); after updates alone,
+  /// run reach max(64, size() / 8). Afterwards there are no holes and nothing pending, so every
+  /// object is back in front-to-back order. With holes or pending objects, the tree is rebuilt from
+  /// the live objects (ids kept, the build's split settings, calling thread); after updates alone,
   /// `repair(0.2)`. Cost O(n log n) at most: O(log n) amortized per change.
   void maintain() {
     dyn_.ops = 0;
@@ -475,14 +471,16 @@ class AdaptiveBinaryTree {
     }
   }
 
-  // ---------------------------------------------------------------------------------------------
-  // Read-only views
-  // ---------------------------------------------------------------------------------------------
+  // ---- Read-only views
 
   /// Every node; node 0 is the root; children follow their parent. Empty for an empty tree.
   [[nodiscard]] const std::vector<AbtNode>& nodes() const noexcept { return nodes_; }
-  /// Position -> input index of the object: node ranges `[begin, end)` index into this.
+  /// Position -> id of the object: node ranges `[begin, end)` index into this. After `remove`, a
+  /// position may hold `removed_slot` (a hole: skip it); positions from `pending_begin()` on (no
+  /// node covers them) hold objects inserted since the last rebuild.
   [[nodiscard]] const std::vector<std::uint32_t>& order() const noexcept { return order_; }
+  static constexpr std::uint32_t removed_slot = detail::abt_removed_slot;
+  [[nodiscard]] std::size_t pending_begin() const noexcept { return dyn_.tree_end; }
   /// Bounds of the object at each position of `order()` (as of the build or the last refit).
   [[nodiscard]] const std::vector<Aabb>& object_bounds() const noexcept { return bounds_; }
   /// Objects held (including those without valid bounds; skipped ones excluded).

@@ -121,6 +121,24 @@ void cull_with_occlusion(const AdaptiveBinaryTree<Object, Traits>& abt, const Fr
     return true;
   };
 
+  // One object at `pos` of the order: frustum test unless already known inside, occlusion query
+  // when `query` (a single-object leaf was already queried as its node), then reported.
+  const auto visit_object = [&](std::uint32_t pos, bool known_inside, bool query, std::uint32_t start, bool clear) {
+    const Aabb& b = bounds[pos];
+    if (!known_inside && frustum.classify(b) == Containment::outside) {
+      ++st.frustum_rejected;
+      return;
+    }
+    if (query && !occlusion_pass(b, start, clear)) return;
+    out.push_back(order[pos]);
+    ++st.objects_visible;
+    if (is_unbounded(b)) ++st.unbounded;
+    if (params.grow && !is_unbounded(b)) {
+      ++st.occluder_calls;
+      occluders(order[pos], tree);
+    }
+  };
+
   while (top > 0) {
     Item item = stack[--top];
     const AbtNode& node = nodes[item.node];
@@ -143,22 +161,15 @@ void cull_with_occlusion(const AdaptiveBinaryTree<Object, Traits>& abt, const Fr
       continue;
     }
     for (std::uint32_t pos = node.begin; pos < node.end; ++pos) {
-      const Aabb& b = bounds[pos];
-      if (!item.frustum_inside && node.count() > 1 && frustum.classify(b) == Containment::outside) {
-        ++st.frustum_rejected;
-        continue;
-      }
-      std::uint32_t start = item.start;
-      bool clear = item.clear;
-      if (node.count() > 1 && !occlusion_pass(b, start, clear)) continue;
-      out.push_back(order[pos]);
-      ++st.objects_visible;
-      if (is_unbounded(b)) ++st.unbounded;
-      if (params.grow && !is_unbounded(b)) {
-        ++st.occluder_calls;
-        occluders(order[pos], tree);
-      }
+      if (order[pos] == AdaptiveBinaryTree<Object, Traits>::removed_slot) continue;
+      visit_object(pos, item.frustum_inside || node.count() == 1, node.count() > 1, item.start, item.clear);
     }
+  }
+  // Objects inserted since the last rebuild belong to no node: tested one by one, after the walk,
+  // against the grown tree (they are not in front-to-back order and grow no occluders first).
+  for (std::size_t pos = abt.pending_begin(); pos < order.size(); ++pos) {
+    if (order[pos] == AdaptiveBinaryTree<Object, Traits>::removed_slot) continue;
+    visit_object(static_cast<std::uint32_t>(pos), false, true, OcclusionTree::whole_tree, false);
   }
 }
 

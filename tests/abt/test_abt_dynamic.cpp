@@ -1,6 +1,6 @@
 // AdaptiveBinaryTree insert / remove / update against a brute-force model over seeded random
 // operation sequences. After every batch of operations: validate(), and every cull (frustum,
-// ConvexVolume, cull_views, occlusion cull with an empty occlusion tree, node traversal) is compared
+// ConvexVolume, cull_views, occlusion culls with an empty occlusion tree, node traversal) is compared
 // with the model: no live object that meets the view is missing, no removed id is ever reported,
 // every id at most once, objects with bad bounds always reported. Bad input: unknown ids, double
 // removes, NaN bounds on insert and update. Non-vacuity: the views do cut, and removed objects
@@ -107,6 +107,10 @@ void check_culls(const AdaptiveBinaryTree<Aabb>& tree, const Model& m, support::
   const OcclusionTree nothing(view.eye);
   tree.cull(f, nothing, out);
   judge(out, "cull(occlusion)", false);
+  // cull_with_occlusion walks nodes() and order() itself: holes skipped, pending objects tested.
+  OcclusionTree growing(view.eye);
+  cull_with_occlusion(tree, f, growing, [](std::uint32_t, OcclusionTree&) {}, out);
+  judge(out, "cull_with_occlusion", false);
   // Traversal: leaves (and the pending leaf) cover every live id once.
   std::vector<std::uint32_t> covered;
   tree.traverse_front_to_back(view.eye, [&](std::uint32_t, const AbtNode& node) {
