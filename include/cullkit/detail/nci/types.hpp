@@ -65,7 +65,11 @@ struct NciParams {
   void (*progress)(float fraction, void* user) = nullptr;
   /// Passed to `progress` unchanged.
   void* progress_user = nullptr;
-  /// How crowded cells are served (see NciCrowdedPath). Never changes the answer.
+  /// How crowded cells are served (see NciCrowdedPath). Never changes the answer. The build keeps a
+  /// 4-wide hierarchy over every (class, cell) list of at least 48 triangles whatever this says
+  /// (about 6 bytes per triangle on the 10.1M-triangle generated city). Measured so far the walk is
+  /// the faster path on every view, so `automatic` takes the hierarchy only for cells with more
+  /// than 256 triangles per live pixel under them (see docs/nci_internals.md).
   NciCrowdedPath crowded_path = NciCrowdedPath::automatic;
 };
 
