@@ -80,7 +80,7 @@ class MeshOcclusionCuller {
       detail::mesh_occlusion::build_index(
           index_, triangle_count,
           [&mesh](std::size_t t, glm::vec3 p[3]) { return triangle_positions<Traits>(mesh, t, p); },
-          objects, object_count, params_.tree);
+          objects, object_count, params_.tree, params_.patch_triangles);
     }
   }
 

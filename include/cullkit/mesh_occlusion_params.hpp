@@ -38,8 +38,19 @@ struct MeshOcclusionParams {
   /// 0 makes every distinct depth its own band (tightest depths, slowest); larger values are
   /// faster and hide less behind layered occluders.
   float depth_band_ratio = 0.1f;
-  /// Most occluder objects per frame. Default 4096.
+  /// Most occluder patches per frame. Default 4096.
   std::uint32_t max_occluder_objects = 4096;
+  /// Objects are cut at build time into surface patches of at most this many triangles (grown over
+  /// shared edges, so each is connected and compact). Occluders are chosen patch by patch, so the
+  /// budget takes the part of a big object that is big on screen instead of skipping it whole; an
+  /// object whose box is not hidden is hidden when all its patches' boxes are. Default 256. Smaller
+  /// patches fit the budget and the object tests tighter, at more boxes to project per frame.
+  /// Clamped to [1, 65536].
+  std::uint32_t patch_triangles = 256;
+  /// An object of at most this many triangles whose box is not hidden is tested triangle by
+  /// triangle: each front-facing triangle's own screen rectangle at its own nearest depth (an object
+  /// whose triangles all face away from the eye is never seen). Default 16. 0 turns it off.
+  std::uint32_t object_test_triangles = 16;
   /// Parameters of the frustum-culling tree over object bounds.
   AbtParams tree = {};
 };
@@ -59,7 +70,7 @@ struct MeshOcclusionBuildStats {
 /// What one `cull` did (`MeshOcclusionContext::stats`).
 struct MeshOcclusionStats {
   std::size_t objects_in_frustum = 0;          ///< usable objects whose box may meet the frustum
-  std::size_t occluders_used = 0;              ///< occluder objects rasterized
+  std::size_t occluders_used = 0;              ///< occluder patches rasterized
   std::size_t occluder_triangles = 0;          ///< occluder triangles rasterized (front-facing, beyond the near plane)
   std::size_t objects_hidden = 0;              ///< objects in the frustum left out as hidden
   std::size_t objects_unusable_visible = 0;    ///< objects with unusable bounds, reported visible

@@ -32,13 +32,14 @@ struct Scratch {
   MeshOcclusionStats stats;
   std::vector<std::uint32_t> in_frustum;  // tree positions, then objects
   std::vector<BoxView> boxes;             // parallel to in_frustum
-  std::vector<std::pair<float, std::uint32_t>> candidates;  // (screen cells, position in in_frustum)
-  std::vector<std::pair<double, std::uint32_t>> occluders;  // (depth key, object)
+  std::vector<std::pair<float, std::uint32_t>> candidates;  // (screen cells, patch)
+  std::vector<std::pair<double, std::uint32_t>> occluders;  // (depth key, patch)
   std::vector<std::pair<std::uint32_t, std::uint32_t>> triangles, sort_buffer;  // (depth bits, triangle)
   // Per-frame caches, valid where the stamp equals `frame`.
   const void* owner = nullptr;
   std::uint32_t frame = 0;
-  std::vector<std::uint32_t> vertex_stamp, vertex_slot, triangle_stamp, triangle_band;
+  std::vector<std::uint32_t> vertex_stamp, vertex_slot, triangle_stamp, triangle_band, patch_stamp;
+  std::vector<BoxView> patch_boxes;       // per patch, valid where patch_stamp equals `frame`
   std::vector<Projected> projected;
   View view;
   CoverageGrid grid;
@@ -67,17 +68,20 @@ inline void radix_sort(std::vector<std::pair<std::uint32_t, std::uint32_t>>& ite
 /// Makes the caches fit `index` and starts a new frame.
 inline void begin_frame(const MeshIndex& index, Scratch& s) {
   if (s.owner != &index || s.vertex_stamp.size() != index.positions.size() ||
-      s.triangle_stamp.size() != index.corners.size() / 3) {
+      s.triangle_stamp.size() != index.corners.size() / 3 || s.patch_stamp.size() != index.patches.patches.size()) {
     s.owner = &index;
     s.vertex_stamp.assign(index.positions.size(), 0);
     s.vertex_slot.assign(index.positions.size(), 0);
     s.triangle_stamp.assign(index.corners.size() / 3, 0);
     s.triangle_band.assign(index.corners.size() / 3, 0);
+    s.patch_stamp.assign(index.patches.patches.size(), 0);
+    s.patch_boxes.resize(index.patches.patches.size());
     s.frame = 0;
   }
   if (++s.frame == 0) {
     std::fill(s.vertex_stamp.begin(), s.vertex_stamp.end(), 0);
     std::fill(s.triangle_stamp.begin(), s.triangle_stamp.end(), 0);
+    std::fill(s.patch_stamp.begin(), s.patch_stamp.end(), 0);
     s.frame = 1;
   }
   s.projected.clear();
@@ -137,23 +141,48 @@ inline BoxView project_box(const View& view, const Aabb& box) {
   return b;
 }
 
-/// Picks occluder objects by size on screen, biggest first, within the triangle budget; fills
-/// `s.occluders`.
+/// A patch's box seen from the eye, projected once per frame.
+inline const BoxView& patch_box(const MeshIndex& index, Scratch& s, std::uint32_t patch) {
+  if (s.patch_stamp[patch] != s.frame) {
+    s.patch_stamp[patch] = s.frame;
+    s.patch_boxes[patch] = project_box(s.view, index.patches.patches[patch].box);
+  }
+  return s.patch_boxes[patch];
+}
+
+/// Grid cells a box view covers on screen (all of them for a box through the near plane: it is
+/// near the eye, likely big).
+inline double screen_cells(const BoxView& b, const CoverageGrid& grid) {
+  if (!b.usable) return double(grid.width()) * double(grid.height());
+  const double w = std::min(b.x1, double(grid.width())) - std::max(b.x0, 0.0);
+  const double h = std::min(b.y1, double(grid.height())) - std::max(b.y0, 0.0);
+  return w > 0.0 && h > 0.0 ? w * h : 0.0;
+}
+
+/// Picks occluder patches by size on screen, biggest first, within the triangle budget; fills
+/// `s.occluders`. A patch too big for what is left of the budget is skipped, smaller ones still fit.
+/// An object of one patch is measured by its own box (already projected).
 inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
   const double grid_cells = double(s.grid.width()) * double(s.grid.height());
   const double min_cells = std::max(1.0, params.min_occluder_screen_fraction * grid_cells);
+  const PatchSet& ps = index.patches;
   s.candidates.clear();
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
-    const BoxView& b = s.boxes[i];
-    double cells = grid_cells;  // a box through the near plane: near the eye, likely big
-    if (b.usable) {
-      const double w = std::min(b.x1, double(s.grid.width())) - std::max(b.x0, 0.0);
-      const double h = std::min(b.y1, double(s.grid.height())) - std::max(b.y0, 0.0);
-      cells = w > 0.0 && h > 0.0 ? w * h : 0.0;
+    const std::uint32_t o = s.in_frustum[i];
+    const std::uint32_t p0 = ps.object_first[o], p1 = ps.object_first[o + 1];
+    if (p0 == p1) continue;
+    const double object_cells = screen_cells(s.boxes[i], s.grid);
+    if (object_cells < min_cells) continue;
+    if (p1 - p0 == 1) {
+      s.candidates.emplace_back(static_cast<float>(object_cells), p0);
+      continue;
     }
-    if (cells >= min_cells) s.candidates.emplace_back(static_cast<float>(cells), static_cast<std::uint32_t>(i));
+    for (std::uint32_t p = p0; p < p1; ++p) {
+      const double cells = screen_cells(patch_box(index, s, p), s.grid);
+      if (cells >= min_cells) s.candidates.emplace_back(static_cast<float>(cells), p);
+    }
   }
-  // Biggest first. A full sort of the candidates only (they are the objects above the size floor).
+  // Biggest first. A full sort of the candidates only (they are the patches above the size floor).
   std::sort(s.candidates.begin(), s.candidates.end(),
             [](const std::pair<float, std::uint32_t>& a, const std::pair<float, std::uint32_t>& b) {
               return a.first > b.first || (a.first == b.first && a.second < b.second);
@@ -161,26 +190,26 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
   s.occluders.clear();
   std::uint64_t budget = params.occluder_triangle_budget;
   for (const auto& c : s.candidates) {
-    if (s.occluders.size() >= params.max_occluder_objects) break;
-    const std::uint32_t o = s.in_frustum[c.second];
-    const std::uint32_t n = index.objects[o].triangle_count;
+    if (s.occluders.size() >= params.max_occluder_objects || budget == 0) break;
+    const std::uint32_t n = ps.patches[c.second].count;
     if (n > budget) continue;
     budget -= n;
-    const BoxView& b = s.boxes[c.second];
-    s.occluders.emplace_back(b.usable ? b.w_min : 0.0, o);
+    s.occluders.emplace_back(0.0, c.second);
   }
 }
 
-/// Projects the occluder objects' triangles and keeps those that can occlude: every corner
+/// Projects the occluder patches' triangles and keeps those that can occlude: every corner
 /// clearly beyond the near plane, clearly front-facing, touching the grid. Fills `s.triangles`
 /// with (largest corner depth as float bits, triangle), nearest first.
 inline void gather_triangles(const MeshIndex& index, Scratch& s) {
   const int orient = s.view.orient;
   const double gw = s.grid.width(), gh = s.grid.height();
   s.triangles.clear();
+  const PatchSet& ps = index.patches;
   for (const auto& o : s.occluders) {
-    const MeshObject& range = index.objects[o.second];
-    for (std::uint32_t t = range.first_triangle; t < range.first_triangle + range.triangle_count; ++t) {
+    const Patch& patch = ps.patches[o.second];
+    for (std::uint32_t k = patch.first; k < patch.first + patch.count; ++k) {
+      const std::uint32_t t = ps.triangles[k];
       const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
       // Objects may overlap: a triangle goes in once.
       if (c[0] == none || s.triangle_stamp[t] == s.frame) continue;
@@ -281,6 +310,64 @@ inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionP
   return covered;
 }
 
+/// True when every cell the box view's rectangle touches is covered nearer than the box.
+inline bool rect_hidden(const CoverageGrid& grid, const BoxView& b) {
+  if (!b.usable) return false;
+  const CellRect r = grid.cells_of(b.x0, b.y0, b.x1, b.y1);
+  // A rectangle that misses the grid meets no ray through the frustum.
+  const float threshold = static_cast<float>((1.0 / b.w_min) * (1.0 + 0x1p-20));
+  return r.empty() || (std::isfinite(threshold) && grid.all_nearer(r, threshold));
+}
+
+/// True when each of the patch's triangles is clearly back-facing (no ray sees its front) or hidden
+/// by its own screen rectangle at its own nearest depth. Corners are projected as for occluders.
+inline bool patch_triangles_hidden(const MeshIndex& index, Scratch& s, const Patch& patch) {
+  for (std::uint32_t k = patch.first; k < patch.first + patch.count; ++k) {
+    const std::uint32_t* c = &index.corners[3 * std::size_t(index.patches.triangles[k])];
+    BoxView b{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, HUGE_VAL, true};
+    double x[3], y[3];
+    for (int v = 0; v < 3; ++v) {
+      const Projected& p = project_vertex(index, s, c[v]);
+      if (!p.usable) return false;  // through the near plane: cannot be measured
+      x[v] = p.x;
+      y[v] = p.y;
+      b.x0 = std::min(b.x0, p.x);
+      b.x1 = std::max(b.x1, p.x);
+      b.y0 = std::min(b.y0, p.y);
+      b.y1 = std::max(b.y1, p.y);
+      b.w_min = std::min(b.w_min, p.w);
+    }
+    // The mirror of the occluders' front-facing rule, with the same margin: only a triangle that is
+    // clearly back-facing is passed over; an edge-on one is tested like any other.
+    const double area2 = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+    const double extent = std::max(b.x1 - b.x0, b.y1 - b.y0);
+    if (area2 * s.view.orient < -1e-9 * extent * extent) continue;
+    if (!rect_hidden(s.grid, b)) return false;
+  }
+  return true;
+}
+
+/// The object test. Its box first (one rectangle, usually enough); else, when the object is cut into
+/// patches, each patch by its box or, for a patch of at most `object_test_triangles` triangles, by
+/// its triangles. Every triangle that can be seen is in some patch, so the object is hidden when all
+/// of its patches are. An object with no patch (only degenerate triangles) rests on its box.
+inline bool object_hidden(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, std::size_t i) {
+  const BoxView& b = s.boxes[i];
+  if (rect_hidden(s.grid, b)) return true;
+  const std::uint32_t o = s.in_frustum[i];
+  const PatchSet& ps = index.patches;
+  const std::uint32_t p0 = ps.object_first[o], p1 = ps.object_first[o + 1];
+  if (p0 == p1) return false;
+  // One patch whose box is the object's box and too many triangles to test: nothing tighter.
+  if (p1 - p0 == 1 && ps.patches[p0].count > params.object_test_triangles) return false;
+  for (std::uint32_t p = p0; p < p1; ++p) {
+    const Patch& patch = ps.patches[p];
+    if (p1 - p0 > 1 && rect_hidden(s.grid, patch_box(index, s, p))) continue;
+    if (patch.count > params.object_test_triangles || !patch_triangles_hidden(index, s, patch)) return false;
+  }
+  return true;
+}
+
 inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera, Scratch& s,
                  std::vector<std::uint32_t>& out) {
   out.clear();
@@ -310,15 +397,7 @@ inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, cons
   s.grid.finish();
 
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
-    const BoxView& b = s.boxes[i];
-    bool hidden = false;
-    if (b.usable) {
-      const CellRect r = s.grid.cells_of(b.x0, b.y0, b.x1, b.y1);
-      // A box that misses the grid meets no ray through the frustum.
-      const float threshold = static_cast<float>((1.0 / b.w_min) * (1.0 + 0x1p-20));
-      hidden = r.empty() || (std::isfinite(threshold) && s.grid.all_nearer(r, threshold));
-    }
-    if (hidden) ++stats.objects_hidden;
+    if (object_hidden(index, params, s, i)) ++stats.objects_hidden;
     else out.push_back(s.in_frustum[i]);
   }
 }
