@@ -164,7 +164,10 @@ class ReasonProbe {
       else if (hid_sd[o]) r.depth += share;
       else if (hid_all[o]) r.grid += share;
       else if (triangles_hidden(cam, fine_scratch, o)) r.box += share;
-      else r.other += share;
+      else {
+        r.other += share;
+        if (std::getenv("DEBUG_OTHER")) std::fprintf(stderr, "other: %s (%u triangles) box %g %g %g - %g %g %g eye %g %g %g\n", scene_.objects[o].name.c_str(), map_.triangle_count[o], index_.bounds[o].min.x, index_.bounds[o].min.y, index_.bounds[o].min.z, index_.bounds[o].max.x, index_.bounds[o].max.y, index_.bounds[o].max.z, cam.eye.x, cam.eye.y, cam.eye.z);
+      }
     }
   }
 
@@ -331,7 +334,7 @@ void print(const std::vector<Row>& rows) {
 }
 
 /// Parameters from the environment (for measuring alternatives without rebuilding): GW, GH,
-/// BUDGET, RATIO, MINFRAC, PATCH (MeshOcclusionParams fields).
+/// BUDGET, RATIO, MINFRAC, PATCH (patch_triangles), OBJTRI (object_test_triangles).
 MeshOcclusionParams params_from_environment() {
   MeshOcclusionParams params;
   if (const char* v = std::getenv("GW")) params.grid_width = std::atoi(v);
@@ -339,6 +342,8 @@ MeshOcclusionParams params_from_environment() {
   if (const char* v = std::getenv("BUDGET")) params.occluder_triangle_budget = static_cast<std::uint32_t>(std::atol(v));
   if (const char* v = std::getenv("RATIO")) params.depth_band_ratio = static_cast<float>(std::atof(v));
   if (const char* v = std::getenv("MINFRAC")) params.min_occluder_screen_fraction = static_cast<float>(std::atof(v));
+  if (const char* v = std::getenv("PATCH")) params.patch_triangles = static_cast<std::uint32_t>(std::atol(v));
+  if (const char* v = std::getenv("OBJTRI")) params.object_test_triangles = static_cast<std::uint32_t>(std::atol(v));
   return params;
 }
 

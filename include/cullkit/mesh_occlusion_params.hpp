@@ -51,6 +51,14 @@ struct MeshOcclusionParams {
   /// triangle: each front-facing triangle's own screen rectangle at its own nearest depth (an object
   /// whose triangles all face away from the eye is never seen). Default 16. 0 turns it off.
   std::uint32_t object_test_triangles = 16;
+  /// Objects whose triangles are exactly a closed box (12 outward triangles on the faces of their
+  /// bounds: buildings and crates of generated scenes, walls of some building models) are solids:
+  /// up to this many of them in the frustum, the biggest on screen (above the occluder size floor,
+  /// wholly beyond the near plane), also go into an object-space OcclusionTree as box occluders, and
+  /// an object the grid does not hide is hidden when that tree hides its box. The tree is exact
+  /// where the grid's cells blur the occluders' outlines (a roof edge in front of a rooftop prop),
+  /// and fuses boxes that touch. Default 128. 0 turns it off.
+  std::uint32_t max_box_occluders = 128;
   /// Parameters of the frustum-culling tree over object bounds.
   AbtParams tree = {};
 };

@@ -39,6 +39,7 @@ struct MeshIndex {
   std::vector<std::uint32_t> unusable;    // objects always reported visible
   AdaptiveBinaryTree<Aabb> tree;          // over the usable objects' bounds
   PatchSet patches;                       // the objects cut into surface patches
+  std::vector<std::uint8_t> solid_box;    // per object: its triangles are a closed box (is_solid_box)
 };
 
 inline MeshOcclusionParams sanitize(MeshOcclusionParams p) {
@@ -225,6 +226,10 @@ void build_index(MeshIndex& index, std::size_t triangle_count, ReadTriangle&& re
     if (unusable[t] == 2) index.corners[3 * t] = index.corners[3 * t + 1] = index.corners[3 * t + 2] = none;
   stats.shared_edges = pair_edges(index.corners, index.twins);
   build_patches(index.patches, index.positions, index.corners, index.twins, index.objects, patch_triangles);
+  index.solid_box.assign(object_count, 0);
+  for (std::size_t o = 0; o < object_count; ++o)
+    if (index.objects[o].triangle_count > 0)
+      index.solid_box[o] = is_solid_box(index.positions, index.corners, index.twins, index.objects[o], index.bounds[o]);
   index.tree = AdaptiveBinaryTree<Aabb>(tree_bounds.data(), tree_bounds.size(), tree_params);
 }
 

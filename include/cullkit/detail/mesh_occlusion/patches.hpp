@@ -15,6 +15,9 @@
 #include <limits>
 #include <vector>
 
+#include <glm/geometric.hpp>
+#include <glm/ext/vector_double3.hpp>
+
 #include "../../geometry/aabb.hpp"
 #include "../../mesh_occlusion_params.hpp"
 
@@ -86,6 +89,40 @@ inline void build_patches(PatchSet& set, const std::vector<glm::vec3>& positions
     }
   }
   set.object_first[objects.size()] = static_cast<std::uint32_t>(set.patches.size());
+}
+
+/// True when object o's usable triangles are exactly a closed, outward-wound surface on the faces of
+/// its bounds (12 triangles, every edge paired within the object, every corner a box corner, each
+/// triangle lying on a face and facing out) and the box has volume. Every ray into such a box meets
+/// one of its front faces first, so the box is a solid: everything it hides is hidden by the object.
+inline bool is_solid_box(const std::vector<glm::vec3>& positions, const std::vector<std::uint32_t>& corners,
+                         const std::vector<std::uint32_t>& twins, const MeshObject& object, const Aabb& box) {
+  constexpr std::uint32_t none = 0xffffffffu;
+  if (!(box.max.x > box.min.x && box.max.y > box.min.y && box.max.z > box.min.z)) return false;
+  const std::uint32_t first = object.first_triangle, end = first + object.triangle_count;
+  int live = 0;
+  for (std::uint32_t t = first; t < end; ++t) {
+    const std::uint32_t* c = &corners[3 * std::size_t(t)];
+    if (c[0] == none) continue;
+    if (++live > 12) return false;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t twin = twins[3 * std::size_t(t) + std::size_t(k)];
+      if (twin == none || twin / 3 < first || twin / 3 >= end) return false;
+    }
+    const glm::vec3 p[3] = {positions[c[0]], positions[c[1]], positions[c[2]]};
+    for (const glm::vec3& q : p)
+      for (int a = 0; a < 3; ++a)
+        if (q[a] != box.min[a] && q[a] != box.max[a]) return false;
+    // The face it lies on, and its winding: the normal points out of the box along that axis.
+    const glm::dvec3 n = glm::cross(glm::dvec3(p[1]) - glm::dvec3(p[0]), glm::dvec3(p[2]) - glm::dvec3(p[0]));
+    bool on_face = false;
+    for (int a = 0; a < 3 && !on_face; ++a) {
+      if (p[0][a] != p[1][a] || p[0][a] != p[2][a]) continue;
+      on_face = p[0][a] == box.max[a] ? n[a] > 0.0 : n[a] < 0.0;
+    }
+    if (!on_face) return false;
+  }
+  return live == 12;
 }
 
 }  // namespace mesh_occlusion

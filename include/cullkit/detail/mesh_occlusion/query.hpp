@@ -10,7 +10,11 @@
 #include <utility>
 #include <vector>
 
+#include <glm/ext/matrix_double4x4.hpp>
+#include <glm/matrix.hpp>
+
 #include "../../geometry/camera.hpp"
+#include "../../occlusion_tree.hpp"
 #include "coverage.hpp"
 #include "index.hpp"
 #include "view.hpp"
@@ -30,6 +34,8 @@ struct BoxView {
 /// Per-thread working memory of a query; only grows.
 struct Scratch {
   MeshOcclusionStats stats;
+  Frustum frustum;                        // this frame's
+  glm::vec3 view_eye{0.0f};               // this frame's eye
   std::vector<std::uint32_t> in_frustum;  // tree positions, then objects
   std::vector<BoxView> boxes;             // parallel to in_frustum
   std::vector<std::pair<float, std::uint32_t>> candidates;  // (screen cells, patch)
@@ -43,6 +49,9 @@ struct Scratch {
   std::vector<Projected> projected;
   View view;
   CoverageGrid grid;
+  std::vector<std::pair<float, std::uint32_t>> box_candidates;  // (screen cells, object)
+  std::vector<Aabb> box_occluders;
+  OcclusionTree box_tree{glm::vec3(0.0f)};  // the solid boxes' hidden region, when box_occluders is not empty
 };
 
 /// Sorts (key, value) pairs by key, stable: three passes of 11 bits.
@@ -178,6 +187,9 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
       continue;
     }
     for (std::uint32_t p = p0; p < p1; ++p) {
+      // A patch outside the frustum (behind the eye, say) would otherwise count as through the near
+      // plane, the biggest of all.
+      if (s.frustum.classify(ps.patches[p].box) == Containment::outside) continue;
       const double cells = screen_cells(patch_box(index, s, p), s.grid);
       if (cells >= min_cells) s.candidates.emplace_back(static_cast<float>(cells), p);
     }
@@ -347,6 +359,113 @@ inline bool patch_triangles_hidden(const MeshIndex& index, Scratch& s, const Pat
   return true;
 }
 
+/// The part of the view frustum nearer than the near plane: the eye and the near rectangle's
+/// corners, widened a little (rays 0.1% outside the screen, the rectangle 0.1% beyond the plane).
+struct NearPyramid {
+  double p[5][3];      // eye, then the 4 corners (in order around the rectangle)
+  double plane[5][4];  // outward: 4 sides through the eye, then the far side (the near plane)
+  bool ok = false;
+};
+
+inline NearPyramid near_pyramid(const Camera& camera, const View& view) {
+  NearPyramid py;
+  const glm::dmat4 inv = glm::inverse(glm::dmat4(camera.view_proj));
+  const double* e = view.eye;
+  const double* n = view.near_plane;
+  for (int k = 0; k < 3; ++k) py.p[0][k] = e[k];
+  const double cx[4] = {-1, 1, 1, -1}, cy[4] = {-1, -1, 1, 1};
+  for (int c = 0; c < 4; ++c) {
+    // A point on the corner's ray inside the frustum for every depth convention (ndc z = 0.5).
+    const glm::dvec4 h = inv * glm::dvec4(cx[c] * 1.001, cy[c] * 1.001, 0.5, 1.0);
+    if (!(std::fabs(h.w) > 0.0)) return py;
+    const double d[3] = {h.x / h.w - e[0], h.y / h.w - e[1], h.z / h.w - e[2]};
+    const double along = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
+    const double at_eye = n[0] * e[0] + n[1] * e[1] + n[2] * e[2] + n[3];
+    if (!(along > 0.0)) return py;
+    const double t = -at_eye / along * 1.001;
+    for (int k = 0; k < 3; ++k) py.p[c + 1][k] = e[k] + t * d[k];
+  }
+  const auto plane_of = [&](const double* a, const double* b, const double* c, const double* inside, double* out) {
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    out[0] = u[1] * v[2] - u[2] * v[1];
+    out[1] = u[2] * v[0] - u[0] * v[2];
+    out[2] = u[0] * v[1] - u[1] * v[0];
+    out[3] = -(out[0] * a[0] + out[1] * a[1] + out[2] * a[2]);
+    if (out[0] * inside[0] + out[1] * inside[1] + out[2] * inside[2] + out[3] > 0.0)
+      for (int k = 0; k < 4; ++k) out[k] = -out[k];
+  };
+  double centre[3];
+  for (int k = 0; k < 3; ++k) centre[k] = 0.5 * py.p[0][k] + 0.125 * (py.p[1][k] + py.p[2][k] + py.p[3][k] + py.p[4][k]);
+  for (int c = 0; c < 4; ++c) plane_of(py.p[0], py.p[1 + c], py.p[1 + (c + 1) % 4], centre, py.plane[c]);
+  plane_of(py.p[1], py.p[2], py.p[3], centre, py.plane[4]);
+  py.ok = true;
+  for (const auto& q : py.p)
+    for (double v : q) py.ok = py.ok && std::isfinite(v);
+  return py;
+}
+
+/// False only when `box` certainly misses the pyramid: separated by a face of the box or of the
+/// pyramid (with a margin far above the rounding of these sums).
+inline bool box_meets_pyramid(const Aabb& box, const NearPyramid& py) {
+  if (!py.ok) return true;
+  double scale = 0.0;
+  for (const auto& q : py.p)
+    for (double v : q) scale = std::max(scale, std::fabs(v));
+  for (int a = 0; a < 3; ++a) scale = std::max(scale, std::max(std::fabs(double(box.min[a])), std::fabs(double(box.max[a]))));
+  const double tol = 1e-9 * scale;
+  for (int a = 0; a < 3; ++a) {
+    bool below = true, above = true;
+    for (const auto& q : py.p) {
+      below = below && q[a] < box.min[a] - tol;
+      above = above && q[a] > box.max[a] + tol;
+    }
+    if (below || above) return false;
+  }
+  for (const auto& pl : py.plane) {
+    const double len = std::fabs(pl[0]) + std::fabs(pl[1]) + std::fabs(pl[2]);
+    bool outside = true;
+    for (int k = 0; k < 8 && outside; ++k) {
+      const double x = k & 1 ? box.max.x : box.min.x, y = k & 2 ? box.max.y : box.min.y, z = k & 4 ? box.max.z : box.min.z;
+      outside = pl[0] * x + pl[1] * y + pl[2] * z + pl[3] > tol * len;
+    }
+    if (outside) return false;
+  }
+  return true;
+}
+
+/// Fills `s.box_tree` with the biggest solid-box objects on screen. A box is a solid only for rays
+/// that enter it beyond the near plane (what lies nearer is clipped: a ray entering there goes on
+/// inside it and out through a back face), so a box that may meet the part of the frustum nearer
+/// than the near plane is left out; a building beside the eye that reaches behind it stays in.
+/// Leaves `s.box_occluders` empty when there are none.
+inline void insert_box_occluders(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera,
+                                 Scratch& s) {
+  s.box_occluders.clear();
+  if (params.max_box_occluders == 0) return;
+  const double min_cells = std::max(1.0, params.min_occluder_screen_fraction * double(s.grid.width()) * double(s.grid.height()));
+  s.box_candidates.clear();
+  for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
+    const std::uint32_t o = s.in_frustum[i];
+    if (!index.solid_box[o]) continue;
+    const double cells = screen_cells(s.boxes[i], s.grid);
+    if (cells >= min_cells) s.box_candidates.emplace_back(static_cast<float>(cells), o);
+  }
+  if (s.box_candidates.empty()) return;
+  if (s.box_candidates.size() > params.max_box_occluders) {
+    std::nth_element(s.box_candidates.begin(), s.box_candidates.begin() + params.max_box_occluders, s.box_candidates.end(),
+                     [](const std::pair<float, std::uint32_t>& a, const std::pair<float, std::uint32_t>& b) {
+                       return a.first > b.first || (a.first == b.first && a.second < b.second);
+                     });
+    s.box_candidates.resize(params.max_box_occluders);
+  }
+  const NearPyramid pyramid = near_pyramid(camera, s.view);
+  for (const auto& c : s.box_candidates)
+    if (!box_meets_pyramid(index.bounds[c.second], pyramid)) s.box_occluders.push_back(index.bounds[c.second]);
+  if (s.box_occluders.empty()) return;
+  s.box_tree.reset(s.view_eye);
+  s.box_tree.insert_box_occluders(s.box_occluders.data(), s.box_occluders.size());
+}
+
 /// The object test. Its box first (one rectangle, usually enough); else, when the object is cut into
 /// patches, each patch by its box or, for a patch of at most `object_test_triangles` triangles, by
 /// its triangles. Every triangle that can be seen is in some patch, so the object is hidden when all
@@ -355,6 +474,7 @@ inline bool object_hidden(const MeshIndex& index, const MeshOcclusionParams& par
   const BoxView& b = s.boxes[i];
   if (rect_hidden(s.grid, b)) return true;
   const std::uint32_t o = s.in_frustum[i];
+  if (!s.box_occluders.empty() && b.usable && s.box_tree.is_occluded(index.bounds[o])) return true;
   const PatchSet& ps = index.patches;
   const std::uint32_t p0 = ps.object_first[o], p1 = ps.object_first[o + 1];
   if (p0 == p1) return false;
@@ -362,7 +482,9 @@ inline bool object_hidden(const MeshIndex& index, const MeshOcclusionParams& par
   if (p1 - p0 == 1 && ps.patches[p0].count > params.object_test_triangles) return false;
   for (std::uint32_t p = p0; p < p1; ++p) {
     const Patch& patch = ps.patches[p];
-    if (p1 - p0 > 1 && rect_hidden(s.grid, patch_box(index, s, p))) continue;
+    // No ray through the frustum meets a patch outside it.
+    if (p1 - p0 > 1 && (s.frustum.classify(patch.box) == Containment::outside || rect_hidden(s.grid, patch_box(index, s, p))))
+      continue;
     if (patch.count > params.object_test_triangles || !patch_triangles_hidden(index, s, patch)) return false;
   }
   return true;
@@ -373,7 +495,8 @@ inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, cons
   out.clear();
   MeshOcclusionStats& stats = s.stats;
   stats = MeshOcclusionStats{};
-  index.tree.cull(frustum_of(camera), s.in_frustum);
+  s.frustum = frustum_of(camera);
+  index.tree.cull(s.frustum, s.in_frustum);
   for (std::uint32_t& i : s.in_frustum) i = index.tree_objects[i];
   stats.objects_in_frustum = s.in_frustum.size();
   out.insert(out.end(), index.unusable.begin(), index.unusable.end());
@@ -395,6 +518,8 @@ inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, cons
   stats.occluders_used = s.occluders.size();
   stats.cells_covered = insert_triangles(index, params, s);
   s.grid.finish();
+  s.view_eye = camera.eye;
+  insert_box_occluders(index, params, camera, s);
 
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
     if (object_hidden(index, params, s, i)) ++stats.objects_hidden;
