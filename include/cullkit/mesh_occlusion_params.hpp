@@ -47,10 +47,12 @@ struct MeshOcclusionParams {
   /// patches fit the budget and the object tests tighter, at more boxes to project per frame.
   /// Clamped to [1, 65536].
   std::uint32_t patch_triangles = 256;
-  /// An object of at most this many triangles whose box is not hidden is tested triangle by
-  /// triangle: each front-facing triangle's own screen rectangle at its own nearest depth (an object
-  /// whose triangles all face away from the eye is never seen). Default 16. 0 turns it off.
-  std::uint32_t object_test_triangles = 16;
+  /// A patch of at most this many triangles whose box is not hidden is tested triangle by triangle:
+  /// each front-facing triangle by its own screen rectangle at its own nearest depth (triangles
+  /// that clearly face away from the eye are never seen, so an object facing away is hidden). The
+  /// test stops at the first triangle not hidden. Default 256 (every patch of the default size).
+  /// 0 turns it off: objects are then tested by their box and their patches' boxes only.
+  std::uint32_t object_test_triangles = 256;
   /// Objects whose triangles are exactly a closed box (12 outward triangles on the faces of their
   /// bounds: buildings and crates of generated scenes, walls of some building models) are solids:
   /// up to this many of them in the frustum, the biggest on screen (above the occluder size floor,
