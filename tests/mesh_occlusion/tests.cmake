@@ -5,3 +5,5 @@ find_package(Threads REQUIRED)
 cullkit_add_test(test_mesh_occlusion_input SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_input.cpp LIBS Threads::Threads)
 # MeshOcclusionCuller against Embree on real and generated scenes.
 include(${CMAKE_CURRENT_LIST_DIR}/embree.cmake)
+# Surface patches, triangle-level object tests and solid-box occluders, each against its control.
+cullkit_add_test(test_mesh_occlusion_patches SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_patches.cpp TIMEOUT 300)
