@@ -17,7 +17,12 @@
 //               frame once (one ray per pixel, one thread).
 // Ratios are of medians within this run: culler / frustum, culler / old, Embree / culler.
 //
-// Usage: bench_mesh_occlusion [cameras=60] [width=1920] [height=1080] [reps=3]
+// Usage: bench_mesh_occlusion [--reasons] [--scene=NAME] [cameras=60] [width=1920] [height=1080] [reps=3]
+//   --reasons     also says why the culler keeps what Embree does not see (see `Reasons`).
+//   --scene=NAME  only the scenes whose name contains NAME (the cameras stay those of a full run).
+// The environment variables GW, GH, BUDGET, RATIO, MINFRAC, PATCH and OBJTRI override the culler's
+// parameters (grid size, occluder triangle budget, depth band ratio, occluder size floor, patch
+// size, triangle-test patch size), for measuring alternatives without rebuilding.
 // CULLKIT_BENCH_SMOKE=1: the small generated city, 2 cameras, 320x180, 1 rep.
 #include <algorithm>
 #include <chrono>
@@ -164,10 +169,7 @@ class ReasonProbe {
       else if (hid_sd[o]) r.depth += share;
       else if (hid_all[o]) r.grid += share;
       else if (triangles_hidden(cam, fine_scratch, o)) r.box += share;
-      else {
-        r.other += share;
-        if (std::getenv("DEBUG_OTHER")) std::fprintf(stderr, "other: %s (%u triangles) box %g %g %g - %g %g %g eye %g %g %g\n", scene_.objects[o].name.c_str(), map_.triangle_count[o], index_.bounds[o].min.x, index_.bounds[o].min.y, index_.bounds[o].min.z, index_.bounds[o].max.x, index_.bounds[o].max.y, index_.bounds[o].max.z, cam.eye.x, cam.eye.y, cam.eye.z);
-      }
+      else r.other += share;
     }
   }
 
