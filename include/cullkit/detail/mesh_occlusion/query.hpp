@@ -504,7 +504,8 @@ inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, cons
 
   s.view.setup(camera, params.grid_width, params.grid_height);
   stats.occlusion_enabled = s.view.enabled;
-  if (!s.view.enabled || s.in_frustum.empty()) {
+  // One object alone in the frustum has nothing to hide it: an object never hides itself.
+  if (!s.view.enabled || s.in_frustum.size() < 2) {
     out.insert(out.end(), s.in_frustum.begin(), s.in_frustum.end());
     return;
   }
