@@ -17,17 +17,28 @@
 //               frame once (one ray per pixel, one thread).
 // Ratios are of medians within this run: culler / frustum, culler / old, Embree / culler.
 //
-// Usage: bench_mesh_occlusion [--reasons] [--scene=NAME] [cameras=60] [width=1920] [height=1080] [reps=3]
-//   --reasons     also says why the culler keeps what Embree does not see (see `Reasons`).
-//   --scene=NAME  only the scenes whose name contains NAME (the cameras stay those of a full run).
+// Usage: bench_mesh_occlusion [cameras=60] [width=1920] [height=1080] [reps=3] [flags]
+// Flags (anywhere on the line):
+//   --reasons      also says why the culler keeps what Embree does not see (see `Reasons`; not with --hash).
+//   --hash         the culler only (no Embree check, no peers): per scene, an FNV-1a hash of the kept
+//                  sets over the cameras (each sorted), the kept share, and the cull time, median (min-max)
+//                  of each camera's fastest of `reps`, in this thread's CPU time where the platform has
+//                  it (a shared machine's preemption then does not count). Two builds with the same hash
+//                  gave the same answers.
+//   --phases       implies --hash: also where the time of `cull` goes, per named step (an extra,
+//                  separately timed pass with the step probes on; shares of that pass times the median above).
+//   --scene=TEXT   only the scenes whose name contains TEXT (each scene keeps the cameras of a full run).
+//   --grid=WxH     the culler's grid size; overrides GW and GH.
 // The environment variables GW, GH, BUDGET, RATIO, MINFRAC, PATCH and OBJTRI override the culler's
 // parameters (grid size, occluder triangle budget, depth band ratio, occluder size floor, patch
-// size, triangle-test patch size), for measuring alternatives without rebuilding.
+// size, triangle-test patch size) in every mode, for measuring alternatives without rebuilding;
+// --grid, given too, wins over GW and GH.
 // CULLKIT_BENCH_SMOKE=1: the small generated city, 2 cameras, 320x180, 1 rep.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <memory>
 #include <string>
 #include <vector>
@@ -38,6 +49,7 @@
 #include "../tests/mesh_occlusion/walk_cameras.hpp"
 #include "../tests/occlusion/scene_cull.hpp"
 #include "race.hpp"
+#include "cullkit/detail/mesh_occlusion/phase_times.hpp"
 
 using namespace cullkit;
 using namespace mesh_occlusion_test;
@@ -366,46 +378,138 @@ void print_reasons(const std::vector<Row>& rows, const std::vector<Reasons>& rea
   std::fflush(stdout);
 }
 
+// ---- --hash / --phases: the culler alone, its answers as a hash and its time per step ----
+
+/// This thread's CPU time in ms (wall time where POSIX thread clocks are missing).
+double thread_ms() {
+#if defined(CLOCK_THREAD_CPUTIME_ID)
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+#else
+  return std::chrono::duration<double, std::milli>(Clock::now().time_since_epoch()).count();
+#endif
+}
+
+struct Flags {
+  bool reasons = false, hash = false, phases = false;
+  std::string scene;
+  int grid_width = 0, grid_height = 0;
+};
+
+void culler_only(const std::string& name, const CullScene& cs, const std::vector<Camera>& cams, int reps,
+                 const MeshOcclusionParams& given, const Flags& flags) {
+  namespace mo = cullkit::detail::mesh_occlusion;
+  const ObjectMap map(cs.scene);
+  const MeshOcclusionCuller<glm::vec3> culler(cs.scene.mesh(), map.objects.data(), map.objects.size(), given);
+  const MeshOcclusionParams& params = culler.params();  // as clamped
+  MeshOcclusionContext context;
+  std::vector<std::uint32_t> kept;
+  std::vector<double> ms;
+  std::uint64_t hash = 1469598103934665603ull;
+  double share = 0, occluder_triangles = 0;
+  std::size_t pairs = 0;
+  const double total = static_cast<double>(std::max<std::size_t>(cs.scene.triangle_count(), 1));
+  for (const Camera& cam : cams) {
+    double best = 1e300;
+    for (int r = 0; r < reps; ++r) {
+      const double t0 = thread_ms();
+      culler.cull(cam, context, kept);
+      best = std::min(best, thread_ms() - t0);
+    }
+    ms.push_back(best);
+    std::sort(kept.begin(), kept.end());
+    for (std::uint32_t o : kept) hash = (hash ^ o) * 1099511628211ull;
+    hash = (hash ^ 0xffffffffull) * 1099511628211ull;
+    pairs += kept.size();
+    share += triangles_of(map, kept) / total;
+    occluder_triangles += static_cast<double>(context.stats().occluder_triangles);
+  }
+  const double n = static_cast<double>(std::max<std::size_t>(cams.size(), 1));
+  std::printf("hash,%s,%dx%d,%016llx,kept_pairs=%zu,kept_pct=%.3f,occluder_triangles=%.0f,culler_ms=%s\n", name.c_str(),
+              params.grid_width, params.grid_height, static_cast<unsigned long long>(hash), pairs, 100 * share / n,
+              occluder_triangles / n, ms_text(ms).c_str());
+  if (!flags.phases) return;
+  mo::PhaseTimes& times = mo::phase_times();
+  times = mo::PhaseTimes{};
+  times.enabled = true;
+  for (const Camera& cam : cams)
+    for (int r = 0; r < reps; ++r) culler.cull(cam, context, kept);
+  times.enabled = false;
+  static const char* const names[mo::phase_count] = {"frustum walk", "object boxes", "occluder choice",
+                                                     "triangle setup and sort", "vertex projection", "bands",
+                                                     "depths", "counts", "edge marking", "band ends",
+                                                     "finish", "box occluders", "object tests"};
+  std::uint64_t sum = 0;
+  for (std::uint64_t t : times.ticks) sum += t;
+  const double median = spread(ms).median;
+  for (int p = 0; p < mo::phase_count; ++p) {
+    // Each tick is charged to one step (vertex projection is taken out of the steps that call it).
+    const std::uint64_t t = times.ticks[p];
+    const double part = sum ? static_cast<double>(t) / static_cast<double>(sum) : 0.0;
+    std::printf("phase,%s,%s,%.1f%%,%.3f ms\n", name.c_str(), names[p], 100 * part, part * median);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const bool smoke = cullkit_bench::smoke();
   int cameras = smoke ? 2 : 60, width = smoke ? 320 : 1920, height = smoke ? 180 : 1080, reps = smoke ? 1 : 3;
   int* slots[4] = {&cameras, &width, &height, &reps};
-  bool with_reasons = false;
-  std::string only;
+  Flags flags;
   int positional = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--reasons") {
-      with_reasons = true;
-      continue;
-    }
-    if (arg.rfind("--scene=", 0) == 0) {
-      only = arg.substr(8);
+    if (arg.rfind("--", 0) == 0) {
+      if (arg == "--reasons") flags.reasons = true;
+      else if (arg == "--hash") flags.hash = true;
+      else if (arg == "--phases") flags.hash = flags.phases = true;
+      else if (arg.rfind("--scene=", 0) == 0) flags.scene = arg.substr(8);
+      else if (arg.rfind("--grid=", 0) == 0 && std::sscanf(arg.c_str() + 7, "%dx%d", &flags.grid_width, &flags.grid_height) == 2 &&
+               flags.grid_width > 0 && flags.grid_height > 0) {
+      } else {
+        std::fprintf(stderr, "unknown flag %s\n", arg.c_str());
+        return 2;
+      }
       continue;
     }
     const int v = std::atoi(argv[i]);
     if (v <= 0 || positional >= 4) {
-      std::fprintf(stderr, "usage: %s [--reasons] [--scene=NAME] [cameras=60] [width=1920] [height=1080] [reps=3]\n",
+      std::fprintf(stderr,
+                   "usage: %s [cameras=60] [width=1920] [height=1080] [reps=3] [--reasons] [--hash] [--phases] "
+                   "[--scene=TEXT] [--grid=WxH]\n",
                    argv[0]);
       return 2;
     }
     *slots[positional++] = v;
   }
-  const MeshOcclusionParams params = params_from_environment();
+  MeshOcclusionParams params = params_from_environment();
+  if (flags.grid_width > 0) {  // the command line wins over GW and GH
+    params.grid_width = flags.grid_width;
+    params.grid_height = flags.grid_height;
+  }
   std::printf("%d walk cameras per scene, %dx%d, %d alternating reps per camera, one thread.\n", cameras, width, height,
               reps);
   const auto t_all = Clock::now();
   std::vector<Row> rows;
   std::vector<Reasons> reasons;
+  const auto wanted = [&](const std::string& name) { return name.find(flags.scene) != std::string::npos; };
   const auto run = [&](const std::string& name, support::Scene scene, std::uint64_t seed) {
+    if (!wanted(name)) return;
+    if (flags.hash) {
+      const CullScene cs(std::move(scene));
+      const auto cams = walk(walk_spec(name, cs.scene, cs.embree, seed), cs.scene, cs.embree, cameras, 4, width, height,
+                             seed + 1);
+      culler_only(name, cs, cams, reps, params, flags);
+      return;
+    }
     const bool generated = name == "city" || name == "office";
     const CullScene cs(std::move(scene));
     const WalkSpec spec = walk_spec(name, cs.scene, cs.embree, seed);
     const auto cams = walk(spec, cs.scene, cs.embree, cameras, 4, width, height, seed + 1);
     reasons.emplace_back();
-    Reasons* r = with_reasons ? &reasons.back() : nullptr;
+    Reasons* r = flags.reasons ? &reasons.back() : nullptr;
     if (generated) {
       const BoxOccluderSource source{cs.bounds.data(), cs.box_occluder.data()};
       rows.push_back(measure(name, cs, cams, source, reps, params, r));
@@ -413,9 +517,8 @@ int main(int argc, char** argv) {
       rows.push_back(measure(
           name, cs, cams, [&](std::uint32_t o, OcclusionTree& t) { cs.insert_occluders(o, t); }, reps, params, r));
     }
-    rows.back().has_reasons = with_reasons;
+    rows.back().has_reasons = flags.reasons;
   };
-  const auto wanted = [&](const std::string& name) { return only.empty() || name.find(only) != std::string::npos; };
   if (smoke) {
     run("city", support::make_city(1, 3), 11);
   } else {
@@ -433,8 +536,9 @@ int main(int argc, char** argv) {
       run(file, std::move(*s), scene_seed);
     }
   }
+  if (flags.hash) return 0;
   print(rows);
-  if (with_reasons) print_reasons(rows, reasons);
+  if (flags.reasons) print_reasons(rows, reasons);
   long false_culls = 0;
   for (const Row& r : rows) false_culls += r.culler_false;
   std::printf("\nculler false culls in total: %ld; wall time %.1f s\n", false_culls,

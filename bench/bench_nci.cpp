@@ -6,13 +6,19 @@
 //     scene stepping past back faces leaks through shared edges and counts ~12% more triangles
 //     as visible (fzk_haus, both views: 421 against the oracle's 374), which flattered the ratio.
 //  2. time of select_visible against Embree casting one ray per pixel (rtcIntersect1) and 4x4
-//     packets (rtcIntersect16), at 640x480 and 1024x768, on real scenes and a generated one of
-//     >= 10M triangles (full runs only; `--no-big` skips it). The racing peer is a plain Embree
-//     scene (default flags: not robust, two-sided): the fast configuration a user would pick.
+//     packets (rtcIntersect16), at 640x480 and 1024x768, 1 and 2 threads (both sides on the same
+//     count), on real scenes and a generated one of >= 10M triangles (full runs only; `--no-big`
+//     skips it). The racing peer is a plain Embree scene (default flags: not robust, two-sided): the
+//     fast configuration a user would pick. After each race, one `nci_cells` line per crowded-cell
+//     path: the (tile, cell) pairs it walked and cast, and its tested count; with two or more paths,
+//     one `nci_path_ratio` line per path: its median over the first path's.
 // Flags: --no-big, --only-big, --no-precision, --quick (precision at the default parameters only,
 // timing at 640x480 only), --hash (only a hash of the per-pixel triangle and depth of both views at
 // 640x480 and 1024x768 per scene, to check that a change keeps every answer; env CULLKIT_NCI_TILE sets
-// NciParams::tile_size for it). CSV on stdout.
+// NciParams::tile_size for it). --path LIST: the crowded-cell paths raced (comma-separated walk, rays,
+// auto; default auto): `--path walk,auto` races the walk alone against the automatic choice in the
+// same run; with --hash, the first path of the list answers (every path must print the same hashes).
+// --threads LIST: thread counts of the races (default 1,2). CSV on stdout.
 // --profile SCENE VIEW [FRAMES]: for callgrind (instructions per frame: a run of 3 frames minus a run of 1,
 // halved; or `--collect-atstart=no --toggle-collect='*process_tile*'` for the tiles alone):
 // one thread, select_visible only, at 640x480, FRAMES frames (default 1) of view VIEW (0: outside,
@@ -20,6 +26,8 @@
 // tested count, the call's NciSelectStats (triangles met and those with no pixel centre) and the mean
 // wall time per frame (the first frame included); env CULLKIT_NCI_GRID / CULLKIT_NCI_TILE set
 // NciParams::grid / tile_size.
+// Env CULLKIT_NCI_PATH = walk | rays | auto sets NciParams::crowded_path for --profile, and for --hash
+// and the timing races unless --path is given (default: auto).
 // CULLKIT_BENCH_SMOKE=1: a tiny city at 64x48, one setting.
 #include <algorithm>
 #include <atomic>
@@ -27,6 +35,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <string>
 #include <thread>
@@ -193,7 +202,52 @@ std::vector<Camera> views(const Scene& s, int w, int h) {
   return cams;
 }
 
+// NciParams::crowded_path from env CULLKIT_NCI_PATH (walk, rays, auto), else left as it is.
+void path_from_env(NciParams& p) {
+  const char* v = std::getenv("CULLKIT_NCI_PATH");
+  if (!v) return;
+  if (!std::strcmp(v, "walk")) p.crowded_path = NciCrowdedPath::walk_only;
+  else if (!std::strcmp(v, "rays")) p.crowded_path = NciCrowdedPath::rays_only;
+  else p.crowded_path = NciCrowdedPath::automatic;
+}
+
 bool g_quick = false;  // --quick: precision at the default parameters only, timing at 640x480 only
+
+struct PathChoice {
+  NciCrowdedPath path;
+  const char* name;
+};
+std::vector<PathChoice> g_paths = {{NciCrowdedPath::automatic, "auto"}};  // --path
+std::vector<unsigned> g_threads = {1, 2};                                  // --threads
+
+// "walk,rays,auto" -> paths; false on an unknown name.
+bool parse_paths(const char* list, std::vector<PathChoice>& out) {
+  out.clear();
+  const std::string s = list;
+  for (std::size_t at = 0; at <= s.size();) {
+    const std::size_t end = std::min(s.find(',', at), s.size());
+    const std::string word = s.substr(at, end - at);
+    if (word == "walk") out.push_back({NciCrowdedPath::walk_only, "walk"});
+    else if (word == "rays") out.push_back({NciCrowdedPath::rays_only, "rays"});
+    else if (word == "auto") out.push_back({NciCrowdedPath::automatic, "auto"});
+    else return false;
+    at = end + 1;
+  }
+  return !out.empty();
+}
+
+bool parse_threads(const char* list, std::vector<unsigned>& out) {
+  out.clear();
+  for (const char* c = list; *c;) {
+    char* end = nullptr;
+    const long v = std::strtol(c, &end, 10);
+    if (end == c || v < 1 || v > 256) return false;
+    out.push_back(static_cast<unsigned>(v));
+    c = *end == ',' ? end + 1 : end;
+    if (*end && *end != ',') return false;
+  }
+  return !out.empty();
+}
 
 void precision_table(const std::string& name, const Scene& s, unsigned threads, bool smoke) {
   const Embree embree(s, threads);
@@ -233,32 +287,56 @@ void precision_table(const std::string& name, const Scene& s, unsigned threads, 
   }
 }
 
-void speed(const std::string& name, const Scene& s, unsigned threads, bool smoke) {
-  const Embree embree(s, threads);
-  NciParams p;
-  p.threads = threads;
-  p.build_threads = threads;
-  const NormalClassIndex<glm::vec3> index(s.mesh(), p);
+// One race per size x view x thread count: Embree single rays, Embree packets, then select_visible
+// on each path of --path (an index per path and thread count: both are fixed at build).
+void speed(const std::string& name, const Scene& s, unsigned build_threads, bool smoke) {
+  const Embree embree(s, build_threads);
   const std::vector<std::pair<int, int>> sizes =
       smoke     ? std::vector<std::pair<int, int>>{{64, 48}}
       : g_quick ? std::vector<std::pair<int, int>>{{640, 480}}
                 : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}};
-  for (auto [w, h] : sizes) {
-    const auto cams = views(s, w, h);
-    for (std::size_t ci = 0; ci < cams.size(); ++ci) {
-      const Camera cam = cams[ci];
-      NciContext ctx;
-      VisibleSet out;
-      const std::string race = name + "/" + std::to_string(w) + "x" + std::to_string(h) + "/view" +
-                               std::to_string(ci) + "/threads" + std::to_string(threads);
-      cullkit_bench::race(race,
-                          {{"embree_rtcIntersect1", [&] { cullkit_bench::keep(embree.render1(cam, threads)); }},
-                           {"embree_rtcIntersect16", [&] { cullkit_bench::keep(embree.render16(cam, threads)); }},
-                           {"nci_select_visible", [&] {
-                              index.select_visible(cam, ctx, out, nullptr);
-                              cullkit_bench::keep(out.triangles.size());
-                            }}},
-                          smoke ? 2 : 9);
+  for (const unsigned threads : g_threads) {
+    std::vector<std::unique_ptr<NormalClassIndex<glm::vec3>>> index;
+    for (const PathChoice& path : g_paths) {
+      NciParams p;
+      p.threads = threads;
+      p.build_threads = build_threads;
+      p.crowded_path = path.path;
+      index.push_back(std::make_unique<NormalClassIndex<glm::vec3>>(s.mesh(), p));
+    }
+    for (auto [w, h] : sizes) {
+      const auto cams = views(s, w, h);
+      for (std::size_t ci = 0; ci < cams.size(); ++ci) {
+        const Camera cam = cams[ci];
+        std::vector<NciContext> ctx(g_paths.size());
+        VisibleSet out;
+        const std::string race = name + "/" + std::to_string(w) + "x" + std::to_string(h) + "/view" +
+                                 std::to_string(ci) + "/threads" + std::to_string(threads);
+        std::vector<cullkit_bench::Contestant> field = {
+            {"embree_rtcIntersect1", [&] { cullkit_bench::keep(embree.render1(cam, threads)); }},
+            {"embree_rtcIntersect16", [&] { cullkit_bench::keep(embree.render16(cam, threads)); }}};
+        for (std::size_t k = 0; k < g_paths.size(); ++k) {
+          // The default path keeps the contestant's old name, so earlier CSV stays comparable.
+          const std::string who = g_paths[k].path == NciCrowdedPath::automatic
+                                      ? std::string("nci_select_visible")
+                                      : std::string("nci_select_visible_") + g_paths[k].name;
+          field.push_back({who, [&, k] {
+                             index[k]->select_visible(cam, ctx[k], out, nullptr);
+                             cullkit_bench::keep(out.triangles.size());
+                           }});
+        }
+        const auto result = cullkit_bench::race(race, field, smoke ? 2 : 9);
+        for (std::size_t k = 0; k < g_paths.size(); ++k) {
+          index[k]->select_visible(cam, ctx[k], out, nullptr);  // the stats of one frame
+          const NciSelectStats& st = ctx[k].stats;
+          std::printf("nci_cells,%s,%s,%zu,%zu,%zu,%zu,%zu\n", race.c_str(), g_paths[k].name, st.cells_walked,
+                      st.cells_ray_cast, out.triangles_tested, st.triangles_met, st.triangles_no_pixel);
+          if (k > 0)
+            std::printf("nci_path_ratio,%s,%s_over_%s,%.3f\n", race.c_str(), g_paths[k].name, g_paths[0].name,
+                        result[2 + k].median_ns / result[2].median_ns);
+        }
+        std::fflush(stdout);
+      }
     }
   }
 }
@@ -270,6 +348,7 @@ void pixel_hash(const std::string& name, const Scene& s, unsigned threads) {
   p.threads = threads;
   p.build_threads = threads;
   if (const char* tile = std::getenv("CULLKIT_NCI_TILE")) p.tile_size = std::atoi(tile);  // answers must not move
+  p.crowded_path = g_paths.front().path;  // neither must they
   const NormalClassIndex<glm::vec3> index(s.mesh(), p);
   for (auto [w, h] : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}}) {
     const auto cams = views(s, w, h);
@@ -313,6 +392,7 @@ int profile(const std::string& name, int view, int frames) {
   p.build_threads = 1;
   if (const char* g = std::getenv("CULLKIT_NCI_GRID")) p.grid = std::atoi(g);
   if (const char* t = std::getenv("CULLKIT_NCI_TILE")) p.tile_size = std::atoi(t);
+  path_from_env(p);
   const NormalClassIndex<glm::vec3> index(s->mesh(), p);
   const auto cams = views(*s, 640, 480);
   NciContext ctx;
@@ -322,9 +402,9 @@ int profile(const std::string& name, int view, int frames) {
   const double ms = frames > 0 ? seconds_since(t0) * 1e3 / frames : 0.0;
   const NciSelectStats& st = ctx.stats;
   std::printf("profile,%s,view%d,grid=%d,frames=%d,ms_per_frame=%.2f,selected=%zu,tested=%zu,ray_tests=%zu,cells=%zu,"
-              "triangles_met=%zu,triangles_no_pixel=%zu,bytes_per_triangle=%.1f\n",
+              "triangles_met=%zu,triangles_no_pixel=%zu,cells_walked=%zu,cells_ray_cast=%zu,bytes_per_triangle=%.1f\n",
               name.c_str(), view, index.params().grid, frames, ms, out.triangles.size(), out.triangles_tested,
-              st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel,
+              st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel, st.cells_walked, st.cells_ray_cast,
               double(index.memory_bytes()) / double(std::max<std::size_t>(1, s->triangle_count())));
   return 0;
 }
@@ -335,13 +415,28 @@ int main(int argc, char** argv) {
   if (argc >= 4 && !std::strcmp(argv[1], "--profile"))
     return profile(argv[2], std::atoi(argv[3]), argc >= 5 ? std::max(1, std::atoi(argv[4])) : 1);
   const bool smoke = cullkit_bench::smoke();
-  bool big = !smoke, small = true, precision = true, timing = true, hash = false;
+  bool big = !smoke, small = true, precision = true, timing = true, hash = false, no_precision = false;
+  if (std::getenv("CULLKIT_NCI_PATH")) {  // the environment's path, unless --path says otherwise
+    NciParams env;
+    path_from_env(env);
+    g_paths = {{env.crowded_path, env.crowded_path == NciCrowdedPath::walk_only   ? "walk"
+                                  : env.crowded_path == NciCrowdedPath::rays_only ? "rays"
+                                                                                   : "auto"}};
+  }
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--no-big")) big = false;
     if (!std::strcmp(argv[i], "--only-big")) small = precision = timing = false;
-    if (!std::strcmp(argv[i], "--no-precision")) precision = false;
+    if (!std::strcmp(argv[i], "--no-precision")) precision = false, no_precision = true;
     if (!std::strcmp(argv[i], "--quick")) g_quick = true;
     if (!std::strcmp(argv[i], "--hash")) hash = true;
+    if (!std::strcmp(argv[i], "--path") && (i + 1 >= argc || !parse_paths(argv[++i], g_paths))) {
+      std::fprintf(stderr, "--path: a comma-separated list of walk, rays, auto\n");
+      return 2;
+    }
+    if (!std::strcmp(argv[i], "--threads") && (i + 1 >= argc || !parse_threads(argv[++i], g_threads))) {
+      std::fprintf(stderr, "--threads: a comma-separated list of thread counts\n");
+      return 2;
+    }
   }
   const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
   std::printf("# threads=%u\n", threads);
@@ -356,6 +451,14 @@ int main(int argc, char** argv) {
     }
   }
   if (hash) precision = timing = false;
+  if (!hash && (timing || big)) {
+    std::printf("# races at");
+    for (unsigned t : g_threads) std::printf(" %u", t);
+    std::printf(" threads (build and precision at %u); paths", threads);
+    for (const PathChoice& p : g_paths) std::printf(" %s", p.name);
+    std::printf("\n# nci_cells,race,path,cells_walked,cells_ray_cast,tested,triangles_met,triangles_no_pixel\n"
+                "# nci_path_ratio,race,path_over_first_path,median_ratio\n");
+  }
   for (const auto& [name, s] : scenes) {
     if (hash && small) pixel_hash(name, s, threads);
     if (precision) precision_table(name, s, threads, smoke);
@@ -369,7 +472,7 @@ int main(int argc, char** argv) {
       pixel_hash("bigcity", s, threads);
       return 0;
     }
-    precision_table("bigcity", s, threads, smoke);
+    if (!no_precision) precision_table("bigcity", s, threads, smoke);
     speed("bigcity", s, threads, smoke);
   }
   return 0;

@@ -2,7 +2,9 @@
 // 16-bit index buffers, two eyes of a headset culled in one walk (cull_views), and the shadow map
 // of a directional light drawn only for the objects that can shadow what the eyes see
 // (shadow_caster_volume). A skybox with infinite bounds and an object whose transform is NaN on the
-// first frame show the rule for bad bounds: such objects are always drawn.
+// first frame show the rule for bad bounds: such objects are always drawn. The crate mesh also goes
+// into NormalClassIndex and BspTree as raw buffers (StridedMesh: interleaved vertex bytes and a
+// 16-bit index buffer whose width is chosen at run time).
 // The program checks its own answers against brute force and returns non-zero if one is wrong.
 #include <cmath>
 #include <cstdint>
@@ -162,6 +164,27 @@ int main() {
   });
   if (triangles != 12 || crate_indices.size() != 36) ++errors;
   std::printf("crate: %zu triangles in %zu ranges of a 16-bit index buffer\n", triangles, ranges);
+
+  // The same crate as raw GPU-style buffers: bytes of interleaved vertices (position at offset 0
+  // of each 16-byte vertex) and an index buffer whose width the asset decides at load time.
+  // Every mesh-reading container takes it (StridedMesh) and answers as for the typed MeshView.
+  const IndexFormat asset_format = IndexFormat::uint16;  // e.g. read from the file header
+  const StridedMesh raw{{reinterpret_cast<const unsigned char*>(crate.vertices.data()), sizeof(Vertex), 0},
+                        crate.vertices.size(),
+                        {crate.indices.data(), crate.indices.size(), asset_format}};
+  const NormalClassIndex from_buffers(raw);  // NormalClassIndex<glm::vec3>: the vertex type is not read
+  const NormalClassIndex<Vertex, std::uint16_t> from_view(crate_view);
+  const Camera crate_cam = make_camera(glm::perspectiveRH_NO(glm::radians(60.0f), 4.0f / 3.0f, 0.1f, 100.0f) *
+                                           glm::lookAtRH(glm::vec3(3, 2, 4), glm::vec3(0), glm::vec3(0, 1, 0)),
+                                       64, 48);
+  const VisibleSet seen = from_buffers.select_visible(crate_cam);
+  if (seen.triangles != from_view.select_visible(crate_cam).triangles || seen.triangles.empty()) ++errors;
+  const BspTree glass(raw);  // a transparent crate: painter's order from raw buffers
+  std::vector<std::uint32_t> order;
+  glass.back_to_front(crate_cam.eye, order);
+  if (order.size() != glass.fragments().size() || order.size() < 12) ++errors;
+  std::printf("crate from raw buffers: %zu of 12 triangles seen, %zu fragments in back-to-front order\n",
+              seen.triangles.size(), order.size());
   std::printf("engine_frame: %s\n", errors == 0 ? "all answers checked" : "WRONG ANSWERS");
   return errors == 0 ? 0 : 1;
 }

@@ -34,6 +34,7 @@
 
 #include "config.hpp"
 #include "detail/bsp/build.hpp"
+#include "mesh_buffers.hpp"
 #include "traits.hpp"
 
 namespace cullkit {
@@ -53,11 +54,24 @@ class BspTree {
   /// a NaN or infinite corner, or zero area are dropped and counted in `stats()`; they have no
   /// fragments. Empty input gives an empty tree. Uses `params.threads` worker threads for large
   /// inputs (the result does not depend on them) and reports through `params.progress`.
+  /// pre: mesh.vertices != nullptr when vertex_count > 0, mesh.indices likewise (asserted in debug
+  /// builds; a null pointer is read as an empty buffer in release builds).
   explicit BspTree(MeshView<Vertex, Index> mesh, const BspParams& params = {}) {
+    mesh = detail::checked_mesh(mesh);
     const auto read = [&mesh](std::size_t t, glm::vec3 out[3]) {
       return triangle_positions<Traits>(mesh, t, out);
     };
     detail::bsp::build(mesh.triangle_count(), read, params, data_);
+  }
+
+  /// Builds over raw buffers: positions through a pointer and a byte stride, indices of a width
+  /// chosen at run time (see StridedMesh). The same tree (fragments, corners, order) as the
+  /// MeshView constructor given the same positions and indices; `Vertex` is not read.
+  /// pre: as StridedMesh's (asserted in debug builds; null buffers are read as empty in release).
+  explicit BspTree(const StridedMesh& mesh, const BspParams& params = {}) {
+    const StridedMesh m = detail::checked_mesh(mesh);
+    const auto read = [&m](std::size_t t, glm::vec3 out[3]) { return triangle_positions(m, t, out); };
+    detail::bsp::build(m.triangle_count(), read, params, data_);
   }
 
   /// Every fragment, grouped by node (fragments of one node are consecutive).
@@ -178,5 +192,9 @@ class BspTree {
 
   detail::bsp::Data data_;
 };
+
+/// `BspTree tree(strided_mesh)` builds a BspTree<glm::vec3>.
+BspTree(const StridedMesh&)->BspTree<glm::vec3>;
+BspTree(const StridedMesh&, const BspParams&)->BspTree<glm::vec3>;
 
 }  // namespace cullkit

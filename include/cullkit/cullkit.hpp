@@ -4,6 +4,7 @@
 #include "config.hpp"
 #include "geometry.hpp"
 #include "traits.hpp"
+#include "mesh_buffers.hpp"
 #include "box_proxy.hpp"
 #include "adaptive_binary_tree.hpp"
 #include "occlusion_tree.hpp"

@@ -25,6 +25,7 @@
 #include "config.hpp"
 #include "geometry/aabb.hpp"
 #include "geometry/camera.hpp"
+#include "mesh_buffers.hpp"
 #include "traits.hpp"
 #include "mesh_occlusion_params.hpp"
 // The index and the query are plain functions on flat arrays, compiled once whatever the vertex type.
@@ -68,20 +69,24 @@ class MeshOcclusionCuller {
   MeshOcclusionCuller(MeshView<Vertex, Index> mesh, const MeshObject* objects, std::size_t object_count,
                       const MeshOcclusionParams& params = {}) {
     static_assert(require_vertex_traits<Vertex, Traits>::value, "");
-    CULLKIT_ASSERT(objects != nullptr || object_count == 0, "objects points to object_count objects");
-    CULLKIT_ASSERT(mesh.vertices != nullptr || mesh.vertex_count == 0, "vertices points to vertex_count vertices");
-    CULLKIT_ASSERT(mesh.indices != nullptr || mesh.index_count == 0, "indices points to index_count indices");
     if constexpr (has_vertex_traits_v<Vertex, Traits>) {
-      if (objects == nullptr) object_count = 0;
-      if (mesh.vertices == nullptr) mesh.vertex_count = 0;
-      if (mesh.indices == nullptr) mesh.index_count = 0;
-      params_ = detail::mesh_occlusion::sanitize(params);
-      const std::size_t triangle_count = mesh.index_count / 3;
-      detail::mesh_occlusion::build_index(
-          index_, triangle_count,
-          [&mesh](std::size_t t, glm::vec3 p[3]) { return triangle_positions<Traits>(mesh, t, p); },
-          objects, object_count, params_.tree, params_.patch_triangles);
+      mesh = detail::checked_mesh(mesh);
+      build(mesh.index_count / 3,
+            [&mesh](std::size_t t, glm::vec3 p[3]) { return triangle_positions<Traits>(mesh, t, p); }, objects,
+            object_count, params);
     }
+  }
+
+  /// Builds over raw buffers: positions through a pointer and a byte stride, indices of a width
+  /// chosen at run time (see StridedMesh). The same culler (hence the same answers) as the
+  /// MeshView constructor given the same positions and indices; `Vertex` is not read.
+  /// pre: as the MeshView constructor's, and StridedMesh's (asserted in debug builds; null
+  /// buffers are read as empty in release builds).
+  MeshOcclusionCuller(const StridedMesh& mesh, const MeshObject* objects, std::size_t object_count,
+                      const MeshOcclusionParams& params = {}) {
+    const StridedMesh m = detail::checked_mesh(mesh);
+    build(m.triangle_count(), [&m](std::size_t t, glm::vec3 p[3]) { return triangle_positions(m, t, p); }, objects,
+          object_count, params);
   }
 
   /// Clears `out`, then writes, once each, in any order, every object that may be visible from
@@ -113,8 +118,24 @@ class MeshOcclusionCuller {
   [[nodiscard]] const MeshOcclusionParams& params() const noexcept { return params_; }
 
  private:
+  // The constructors' common part: `read(t, corners)` reads triangle t (false: an index out of range).
+  template <class ReadTriangle>
+  void build(std::size_t triangle_count, const ReadTriangle& read, const MeshObject* objects, std::size_t object_count,
+             const MeshOcclusionParams& params) {
+    CULLKIT_ASSERT(objects != nullptr || object_count == 0, "objects points to object_count objects");
+    if (objects == nullptr) object_count = 0;
+    params_ = detail::mesh_occlusion::sanitize(params);
+    detail::mesh_occlusion::build_index(index_, triangle_count, read, objects, object_count, params_.tree,
+                                        params_.patch_triangles);
+  }
+
   MeshOcclusionParams params_;
   detail::mesh_occlusion::MeshIndex index_;
 };
+
+/// `MeshOcclusionCuller culler(strided_mesh, objects, count)` builds a MeshOcclusionCuller<glm::vec3>.
+MeshOcclusionCuller(const StridedMesh&, const MeshObject*, std::size_t)->MeshOcclusionCuller<glm::vec3>;
+MeshOcclusionCuller(const StridedMesh&, const MeshObject*, std::size_t, const MeshOcclusionParams&)
+    ->MeshOcclusionCuller<glm::vec3>;
 
 }  // namespace cullkit

@@ -66,6 +66,10 @@
 #include <memory>
 #include <type_traits>
 #include <vector>
+#ifdef CULLKIT_NCI_CROWDED_PATH_FROM_ENV
+#include <cstdlib>
+#include <string>
+#endif
 
 #include <glm/geometric.hpp>
 #include <glm/mat4x4.hpp>
@@ -76,10 +80,13 @@
 #include "geometry/aabb.hpp"
 #include "geometry/camera.hpp"
 #include "task_runner.hpp"
+#include "mesh_buffers.hpp"
 #include "traits.hpp"
 #include "detail/nci/build.hpp"
 #include "detail/nci/context.hpp"
+#include "detail/nci/degenerate_camera.hpp"
 #include "detail/nci/index_data.hpp"
+#include "detail/nci/moving.hpp"
 #include "detail/nci/select.hpp"
 #include "detail/nci/types.hpp"
 
@@ -101,14 +108,25 @@ class NormalClassIndex {
  public:
   /// Builds the index. Triangles with an out-of-range index, a non-finite coordinate or zero area
   /// are skipped and counted in stats(); an empty or all-invalid mesh gives an index that selects
-  /// nothing. pre: mesh.vertices != nullptr when vertex_count > 0, mesh.indices likewise.
+  /// nothing. pre: mesh.vertices != nullptr when vertex_count > 0, mesh.indices likewise (asserted
+  /// in debug builds; a null pointer is read as an empty buffer in release builds).
   explicit NormalClassIndex(MeshView<Vertex, Index> mesh, const NciParams& params = {}) {
-    CULLKIT_ASSERT(mesh.vertices != nullptr || mesh.vertex_count == 0, "vertices present when vertex_count > 0");
-    CULLKIT_ASSERT(mesh.indices != nullptr || mesh.index_count == 0, "indices present when index_count > 0");
+    mesh = detail::checked_mesh(mesh);
     const Vertex* vertices = mesh.vertices;
-    construct(
-        [vertices](std::size_t i) { return glm::vec3(Traits::position(vertices[i])); }, mesh.vertex_count,
-        mesh.indices, mesh.index_count, params);
+    const Index* indices = mesh.indices;
+    construct([vertices](std::size_t i) { return glm::vec3(Traits::position(vertices[i])); }, mesh.vertex_count,
+              [indices](std::size_t i) { return widen_index(indices[i]); }, mesh.index_count, params);
+  }
+
+  /// Builds the index from raw buffers: positions through a pointer and a byte stride, indices of
+  /// a width chosen at run time (see StridedMesh). Same skipping rules and the same index (hence
+  /// the same answers) as the MeshView constructor given the same positions and indices; `Vertex`
+  /// and `Index` are not read. pre: as StridedMesh's (asserted in debug builds; null buffers are
+  /// read as empty in release builds).
+  explicit NormalClassIndex(const StridedMesh& mesh, const NciParams& params = {}) {
+    const StridedMesh m = detail::checked_mesh(mesh);
+    construct([&m](std::size_t i) { return m.positions(static_cast<std::uint32_t>(i)); }, m.vertex_count,
+              [&m](std::size_t i) { return std::uint64_t{m.indices[i]}; }, m.indices.count, params);
   }
 
   /// Builds the index from positions read through a pointer and a byte stride (an interleaved
@@ -116,18 +134,15 @@ class NormalClassIndex {
   /// alignment) and `index_count` indices (3 per triangle) of this index's `Index` type, which may
   /// be 16 or 32 bits. Same skipping rules and answers as the MeshView constructor; `Vertex` is not
   /// read. pre: positions.base != nullptr when vertex_count > 0, indices != nullptr when
-  /// index_count > 0.
+  /// index_count > 0. For an index width chosen at run time, use the StridedMesh constructor.
   NormalClassIndex(const StridedPositions& positions, std::size_t vertex_count, const Index* indices,
                    std::size_t index_count, const NciParams& params = {}) {
     CULLKIT_ASSERT(positions.base != nullptr || vertex_count == 0, "positions present when vertex_count > 0");
     CULLKIT_ASSERT(indices != nullptr || index_count == 0, "indices present when index_count > 0");
-    construct(
-        [positions](std::size_t i) {
-          float q[3];  // memcpy: the buffer need not be float-aligned
-          std::memcpy(q, positions.base + i * positions.stride_bytes + positions.offset_bytes, sizeof q);
-          return glm::vec3(q[0], q[1], q[2]);
-        },
-        vertex_count, indices, index_count, params);
+    if (positions.base == nullptr) vertex_count = 0;
+    if (indices == nullptr) index_count = 0;
+    construct([&positions](std::size_t i) { return positions(static_cast<std::uint32_t>(i)); }, vertex_count,
+              [indices](std::size_t i) { return widen_index(indices[i]); }, index_count, params);
   }
 
   /// The triangles that are the first front-facing surface hit by the ray of some pixel centre
@@ -140,7 +155,10 @@ class NormalClassIndex {
   /// So the set may be a little larger than the pixels' first hits (in ordinary views a few
   /// triangles in ten thousand; in views a few degrees wide from kilometres away up to +60%),
   /// never smaller. The per-pixel output stays the plain first hit of the watertight test.
-  /// A camera with a non-positive width or height gives an empty set. Allocates a context.
+  /// A camera with a non-positive width or height gives an empty set (no pixel sees anything). A
+  /// degenerate camera (a NaN or infinite eye; a NaN, infinite or singular matrix), whose pixel
+  /// rays are undefined, gives every kept triangle (nothing can be decided, so nothing is hidden)
+  /// with no triangle tested and every pixel a miss. Allocates a context.
   [[nodiscard]] VisibleSet select_visible(const Camera& camera) const {
     NciContext context;
     VisibleSet out;
@@ -153,82 +171,39 @@ class NormalClassIndex {
   /// depends on NciParams::threads. Cost: proportional to the rays times the triangles met near
   /// the visible surfaces, divided over the threads.
   void select_visible(const Camera& camera, NciContext& context, VisibleSet& out, NciPixels* pixels) const {
+    if (camera.width > 0 && camera.height > 0 && detail::nci::degenerate_camera(camera))
+      return detail::nci::select_everything(data_, camera, context, out, pixels);
     detail::nci::select_frame(data_, camera, context, out, pixels, nullptr, nullptr);
   }
 
-  /// With moving objects: each object has its own index, built in its local frame,
-  /// and a rigid `local_to_world` transform (rotation and translation only: ray parameters t stay
-  /// the same in both frames). The objects are selected first, each with the camera taken into its
-  /// local frame; then the static scene, whose pixels stay unfinished but start from the objects'
-  /// depths, so only static triangles in front of the objects are searched. `out` holds the static
-  /// triangles; `object_triangles` (cleared first) the objects' visible triangles as sorted unique
-  /// (object id, triangle) pairs. `pixels`, when given, holds static triangle ids, or for a pixel
-  /// won by an object NciPixels::miss with the object's depth (see `object_pixels`). Edge bands
-  /// (see above) span objects and scene: an object's triangle is reported where it lies no farther
-  /// than its pixel's first hit outside every band, whichever mesh that hit belongs to.
+  /// With moving objects: each object has its own index, built in its local frame, and an affine
+  /// `local_to_world` transform (any invertible one: rotation, translation, uniform or non-uniform
+  /// scale, shear, mirror). The objects are selected first, each with the camera taken into its
+  /// local frame (the pixel rays mapped by the inverse transform, so ray parameters t stay those of
+  /// the world; depths are brought back to the unit world pixel ray); then the static scene, whose
+  /// pixels stay unfinished but start from the objects' depths, so only static triangles in front
+  /// of the objects are searched. `out` holds the static triangles; `object_triangles` (cleared
+  /// first) the objects' visible triangles as sorted unique (object id, triangle) pairs. `pixels`,
+  /// when given, holds static triangle ids, or for a pixel won by an object NciPixels::miss with
+  /// the object's world depth. Edge bands (see above) span objects and scene: an object's triangle
+  /// is reported where it lies no farther than its pixel's first hit outside every band, whichever
+  /// mesh that hit belongs to.
+  /// Faces: an object's triangle counts where it faces the eye in the object's own frame. For a
+  /// mirrored transform (negative determinant) that is the world back face of the moved triangle:
+  /// the faces an engine draws when it flips its cull mode for such a transform, so a mirrored
+  /// closed mesh still shows its outside.
+  /// Transforms that cannot be used (a NaN or infinite entry, a bottom row other than (0, 0, 0, 1),
+  /// a singular linear part or one with condition number above 1e6) are rejected: the object is
+  /// reported whole (every triangle its index kept), hides nothing, and is counted in
+  /// `context.stats.moving_objects_rejected`. A degenerate camera (see select_visible) reports the
+  /// static scene and every object whole.
   /// pre: every `objects[k].index` is not null. Allocates a second context inside `context`.
   template <class ObjectIndex>
   void select_visible(const Camera& camera, const NciMovingObject<ObjectIndex>* objects, std::size_t object_count,
                       NciContext& context, VisibleSet& out, std::vector<NciObjectTriangle>& object_triangles,
                       NciPixels* pixels = nullptr) const {
-    object_triangles.clear();
-    const int width = camera.width, height = camera.height;
-    if (width <= 0 || height <= 0 || object_count == 0) {
-      detail::nci::select_frame(data_, camera, context, out, pixels, nullptr, nullptr);
-      return;
-    }
-    const std::size_t pixel_count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-    auto& scratch = detail::nci::ContextAccess::scratch(context);
-    if (!scratch.objects) scratch.objects = std::make_unique<detail::nci::MovingScratch>();
-    auto& o = *scratch.objects;
-    o.depth.assign(pixel_count, std::numeric_limits<float>::infinity());
-    o.solid.assign(pixel_count, std::numeric_limits<float>::infinity());
-    o.candidates.clear();
-    o.triangle.assign(pixel_count, NciPixels::miss);
-    o.object.assign(pixel_count, NciPixels::miss);
-    for (std::size_t k = 0; k < object_count; ++k) {
-      CULLKIT_ASSERT(objects[k].index != nullptr, "every moving object has an index");
-      if (!objects[k].index) continue;
-      const glm::dmat4 m(objects[k].local_to_world);
-      Camera local = camera;
-      local.eye = glm::vec3(glm::inverse(m) * glm::dvec4(glm::dvec3(camera.eye), 1.0));
-      local.view_proj = glm::mat4(glm::dmat4(camera.view_proj) * m);
-      objects[k].index->select_visible(local, o.context, o.set, &o.pixels);
-      const std::uint32_t id = objects[k].object_id;
-      const auto& object_scratch = detail::nci::ContextAccess::scratch(o.context);
-      const auto& solid = object_scratch.pixel_solid_t;
-      for (std::size_t p = 0; p < pixel_count; ++p) {
-        if (solid.size() == pixel_count) o.solid[p] = std::min(o.solid[p], solid[p]);
-        const std::uint32_t tri = o.pixels.triangle[p];
-        if (tri == NciPixels::miss) continue;
-        if (o.pixels.depth[p] <= o.solid[p])
-          o.candidates.push_back(detail::nci::MovingScratch::Candidate{id, tri, o.pixels.depth[p], static_cast<std::uint32_t>(p)});
-        if (o.pixels.depth[p] < o.depth[p]) {
-          o.depth[p] = o.pixels.depth[p];
-          o.triangle[p] = tri;
-          o.object[p] = id;
-        }
-      }
-      // The object's triangles beside its pixels' first hits (edge bands; see select_visible).
-      for (const auto& e : object_scratch.extras)
-        if (e.t <= o.solid[e.pixel]) o.candidates.push_back(detail::nci::MovingScratch::Candidate{id, e.tri, e.t, e.pixel});
-    }
-    detail::nci::select_frame(data_, camera, context, out, pixels, o.depth.data(), o.solid.data());
-    // An object's triangle is reported where it lies no farther than the pixel's solid depth after
-    // the static scene (then nothing certain hides it); the pixels keep the objects' first hits
-    // where no static triangle came in front.
-    const auto& solid = scratch.pixel_solid_t;
-    for (const auto& c : o.candidates)
-      if (solid.size() == pixel_count && c.t <= solid[c.pixel]) object_triangles.push_back(NciObjectTriangle{c.object, c.triangle});
-    for (std::size_t p = 0; p < pixel_count; ++p) {
-      if (o.object[p] == NciPixels::miss) continue;
-      if (scratch.pixel_tri.size() == pixel_count && scratch.pixel_tri[p] != detail::nci::no_triangle) continue;
-      if (pixels && pixels->depth.size() == pixel_count) pixels->depth[p] = o.depth[p];
-    }
-    std::sort(object_triangles.begin(), object_triangles.end());
-    object_triangles.erase(std::unique(object_triangles.begin(), object_triangles.end()), object_triangles.end());
+    detail::nci::select_with_objects(data_, camera, objects, object_count, context, out, object_triangles, pixels);
   }
-
 
  public:
   /// Build statistics (skipped triangles, classes, cells, build time).
@@ -252,26 +227,46 @@ class NormalClassIndex {
 
  private:
   // Clamps the parameters, gathers the triangles and builds; times the whole.
-  template <class Position>
-  void construct(const Position& position, std::size_t vertex_count, const Index* indices, std::size_t index_count,
+  // An index as an unsigned 64-bit value; a negative one (signed Index) becomes out of range.
+  template <class I>
+  [[nodiscard]] static std::uint64_t widen_index(I i) noexcept {
+    if constexpr (std::is_signed_v<I>) {
+      if (i < 0) return ~std::uint64_t{0};
+    }
+    return static_cast<std::uint64_t>(i);
+  }
+
+  template <class Position, class IndexAt>
+  void construct(const Position& position, std::size_t vertex_count, const IndexAt& index_at, std::size_t index_count,
                  const NciParams& params) {
     NciParams& p = data_.params = params;
     p.classes = std::clamp(p.classes, 1, 4096);
     p.grid = std::clamp(p.grid, 1, 4096);
     if (p.tile_size != 0) p.tile_size = std::clamp(p.tile_size, 2, detail::nci::TileState::max_tile);
+#ifdef CULLKIT_NCI_CROWDED_PATH_FROM_ENV
+    // Test builds only: env CULLKIT_NCI_CROWDED_PATH (walk, rays, auto) overrides crowded_path, so
+    // the tests run every path without a copy per path.
+    if (const char* v = std::getenv("CULLKIT_NCI_CROWDED_PATH")) {
+      const std::string path(v);
+      if (path == "walk") p.crowded_path = NciCrowdedPath::walk_only;
+      if (path == "rays") p.crowded_path = NciCrowdedPath::rays_only;
+      if (path == "auto") p.crowded_path = NciCrowdedPath::automatic;
+    }
+#endif
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<glm::vec3> normals;
-    gather(position, vertex_count, indices, index_count, normals);
+    gather(position, vertex_count, index_at, index_count, normals);
     detail::nci::build(data_, normals);
     data_.stats.build_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 
   // The valid triangles into data_ (vertices deduplicated through a remap) and their unit
-  // normals; the skipped ones counted. `position(i)`: vertex i's position, for i < vertex_count.
-  // The only step that reads the user's types.
-  template <class Position>
-  void gather(const Position& position, std::size_t vertex_count, const Index* indices, std::size_t index_count,
+  // normals; the skipped ones counted. `position(i)`: vertex i's position, for i < vertex_count;
+  // `index_at(i)`: index i widened to 64 bits (out of range when negative). The only step that
+  // reads the user's types.
+  template <class Position, class IndexAt>
+  void gather(const Position& position, std::size_t vertex_count, const IndexAt& index_at, std::size_t index_count,
               std::vector<glm::vec3>& normals) {
     detail::nci::IndexData& data = data_;
     data.stats.triangles_input = index_count / 3;
@@ -281,12 +276,9 @@ class NormalClassIndex {
       std::size_t idx[3];
       bool in_range = true;
       for (int k = 0; k < 3; ++k) {
-        const auto i = indices[3 * t + static_cast<std::size_t>(k)];
-        if constexpr (std::is_signed_v<Index>) {
-          if (i < 0) in_range = false;
-        }
-        idx[k] = static_cast<std::size_t>(i);
-        if (!in_range || idx[k] >= vertex_count) in_range = false;
+        const std::uint64_t i = index_at(3 * t + static_cast<std::size_t>(k));
+        if (i >= vertex_count) in_range = false;
+        idx[k] = in_range ? static_cast<std::size_t>(i) : 0;
       }
       if (!in_range) {
         ++data.stats.skipped_out_of_range;
@@ -331,5 +323,10 @@ class NormalClassIndex {
 
   detail::nci::IndexData data_;
 };
+
+/// `NormalClassIndex index(strided_mesh)` builds a NormalClassIndex<glm::vec3> (the vertex type
+/// is not read from raw buffers).
+NormalClassIndex(const StridedMesh&)->NormalClassIndex<glm::vec3>;
+NormalClassIndex(const StridedMesh&, const NciParams&)->NormalClassIndex<glm::vec3>;
 
 }  // namespace cullkit

@@ -484,11 +484,51 @@ void test_real_scenes() {
 
 }  // namespace
 
+void test_crowd() {
+  const Scene a = support::make_crowd(1, 40, false), b = support::make_crowd(1, 40, false);
+  const Scene c = support::make_crowd(2, 40, false), m = support::make_crowd(1, 40, true);
+  CHECK(validate(a) == 0);
+  CHECK(validate(c) == 0);
+  CHECK(validate(m) == 0);
+  CHECK(identical(a, b));
+  CHECK(!identical(a, c));
+  CHECK(support::make_crowd(1, 0, true).triangle_count() == 0 && support::make_crowd(1, -2, false).objects.empty());
+  CHECK(a.objects.size() == 40 && m.objects.size() == 40 + 1 + 12);
+  // The mixed scene is the same field (same bytes) plus the plaza.
+  CHECK(std::equal(a.indices.begin(), a.indices.end(), m.indices.begin()));
+  const double per_lot = double(a.triangle_count()) / (40.0 * 40.0);
+  CHECK_MSG(per_lot > 9 && per_lot < 15, "make_crowd: %g triangles per lot", per_lot);
+  // Tufts may lean up to 1.8 m out of the field.
+  CHECK(a.bounds.min.x <= -20.0f && a.bounds.min.x > -22.0f && a.bounds.max.x >= 20.0f && a.bounds.max.x < 22.0f);
+  CHECK(a.bounds.min.y == 0.0f && a.bounds.max.y < 4.0f);
+  CHECK(m.bounds.max.x == 50.0f && m.bounds.max.y > 5.0f && m.bounds.max.y <= 20.0f);
+  // Every lot is paved: ground triangles (y == 0 at all corners, area > 0) face up and cover the
+  // field exactly; closed slabs enclose positive volume (their undersides face down).
+  double ground_area = 0;
+  std::size_t down_ground = 0, up = 0, down = 0, side = 0;
+  for (std::size_t t = 0; t < a.triangle_count(); ++t) {
+    const glm::dvec3 n = tri_normal(a, t);
+    bool flat = true;
+    for (int k = 0; k < 3; ++k) flat = flat && a.positions[a.indices[3 * t + k]].y == 0.0f;
+    if (flat && glm::length(n) > 0) {
+      ground_area += 0.5 * glm::length(n);
+      down_ground += !(n.y > 0);
+    }
+    up += n.y > 1e-9;
+    down += n.y < -1e-9;
+    side += !(n.y > 1e-9) && !(n.y < -1e-9);
+  }
+  CHECK_MSG(std::fabs(ground_area - 1600.0) < 1e-3 && down_ground == 0, "ground area %g, %zu facing down",
+            ground_area, down_ground);
+  CHECK(up > 0 && down > 0 && side > up);
+}
+
 int main() {
   test_add_helpers();
   test_city();
   test_office();
   test_forest();
+  test_crowd();
   test_obj_tiny();
   test_real_scenes();
   return cullkit_test::report("test_scenes");

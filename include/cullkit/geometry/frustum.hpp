@@ -31,6 +31,27 @@ inline void projection_centre(const double m[4][4], double out[4]) noexcept {
   out[2] = det3(0, 1, 3);
   out[3] = -det3(0, 1, 2);
 }
+
+/// True when a matrix (rows m[row][col]) cannot describe a view: an entry is NaN or infinite, or it
+/// is singular or nearly so (|det| at most 1e-12 of the product of its column lengths, a ratio
+/// that does not depend on scale: a perspective matrix with any near plane is near 0.7).
+/// Every container treats a camera with such a matrix as deciding nothing (all visible).
+[[nodiscard]] inline bool degenerate_matrix(const double m[4][4]) noexcept {
+  double norms = 1.0;
+  for (int c = 0; c < 4; ++c) {
+    double sq = 0.0;
+    for (int r = 0; r < 4; ++r) {
+      if (!std::isfinite(m[r][c])) return true;
+      sq += m[r][c] * m[r][c];
+    }
+    norms *= std::sqrt(sq);
+  }
+  // det by 2x2 minors of rows 0-1 and rows 2-3 (Laplace expansion).
+  const auto m2 = [m](int r, int i, int j) { return m[r][i] * m[r + 1][j] - m[r][j] * m[r + 1][i]; };
+  const double det = m2(0, 0, 1) * m2(2, 2, 3) - m2(0, 0, 2) * m2(2, 1, 3) + m2(0, 0, 3) * m2(2, 1, 2) +
+                     m2(0, 1, 2) * m2(2, 0, 3) - m2(0, 1, 3) * m2(2, 0, 2) + m2(0, 2, 3) * m2(2, 0, 1);
+  return !(std::fabs(det) > 1e-12 * norms) || !std::isfinite(det);
+}
 }  // namespace detail
 
 /// How normalized device depth maps: OpenGL's [-1, 1], or Direct3D/Vulkan/Metal's [0, 1].
@@ -48,8 +69,8 @@ using PlaneMask = std::uint8_t;
 /// come out the other way round. (For an orthographic matrix there is no eye: the planes keep the
 /// order of the depth rows, NDC depth -1 or 0 near.) A plane that could not be extracted (the far
 /// plane of an infinite projection, a matrix with NaN) is *dropped*: its bit is absent from
-/// `active_mask()` and it never rejects anything. A matrix with NaN or a singular one drops every
-/// plane: the frustum then holds all of space, and every cull with it keeps everything (the
+/// `active_mask()` and it never rejects anything. A matrix with a NaN or infinite entry, or a
+/// singular one (detail::degenerate_matrix), drops every plane: the frustum then holds all of space, and every cull with it keeps everything (the
 /// library's answer for a degenerate camera). Every query is conservative: `outside` is only
 /// returned when float rounding cannot have moved the shape across a plane.
 ///
@@ -75,6 +96,9 @@ class Frustum {
     double m[4][4];  // m[row][col]
     for (int c = 0; c < 4; ++c)
       for (int r = 0; r < 4; ++r) m[r][c] = static_cast<double>(view_proj[c][r]);
+    // A matrix that cannot describe a view decides nothing: no planes (one NaN entry would
+    // otherwise drop only the planes of its rows, and a singular matrix could keep all six).
+    if (detail::degenerate_matrix(m)) return Frustum{};
     double rows[6][4];
     for (int k = 0; k < 4; ++k) {
       rows[left][k] = m[3][k] + m[0][k];

@@ -18,6 +18,11 @@
 #include <limits>
 #include <vector>
 
+#include "../../config.hpp"
+#if CULLKIT_HAS_SSE2
+#include <emmintrin.h>
+#endif
+
 namespace cullkit {
 namespace detail {
 namespace mesh_occlusion {
@@ -49,14 +54,12 @@ class CoverageGrid {
       tiles_x_ = (width + tile - 1) / tile;
       tiles_y_ = (height + tile - 1) / tile;
       tile_depth_.assign(static_cast<std::size_t>(tiles_x_) * static_cast<std::size_t>(tiles_y_), 0.0f);
-      tile_frozen_.assign(tile_depth_.size(), 0);
-      tile_cells_.assign(tile_depth_.size(), 0);
-      for (int j = 0; j < height; ++j)
-        for (int i = 0; i < width; ++i) ++tile_cells_[tile_of(i, j)];
+      words_ = (width + 63) / 64;
+      frozen_bits_.assign(static_cast<std::size_t>(words_) * static_cast<std::size_t>(height), 0);
       band_lo_.assign(static_cast<std::size_t>(height), width);
       band_hi_.assign(static_cast<std::size_t>(height), -1);
-      band_rows_.clear();
-      band_rows_.reserve(static_cast<std::size_t>(height));
+      band_rows_.assign(static_cast<std::size_t>(height), 0);
+      band_row_count_ = 0;
       dirty_ = CellRect{width, height, -1, -1};
       return;
     }
@@ -68,9 +71,12 @@ class CoverageGrid {
 
 
   /// Adds a front-facing triangle's count: `sign` is +1 or -1 so that the triangle counts +1 inside.
-  /// (x, y) are grid coordinates of the corners in the triangle's own order.
-  void add_count(const double* x, const double* y, int sign) {
+  /// (x, y) are grid coordinates of the corners in the triangle's own order. Edges whose bit is set
+  /// in `skip` (bit k: corner k to the next) are left out: the caller passes the edges that the
+  /// same band's other triangles also leave out, whose crossings would cancel exactly.
+  void add_count(const double* x, const double* y, int sign, unsigned skip = 0) {
     for (int k = 0; k < 3; ++k) {
+      if ((skip >> k) & 1u) continue;
       const int l = k == 2 ? 0 : k + 1;
       // An edge's crossings are computed from its endpoints sorted by y, so the same edge seen from
       // its two triangles gives bit-identical crossings (and opposite signs).
@@ -120,7 +126,10 @@ class CoverageGrid {
         std::swap(xl, xr);
       }
       if (xr + m < 0.0 || xl - m >= width_) continue;
-      const int i0 = clamp_cell(xl - m, width_), i1 = clamp_cell(xr + m, width_);
+      int i0 = clamp_cell(xl - m, width_), i1 = clamp_cell(xr + m, width_);
+      // A covered cell never changes again: its outline counter no longer matters (an edge that
+      // leaves the outline later skips it too, as it is still covered then).
+      if (!unfrozen_span(j, i0, i1)) continue;
       mark(j, i0, i1);
       std::int32_t* row = block_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
       const double qy = j + 0.5 - ya;
@@ -128,8 +137,9 @@ class CoverageGrid {
         const double qx = i + 0.5 - xa;
         const double s = dx * qy - dy * qx;  // orient2d(a, b, centre)
         const double tol = near_line + rounding * (std::fabs(qx) + std::fabs(qy));
-        if (std::fabs(s) <= tol) row[i] += 2 * delta;
-        else if (s * side > 0.0) row[i] += delta;
+        // Branch-free: which side a centre falls on is data, not a pattern.
+        const int inner = s * side > 0.0 ? delta : 0;
+        row[i] += std::fabs(s) <= tol ? 2 * delta : inner;
       }
     }
   }
@@ -144,6 +154,9 @@ class CoverageGrid {
     if (xmax + m < 0.0 || xmin - m >= width_ || ymax + m < 0.0 || ymin - m >= height_) return r;
     r = CellRect{clamp_cell(xmin - m, width_), clamp_cell(ymin - m, height_), clamp_cell(xmax + m, width_),
                  clamp_cell(ymax + m, height_)};
+    // Depth bounds alone never make a cell covered (counts and outline marks do, and those mark
+    // their rows for end_band), so rows are not marked here; the bounds only need clearing later.
+    grow(dirty_, r);
     const TriangleEdges edges = edges_of(x, y);
     // Every point of the triangle has w <= its largest corner w: 1/w >= lowest.
     const double w_max = std::max(std::max(w[0], w[1]), w[2]);
@@ -170,8 +183,7 @@ class CoverageGrid {
         float* row = bound_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
         const float start = static_cast<float>(v00 - err) + bf * static_cast<float>(j - r.y0);
         int i0, i1;
-        if (!row_span(edges, j, m, i0, i1)) continue;
-        mark(j, i0, i1);
+        if (!row_span(edges, j, m, i0, i1) || !unfrozen_span(j, i0, i1)) continue;
         for (int i = i0; i <= i1; ++i) {
           const float v = std::max(lowest, start + af * static_cast<float>(i - r.x0));
           row[i] = std::min(row[i], v);
@@ -181,8 +193,7 @@ class CoverageGrid {
       for (int j = r.y0; j <= r.y1; ++j) {
         float* row = bound_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
         int i0, i1;
-        if (!row_span(edges, j, m, i0, i1)) continue;
-        mark(j, i0, i1);
+        if (!row_span(edges, j, m, i0, i1) || !unfrozen_span(j, i0, i1)) continue;
         for (int i = i0; i <= i1; ++i) row[i] = std::min(row[i], lowest);
       }
     }
@@ -194,7 +205,8 @@ class CoverageGrid {
   /// Returns how many cells it covered.
   std::size_t end_band() {
     std::size_t covered = 0;
-    for (int j : band_rows_) {
+    for (int n = 0; n < band_row_count_; ++n) {
+      const int j = band_rows_[static_cast<std::size_t>(n)];
       const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
       const int i0 = band_lo_[static_cast<std::size_t>(j)], i1 = band_hi_[static_cast<std::size_t>(j)];
       band_lo_[static_cast<std::size_t>(j)] = width_;
@@ -209,15 +221,52 @@ class CoverageGrid {
         run += diff_[c];
         diff_[c] = 0;
         count_[c] += run;
-        if (count_[c] - block_[c] >= 1 && depth_[c] == 0.0f) {
-          depth_[c] = bound_[c];
-          ++tile_frozen_[tile_of(i, j)];
-          ++covered;
-        }
       }
       grow(dirty_, CellRect{i0, j, i - 1, j});
+      covered += freeze(j, i0, i - 1);
     }
-    band_rows_.clear();
+    band_row_count_ = 0;
+    return covered;
+  }
+
+  /// Freezes the cells of row j in [a, b] that are covered and not yet frozen at their running
+  /// bound. Cells outside the band's changed ranges never qualify (any change of their counters
+  /// was scanned at the end of its band), so whole aligned groups of four may be tested.
+  std::size_t freeze(int j, int a, int b) {
+    const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+    const std::int32_t* count = count_.data() + base;
+    const std::int32_t* block = block_.data() + base;
+    const float* bound = bound_.data() + base;
+    float* depth = depth_.data() + base;
+    std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+    std::size_t covered = 0;
+    const auto one = [&](int i) {
+      if (count[i] - block[i] >= 1 && depth[i] == 0.0f) {
+        depth[i] = bound[i];
+        frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
+        ++covered;
+      }
+    };
+    int i = a;
+#if CULLKIT_HAS_SSE2
+    // Groups of four aligned on the row (a word of frozen bits holds 16 of them): the same
+    // comparisons, four at once.
+    for (; i <= b && (i & 3) != 0; ++i) one(i);
+    const __m128i zero_i = _mm_setzero_si128();
+    const __m128 zero_f = _mm_setzero_ps();
+    for (; i + 3 <= b; i += 4) {
+      const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i));
+      const __m128i k = _mm_loadu_si128(reinterpret_cast<const __m128i*>(block + i));
+      const __m128 d = _mm_loadu_ps(depth + i);
+      const __m128 fresh = _mm_and_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(_mm_sub_epi32(c, k), zero_i)), _mm_cmpeq_ps(d, zero_f));
+      const int mask = _mm_movemask_ps(fresh);
+      if (mask == 0) continue;
+      _mm_storeu_ps(depth + i, _mm_or_ps(_mm_and_ps(fresh, _mm_loadu_ps(bound + i)), _mm_andnot_ps(fresh, d)));
+      frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+      covered += static_cast<std::size_t>((mask & 1) + ((mask >> 1) & 1) + ((mask >> 2) & 1) + ((mask >> 3) & 1));
+    }
+#endif
+    for (; i <= b; ++i) one(i);
     return covered;
   }
 
@@ -252,18 +301,14 @@ class CoverageGrid {
     return true;
   }
 
-  /// True when every cell the triangle's box touches (with a margin) is covered already, by
-  /// whole tiles (a cheap test; false when unsure).
+  /// True when every cell the triangle's box touches (with a margin) is covered already.
   [[nodiscard]] bool all_frozen(const double* x, const double* y) const {
     const double xmin = std::min(std::min(x[0], x[1]), x[2]), xmax = std::max(std::max(x[0], x[1]), x[2]);
     const double ymin = std::min(std::min(y[0], y[1]), y[2]), ymax = std::max(std::max(y[0], y[1]), y[2]);
     const CellRect r = cells_of(xmin, ymin, xmax, ymax);
     if (r.empty()) return false;
-    for (int ty = r.y0 / tile; ty <= r.y1 / tile; ++ty)
-      for (int tx = r.x0 / tile; tx <= r.x1 / tile; ++tx) {
-        const std::size_t t = static_cast<std::size_t>(ty) * static_cast<std::size_t>(tiles_x_) + static_cast<std::size_t>(tx);
-        if (tile_frozen_[t] != tile_cells_[t]) return false;
-      }
+    for (int j = r.y0; j <= r.y1; ++j)
+      if (!row_frozen(j, r.x0, r.x1)) return false;
     return true;
   }
 
@@ -331,14 +376,72 @@ class CoverageGrid {
     return true;
   }
 
-  [[nodiscard]] std::size_t tile_of(int i, int j) const {
-    return static_cast<std::size_t>(j / tile) * static_cast<std::size_t>(tiles_x_) + static_cast<std::size_t>(i / tile);
+  // True when every cell of row j in [i0, i1] is covered (0 <= i0 <= i1 < width).
+  [[nodiscard]] bool row_frozen(int j, int i0, int i1) const {
+    const std::uint64_t* w = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+    const int a = i0 >> 6, b = i1 >> 6;
+    const std::uint64_t first = ~std::uint64_t{0} << (i0 & 63), last = ~std::uint64_t{0} >> (63 - (i1 & 63));
+    if (a == b) return (w[a] & first & last) == (first & last);
+    if ((w[a] & first) != first || (w[b] & last) != last) return false;
+    for (int k = a + 1; k < b; ++k)
+      if (w[k] != ~std::uint64_t{0}) return false;
+    return true;
+  }
+
+  // Narrows the cells [i0, i1] of row j to those between its first and last cell not yet covered
+  // (a covered cell's depth is frozen and its counters no longer matter). False when none is left.
+  bool unfrozen_span(int j, int& i0, int& i1) const {
+    const std::uint64_t* w = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+    for (;;) {
+      // Bits past the last column are clear, so they read as "not covered" and end the search.
+      const std::uint64_t open = ~w[i0 >> 6] >> (i0 & 63);
+      if (open != 0) {
+        i0 += lowest_bit(open);
+        break;
+      }
+      i0 = (i0 | 63) + 1;
+      if (i0 > i1) return false;
+    }
+    if (i0 > i1) return false;
+    for (;;) {  // ends: cell i0 is not covered
+      const std::uint64_t open = ~w[i1 >> 6] << (63 - (i1 & 63));
+      if (open != 0) {
+        i1 -= 63 - highest_bit(open);
+        return true;
+      }
+      i1 = (i1 & ~63) - 1;
+    }
+  }
+
+  static int lowest_bit(std::uint64_t v) {  // v != 0
+#if defined(__GNUC__) || defined(__clang__)
+    return __builtin_ctzll(v);
+#else
+    int n = 0;
+    while (!(v & 1)) {
+      v >>= 1;
+      ++n;
+    }
+    return n;
+#endif
+  }
+  static int highest_bit(std::uint64_t v) {  // v != 0
+#if defined(__GNUC__) || defined(__clang__)
+    return 63 - __builtin_clzll(v);
+#else
+    int n = 63;
+    while (!(v >> 63)) {
+      v <<= 1;
+      --n;
+    }
+    return n;
+#endif
   }
 
   // Cell range [i0, i1] of row j changed in this band: end_band scans it.
   void mark(int j, int i0, int i1) {
     const auto r = static_cast<std::size_t>(j);
-    if (band_hi_[r] < 0) band_rows_.push_back(j);
+    if (band_hi_[r] < 0) band_rows_[static_cast<std::size_t>(band_row_count_++)] = j;  // each row once per band
     band_lo_[r] = std::min(band_lo_[r], i0);
     band_hi_[r] = std::max(band_hi_[r], i1);
   }
@@ -390,7 +493,8 @@ class CoverageGrid {
       std::fill(bound_.begin() + b, bound_.begin() + e, std::numeric_limits<float>::infinity());
       std::fill(depth_.begin() + b, depth_.begin() + e, 0.0f);
     }
-    std::fill(tile_frozen_.begin(), tile_frozen_.end(), 0);
+    std::fill(frozen_bits_.begin() + static_cast<std::ptrdiff_t>(dirty_.y0) * words_,
+              frozen_bits_.begin() + static_cast<std::ptrdiff_t>(dirty_.y1 + 1) * words_, 0);
     dirty_ = CellRect{width_, height_, -1, -1};
   }
 
@@ -399,8 +503,10 @@ class CoverageGrid {
   std::vector<float> bound_;   // running lower bound of 1/w over the triangles touching the cell
   std::vector<float> depth_;   // frozen lower bound of 1/w at the first hit; 0: not covered
   std::vector<float> tile_depth_;
-  std::vector<std::int32_t> tile_frozen_, tile_cells_;  // per tile: covered cells, cells
+  int words_ = 0;                            // words of frozen bits per row
+  std::vector<std::uint64_t> frozen_bits_;   // per row, a bit per covered (frozen) cell
   std::vector<int> band_lo_, band_hi_, band_rows_;  // per row: cells changed in the current band
+  int band_row_count_ = 0;                          // rows listed in band_rows_
   CellRect dirty_{0, 0, -1, -1};
 };
 

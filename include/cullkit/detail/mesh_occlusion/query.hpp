@@ -17,6 +17,7 @@
 #include "../../occlusion_tree.hpp"
 #include "coverage.hpp"
 #include "index.hpp"
+#include "phase_times.hpp"
 #include "view.hpp"
 
 namespace cullkit {
@@ -98,10 +99,12 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
 
 inline const Projected& project_vertex(const MeshIndex& index, Scratch& s, std::uint32_t v) {
   if (s.vertex_stamp[v] != s.frame) {
+    PhaseProbe probe;
     s.vertex_stamp[v] = s.frame;
     s.vertex_slot[v] = static_cast<std::uint32_t>(s.projected.size());
     const glm::vec3& p = index.positions[v];
     s.projected.push_back(s.view.project(p.x, p.y, p.z));
+    probe.next(phase_project);
   }
   return s.projected[s.vertex_slot[v]];
 }
@@ -260,6 +263,7 @@ inline void gather_triangles(const MeshIndex& index, Scratch& s) {
 /// triangles is never touched: it cancels before the band ends. Returns the cells covered.
 inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
   CoverageGrid& grid = s.grid;
+  PhaseProbe probe;
   const int orient = s.view.orient;
   const float ratio = 1.0f + std::max(0.0f, params.depth_band_ratio);
   // Bands: runs of the sorted triangles whose nearest depth is within `ratio` of the run's first.
@@ -297,27 +301,40 @@ inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionP
       corners_of(t, x, y, w);
       if (grid.all_frozen(x, y)) s.triangle_stamp[t] = 0;
     }
+    probe.next(phase_bands);
     for (std::size_t i = begin; i < end; ++i) {
       const std::uint32_t t = s.triangles[i].second;
       if (s.triangle_stamp[t] != s.frame) continue;
       ++s.stats.occluder_triangles;
       double x[3], y[3], w[3];
       corners_of(t, x, y, w);
+      probe.next(phase_bands);
       grid.add_depth(x, y, w);
-      grid.add_count(x, y, orient);
+      probe.next(phase_depth);
+      std::uint32_t twin_band[3];
+      unsigned inner = 0;  // edges shared with a triangle of this band
       for (int k = 0; k < 3; ++k) {
-        const int l = k == 2 ? 0 : k + 1;
         const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
         const bool twin_here = twin != none && s.triangle_stamp[twin / 3] == s.frame;
-        const std::uint32_t twin_band = twin_here ? s.triangle_band[twin / 3] : none;
-        if (twin_band == my_band) continue;  // cancels within the band
+        twin_band[k] = twin_here ? s.triangle_band[twin / 3] : none;
+        if (twin_band[k] == my_band) inner |= 1u << k;
+      }
+      // An edge shared within the band adds crossings from both triangles that cancel bit for bit
+      // (the same endpoints, the same arithmetic, opposite signs): both leave them out.
+      grid.add_count(x, y, orient, inner);
+      probe.next(phase_counts);
+      for (int k = 0; k < 3; ++k) {
+        const int l = k == 2 ? 0 : k + 1;
+        if ((inner >> k) & 1u) continue;  // cancels within the band
         // The twin in an earlier band: its edge (l -> k, as its triangle runs) leaves the
         // outline, and this one never joins it.
-        if (twin_band < my_band) grid.touch_edge(x[l], y[l], x[k], y[k], orient, -1);
+        if (twin_band[k] < my_band) grid.touch_edge(x[l], y[l], x[k], y[k], orient, -1);
         else grid.touch_edge(x[k], y[k], x[l], y[l], orient, 1);
       }
+      probe.next(phase_edges);
     }
     covered += grid.end_band();
+    probe.next(phase_end_band);
   }
   return covered;
 }
@@ -493,6 +510,8 @@ inline bool object_hidden(const MeshIndex& index, const MeshOcclusionParams& par
 inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera, Scratch& s,
                  std::vector<std::uint32_t>& out) {
   out.clear();
+  PhaseProbe probe;
+  if (probe.on()) ++phase_times().calls;
   MeshOcclusionStats& stats = s.stats;
   stats = MeshOcclusionStats{};
   s.frustum = frustum_of(camera);
@@ -507,25 +526,33 @@ inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, cons
   // One object alone in the frustum has nothing to hide it: an object never hides itself.
   if (!s.view.enabled || s.in_frustum.size() < 2) {
     out.insert(out.end(), s.in_frustum.begin(), s.in_frustum.end());
+    probe.next(phase_frustum);
     return;
   }
+  probe.next(phase_frustum);
   begin_frame(index, s);
   s.grid.reset(params.grid_width, params.grid_height);
   s.boxes.resize(s.in_frustum.size());
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) s.boxes[i] = project_box(s.view, index.bounds[s.in_frustum[i]]);
-
+  probe.next(phase_boxes);
   choose_occluders(index, params, s);
+  probe.next(phase_choose);
   gather_triangles(index, s);
+  probe.next(phase_gather);
   stats.occluders_used = s.occluders.size();
   stats.cells_covered = insert_triangles(index, params, s);
+  probe.restart();  // insert_triangles charged its own steps
   s.grid.finish();
+  probe.next(phase_finish);
   s.view_eye = camera.eye;
   insert_box_occluders(index, params, camera, s);
+  probe.next(phase_box_occluders);
 
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
     if (object_hidden(index, params, s, i)) ++stats.objects_hidden;
     else out.push_back(s.in_frustum[i]);
   }
+  probe.next(phase_tests);
 }
 
 }  // namespace mesh_occlusion

@@ -17,86 +17,13 @@
 #include "beam.hpp"
 #include "context.hpp"
 #include "index_data.hpp"
+#include "packet_cast.hpp"
 #include "rejection.hpp"
+#include "tile_walk.hpp"
 #include "tolerances.hpp"
 #include "view.hpp"
 
 namespace cullkit::detail::nci {
-
-// Tests an admitted triangle against the unfinished rays under its rectangle; false when no ray
-// was tested (all of them already hold nearer hits, or the triangle passes beside them).
-inline bool test_triangle(const IndexData& data, const ViewSetup& f, int x0, int y0, const Candidate& cand, const Mask* live,
-                   TileState& r, Worker& worker) {
-  const int stride = r.stride;  // the tile's row pitch (kept in a register)
-  const std::uint32_t tri = cand.tri;
-  const int rx0 = cand.rx0, ry0 = cand.ry0, rx1 = cand.rx1, ry1 = cand.ry1;
-  const Mask span = TileState::columns(rx0, rx1);
-  const glm::vec3& p0 = data.corner(tri, 0);
-  const glm::vec3& p1 = data.corner(tri, 1);
-  const glm::vec3& p2 = data.corner(tri, 2);
-  const float a[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};
-  const float b[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
-  const float c[3] = {p2.x - f.eye_f.x, p2.y - f.eye_f.y, p2.z - f.eye_f.z};
-  const float mag[3] = {std::max({std::fabs(a[0]), std::fabs(a[1]), std::fabs(a[2])}),
-                        std::max({std::fabs(b[0]), std::fabs(b[1]), std::fabs(b[2])}),
-                        std::max({std::fabs(c[0]), std::fabs(c[1]), std::fabs(c[2])})};
-  const float qlo[3] = {std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}), std::min({a[2], b[2], c[2]})};
-  const float qhi[3] = {std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}), std::max({a[2], b[2], c[2]})};
-  if (behind_hits(r, qlo, qhi, ry0, ry1, span, live)) return false;
-  if (f.use_rect && f.affine_rays && (rx1 > rx0 || ry1 > ry0) && beside_rect(r, a, b, c, rx0, ry0, rx1, ry1)) return false;
-  // Only the live rays whose pixel centres lie in the triangle's grown 2D footprint can hit it.
-  Mask rows[TileState::max_tile];
-  for (int y = ry0; y <= ry1; ++y) rows[y] = live[y] & span;
-  if (f.footprint) {
-    Mask inside[TileState::max_tile];
-    if (footprint_mask(f, p0, p1, p2, x0, y0, ry0, ry1, rows, inside, f.tile - 1)) {
-      Mask left = 0;
-      for (int y = ry0; y <= ry1; ++y) left |= (rows[y] &= inside[y]);
-      if (!left) return false;  // no live pixel centre can see it: not tested
-    }
-  }
-  bool any = false;
-  for (int y = ry0; y <= ry1; ++y) {
-    Mask bits = rows[y];
-    while (bits) {
-      const int x = TileState::low_bit(bits);
-      bits &= bits - 1;
-      const int i = y * stride + x;
-      // The depth reject of behind_hits for this ray alone (its own scale sz on its own dominant
-      // axis, the same bound and margin): a ray that already holds a solid hit strictly nearer
-      // than any t the test could return is not tested. Skipping it changes no answer.
-      if (r.solid_t[i] < std::numeric_limits<float>::infinity()) {
-        const detail::WatertightRay<float>& w = r.wray[i];
-        const double sz = w.sz;
-        double bound = std::min(sz * double(qlo[w.kz]), sz * double(qhi[w.kz])) * (1.0 - tolerance::float_relative);
-        if (bound > 1e-30 && std::isfinite(bound) && double(r.solid_t[i]) < bound) continue;
-      }
-      ++worker.stats.ray_tests;
-      any = true;
-      float t = 0.0f;
-      bool near = false;
-      const bool hit = detail::watertight_hit_band(r.wray[i], a, b, c, mag, data.band, t, near);
-      // Ties go to the lower mesh index (the internal numbering is not the mesh's).
-      if (hit && (t < r.best_t[i] ||
-                  (t == r.best_t[i] && (r.best[i] == no_triangle || data.tri_original[tri] < data.tri_original[r.best[i]])))) {
-        r.best_t[i] = t;
-        r.best[i] = tri;
-      }
-      if (near) {
-        if (t <= r.solid_t[i]) worker.edge_hits.push_back(EdgeBandHit{tri, t, static_cast<std::uint16_t>(i)});
-      } else if (hit && (t < r.solid_t[i] || (t == r.solid_t[i] && (r.solid[i] == no_triangle ||
-                                                                    data.tri_original[tri] < data.tri_original[r.solid[i]])))) {
-        if (t < r.solid_t[i]) {
-          r.dirty[i] = true;
-          r.any_dirty = true;
-        }
-        r.solid_t[i] = t;
-        r.solid[i] = tri;
-      }
-    }
-  }
-  return any;
-}
 
 // The first slice (in walk order, from `from`) after which ray i may stop: its nearest solid
 // hit (or the box exit: nothing lies beyond) comes before where it enters the next slice, with
@@ -187,6 +114,7 @@ struct TileMasks {
 CULLKIT_FORCEINLINE glm::dvec3 setup_rays(const IndexData& data, const ViewSetup& f, int x0, int y0, int tw, int th,
                                           TileState& r, TileMasks& m) {
   r.any_dirty = true;
+  r.inverse_ready = false;
   r.beam = false;
   r.beam_eps = 0.0f;
   for (int k = 0; k < 4; ++k) r.beam_box[k] = -1;
@@ -313,28 +241,6 @@ CULLKIT_FORCEINLINE void select_classes(const IndexData& data, TileState& r, int
     if (!skip) active.push_back(static_cast<std::uint16_t>(k));
   }
 }
-
-// One walk of a tile through the slices of its grid, from the eye's slice in one direction: what
-// the steps below share.
-struct TileWalk {
-  const IndexData& data;
-  const ViewSetup& f;
-  TileState& r;
-  Worker& worker;
-  int x0, y0, tw, th;
-  Mask* live;  // the tile's live rays (both walks)
-  Mask* mask;  // this walk's live rays
-  int walk;    // 0: toward +axis, 1: toward -axis
-  int a, b, c;  // walk axis, then the grid's row and column axes
-  double ea, eb, ec;
-  int na, nb, nc;
-  std::uint32_t stamp;  // the tile's stamp in Worker::tri (each triangle met once per tile)
-  std::size_t met = 0;  // NciSelectStats::triangles_met of this tile (a local: the visit loop is hot)
-  // The walk's live rays' slopes across the walk axis (recomputed only after rays finished).
-  bool slopes_stale = true, full = false;
-  float smin_b = 0.0f, smax_b = 0.0f, smin_c = 0.0f, smax_c = 0.0f;
-  int next_finish = 0;  // the earliest slice where some ray may finish
-};
 
 // The slopes of the walk's live rays (`full`: some ray runs parallel to the slices).
 CULLKIT_FORCEINLINE void update_slopes(TileWalk& w) {
@@ -474,7 +380,14 @@ CULLKIT_FORCEINLINE void visit_slice(TileWalk& w, const std::vector<std::uint16_
           e = data.class_entry_base[k] + data.cell_begin16[cell + k];
           e_end = data.class_entry_base[k] + data.cell_begin16[cell + k + 1];
         }
-        visit_cell(w, k, e, e_end);
+        const std::uint32_t root = data.cell_bvh.empty() ? IndexData::no_bvh : data.cell_bvh[cell];
+        if (root != IndexData::no_bvh && cast_pays(w, root, e_end - e)) {
+          ++w.worker.stats.cells_ray_cast;
+          queue_cell(w, k, root);
+        } else {
+          ++w.worker.stats.cells_walked;
+          visit_cell(w, k, e, e_end);
+        }
       }
     }
   }
@@ -552,6 +465,7 @@ CULLKIT_FORCEINLINE void walk_slices(TileWalk& w, const std::vector<std::uint16_
       beam_cells(w, s0, s1, rlo, rhi, clo, chi);
       if (rlo <= rhi && clo <= chi) {
         visit_slice(w, active, s, rlo, rhi, clo, chi);
+        cast_queued(w);
         test_candidates(w);
       }
     }

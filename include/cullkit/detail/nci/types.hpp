@@ -119,14 +119,21 @@ struct NciSelectStats {
   std::size_t cells_walked = 0;    ///< (tile, cell) pairs served by the near-to-far walk
   std::size_t cells_ray_cast = 0;  ///< (tile, cell) pairs served by casting the tile's rays through the cell's hierarchy
   int axis = 0;                    ///< grid axis walked
+  /// Moving objects whose transform could not be used (singular, NaN or infinite, or projective;
+  /// see NciMovingObject): each was reported whole and hid nothing.
+  std::size_t moving_objects_rejected = 0;
 };
 
 /// A moving object for NormalClassIndex::select_visible: an index of its triangles in its local
-/// frame, a rigid transform (rotation and translation) to the world, and the id it is reported with.
+/// frame, an affine transform to the world, and the id it is reported with.
 template <class ObjectIndex>
 struct NciMovingObject {
   const ObjectIndex* index = nullptr;  ///< not owned; must outlive the call
-  glm::mat4 local_to_world{1.0f};      ///< rigid: rotation and translation only
+  /// Any invertible affine map (column vectors, bottom row exactly 0, 0, 0, 1): rotation,
+  /// translation, scale (non-uniform too), shear, mirror. On a mirrored object the faces that
+  /// count are those facing the eye in the local frame. A NaN, infinite, projective, singular or
+  /// badly conditioned (above 1e6) matrix makes the object reported whole (see select_visible).
+  glm::mat4 local_to_world{1.0f};
   std::uint32_t object_id = 0;         ///< reported in NciObjectTriangle::object
 };
 

@@ -87,6 +87,15 @@ struct OfficeCells {
 /// (trunk box + crown cone), seeded placement. Cells are 4 m; one terrain object per 8 x 8 cells;
 /// each tree is a trunk box (sunk 0.5 m into the surface) and a closed 8-sided cone crown.
 [[nodiscard]] Scene make_forest(std::uint32_t seed, int terrain_cells, int trees);
+/// A crowded field: `side` x `side` lots of 1 m centred on the origin, each paved by two up-facing
+/// ground triangles and holding a small box (half of them turned about Y), a floating slab (an
+/// overhang, closed), a tuft of 3-6 thin leaning slivers (both windings), or nothing; about 12
+/// triangles per lot on average (make_crowd(1, 150, false) has about 270,000). Seen whole at a few
+/// hundred pixels across, most triangles are smaller than a pixel. `mixed` adds, beside the field on
+/// +X, a plaza 0.75 `side` deep of 12 large boxes (0.15-0.5 `side` tall) on one large ground quad, so
+/// a view can hold crowded and large-triangle parts at once. One object per row of lots
+/// ("crowd_row_<j>"), "plaza_ground", "plaza_block_<i>_<j>". Same seed, same bytes on any compiler.
+[[nodiscard]] Scene make_crowd(std::uint32_t seed, int side, bool mixed);
 
 /// Loads an OBJ (through tinyobjloader), fan-triangulating faces; every `o`/`g` object becomes a
 /// SceneObject (groups without a usable face make none). Faces with an out-of-range index or a

@@ -1,0 +1,273 @@
+// NormalClassIndex on crowded views (many triangles per pixel), under each NciCrowdedPath: the
+// near-to-far walk only, the tile's rays through the cells' hierarchies only, and the per-(tile,
+// cell) choice. On support::make_crowd scenes (a field of small boxes, overhanging slabs and sliver
+// tufts, and the same field beside a plaza of large boxes), cameras seeing the field whole, grazing
+// it, inside it among the boxes, and one view holding both parts:
+//  * the three paths give the same per-pixel triangle and depth (bit for bit), the same set and
+//    the same answer with 1 and 3 threads;
+//  * every triangle Embree sees first at a pixel is in the set, up to explicit ties (as
+//    test_nci_embree);
+//  * in a window of pixels, the per-pixel answer equals the float brute force and the set holds the
+//    brute force's set for those pixels (edge bands included); on a small crowded scene, the whole
+//    set equals the brute force's set (as test_nci_bruteforce);
+//  * walk_only casts no cell (`cells_ray_cast == 0`), rays_only casts cells on the crowded views,
+//    and on the large scenes automatic casts cells there too and takes both paths on the views
+//    holding both parts;
+//  * precision: distinct triangles tested over triangles Embree sees, at most 3 on every path, except
+//    on the large field beside the plaza (at most 4, 5 under sanitizers: see main).
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include <embree_oracle.hpp>
+
+#include "check.hpp"
+#include "nci_test_util.hpp"
+
+using namespace cullkit;
+using cullkit::support::Scene;
+
+namespace {
+
+constexpr NciCrowdedPath kPaths[3] = {NciCrowdedPath::walk_only, NciCrowdedPath::rays_only,
+                                      NciCrowdedPath::automatic};
+const char* const kPathNames[3] = {"walk_only", "rays_only", "automatic"};
+
+struct Frame {
+  VisibleSet set;
+  NciPixels px;
+  NciSelectStats stats;
+};
+
+/// A named camera and what it must show: `crowded` views must cast cells under rays_only and
+/// automatic; `both` views must also walk cells under automatic (the switch).
+struct View {
+  std::string name;
+  Camera cam;
+  bool crowded = false;
+  bool both = false;
+};
+
+struct PathTotals {
+  std::size_t tested = 0, visible = 0;
+};
+
+Frame run(const NormalClassIndex<glm::vec3>& index, const Camera& cam) {
+  Frame f;
+  NciContext ctx;
+  index.select_visible(cam, ctx, f.set, &f.px);
+  f.stats = ctx.stats;
+  return f;
+}
+
+bool same_pixels(const NciPixels& a, const NciPixels& b, std::size_t& first_diff) {
+  if (a.triangle.size() != b.triangle.size()) return (first_diff = 0), false;
+  for (std::size_t p = 0; p < a.triangle.size(); ++p) {
+    if (a.triangle[p] != b.triangle[p] || std::memcmp(&a.depth[p], &b.depth[p], sizeof(float)) != 0) {
+      first_diff = p;
+      return false;
+    }
+  }
+  return true;
+}
+
+// Every pixel Embree hits: its triangle is in the set, or ours there is a tie within 1e-5.
+std::size_t embree_misses(const std::string& label, const Scene& scene, const Camera& cam,
+                          const oracle::HitBuffer& hits, const Frame& f, std::size_t& ties) {
+  std::size_t misses = 0;
+  for (int y = 0; y < hits.height; ++y) {
+    for (int x = 0; x < hits.width; ++x) {
+      const std::uint32_t want = hits.at(x, y);
+      if (want == oracle::HitBuffer::miss) continue;
+      if (std::binary_search(f.set.triangles.begin(), f.set.triangles.end(), want)) continue;
+      const std::size_t p = static_cast<std::size_t>(y) * hits.width + x;
+      const std::uint32_t have = f.px.triangle[p];
+      float t = 0;
+      const float te = hits.distance[p];
+      if (have != NciPixels::miss && nci_test::own_hit(scene, cam, have, x, y, t) &&
+          std::fabs(t - te) <= 1e-5f * std::max(1.0f, te)) {
+        ++ties;
+        continue;
+      }
+      if (++misses <= 3)
+        std::fprintf(stderr, "  MISS %s pixel (%d,%d): embree %u t=%g, ours %u t=%g\n", label.c_str(), x, y, want,
+                     double(te), have, double(f.px.depth[p]));
+    }
+  }
+  return misses;
+}
+
+// The float brute force over `window` (or the whole screen): identical per-pixel answers there; its
+// set for those pixels inside ours (equal to ours when the window is the whole screen).
+void check_brute(const std::string& label, const Scene& scene, const Camera& cam, const Frame& f,
+                 std::array<int, 4> window, bool whole) {
+  const auto brute = nci_test::brute_force<float>(scene, cam, cullkit::detail::edge_band_units * 0x1p-24f, window);
+  int diff = 0;
+  for (int y = window[1]; y < std::min(cam.height, window[3]); ++y) {
+    for (int x = window[0]; x < std::min(cam.width, window[2]); ++x) {
+      const std::size_t p = static_cast<std::size_t>(y) * cam.width + x;
+      const bool same = f.px.triangle[p] == brute.tri[p] &&
+                        (brute.tri[p] == nci_test::miss || f.px.depth[p] == brute.t[p]);
+      if (!same && ++diff <= 3)
+        std::fprintf(stderr, "  %s pixel (%d,%d): index %u t=%g, brute %u t=%g\n", label.c_str(), x, y,
+                     f.px.triangle[p], double(f.px.depth[p]), brute.tri[p], double(brute.t[p]));
+    }
+  }
+  CHECK_MSG(diff == 0, "%s: %d pixels differ from the float brute force", label.c_str(), diff);
+  if (whole) {
+    CHECK_MSG(brute.selected == f.set.triangles, "%s: set differs from the brute force's (%zu vs %zu)", label.c_str(),
+              f.set.triangles.size(), brute.selected.size());
+  } else {
+    const bool inside = std::includes(f.set.triangles.begin(), f.set.triangles.end(), brute.selected.begin(),
+                                      brute.selected.end());
+    CHECK_MSG(inside, "%s: the brute force's set for the window is not inside the set", label.c_str());
+  }
+}
+
+NciParams with_path(NciParams p, NciCrowdedPath path, unsigned threads) {
+  p.crowded_path = path;
+  p.threads = threads;
+  p.build_threads = 2;
+  return p;
+}
+
+// One scene: an index per path (and automatic with 3 threads), the views, every comparison.
+// `brute_whole`: compare whole sets with the brute force (small scenes); else a `window`-pixel
+// square at the screen centre.
+// `precision_bound`: the most triangles tested per visible one allowed on any path (scene total).
+// `check_choice`: automatic's choice must follow the views' `crowded` and `both` (off on the small
+// scenes, whose 48x36 screens leave too few pixels per cell for the choice to be pinned down).
+void run_scene(const std::string& label, const Scene& scene, const NciParams& base, const std::vector<View>& views,
+               bool brute_whole, int window, double precision_bound, bool check_choice) {
+  oracle::EmbreeScene embree;
+  embree.add_mesh(scene.positions.data(), scene.positions.size(), scene.indices.data(), scene.indices.size());
+  embree.commit();
+  const NormalClassIndex<glm::vec3> index[3] = {
+      NormalClassIndex<glm::vec3>(scene.mesh(), with_path(base, kPaths[0], 2)),
+      NormalClassIndex<glm::vec3>(scene.mesh(), with_path(base, kPaths[1], 2)),
+      NormalClassIndex<glm::vec3>(scene.mesh(), with_path(base, kPaths[2], 1))};
+  const NormalClassIndex<glm::vec3> index_many(scene.mesh(), with_path(base, NciCrowdedPath::automatic, 3));
+  PathTotals totals[3];
+  std::size_t ties = 0;
+  for (const View& v : views) {
+    const Camera& cam = v.cam;
+    const std::string at = label + " " + v.name;
+    const oracle::HitBuffer hits = embree.render(cam, 2);
+    const auto visible = oracle::visible_triangles(hits);
+    Frame f[3];
+    for (int k = 0; k < 3; ++k) f[k] = run(index[k], cam);
+    const Frame many = run(index_many, cam);
+    // The same answer on every path and thread count.
+    for (int k = 1; k < 3; ++k) {
+      std::size_t p = 0;
+      const bool same = same_pixels(f[0].px, f[k].px, p);
+      CHECK_MSG(same, "%s: %s and %s differ first at pixel %zu (%u t=%g against %u t=%g)", at.c_str(), kPathNames[0],
+                kPathNames[k], p, f[0].px.triangle[p], double(f[0].px.depth[p]), f[k].px.triangle[p],
+                double(f[k].px.depth[p]));
+      CHECK_MSG(f[0].set.triangles == f[k].set.triangles, "%s: sets of %s and %s differ (%zu and %zu)", at.c_str(),
+                kPathNames[0], kPathNames[k], f[0].set.triangles.size(), f[k].set.triangles.size());
+    }
+    std::size_t p = 0;
+    CHECK_MSG(same_pixels(f[2].px, many.px, p) && f[2].set.triangles == many.set.triangles &&
+                  f[2].set.triangles_tested == many.set.triangles_tested,
+              "%s: automatic with 1 and 3 threads disagree", at.c_str());
+    // Embree's first hits (every path: a path could differ only where the others agree wrongly).
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t misses = embree_misses(at + " " + kPathNames[k], scene, cam, hits, f[k], ties);
+      CHECK_MSG(misses == 0, "%s %s: %zu pixels miss Embree's triangle", at.c_str(), kPathNames[k], misses);
+    }
+    // The float brute force (one path suffices: the others have the same pixels and set).
+    if (brute_whole) {
+      check_brute(at, scene, cam, f[2], {0, 0, cam.width, cam.height}, true);
+    } else {
+      const int x0 = (cam.width - window) / 2, y0 = (cam.height - window) / 2;
+      check_brute(at, scene, cam, f[2], {x0, y0, x0 + window, y0 + window}, false);
+    }
+    // Which path served the cells.
+    const NciSelectStats &walk = f[0].stats, &rays = f[1].stats, &autom = f[2].stats;
+    CHECK_MSG(walk.cells_ray_cast == 0 && walk.cells_walked > 0, "%s walk_only: %zu cells walked, %zu cast",
+              at.c_str(), walk.cells_walked, walk.cells_ray_cast);
+    if (v.crowded) {
+      CHECK_MSG(rays.cells_ray_cast > 0, "%s rays_only: no cell cast (%zu walked)", at.c_str(), rays.cells_walked);
+      if (check_choice)
+        CHECK_MSG(autom.cells_ray_cast > 0, "%s automatic: no cell cast (%zu walked)", at.c_str(), autom.cells_walked);
+    }
+    if (v.both && check_choice)
+      CHECK_MSG(autom.cells_ray_cast > 0 && autom.cells_walked > 0, "%s automatic: %zu cells walked, %zu cast",
+                at.c_str(), autom.cells_walked, autom.cells_ray_cast);
+    std::printf("%-28s visible %6zu", at.c_str(), visible.size());
+    for (int k = 0; k < 3; ++k) {
+      totals[k].tested += f[k].set.triangles_tested;
+      totals[k].visible += visible.size();
+      std::printf("  %s tested %6zu walked %5zu cast %5zu", kPathNames[k], f[k].set.triangles_tested,
+                  f[k].stats.cells_walked, f[k].stats.cells_ray_cast);
+    }
+    std::printf("\n");
+  }
+  for (int k = 0; k < 3; ++k) {
+    const double precision = double(totals[k].tested) / double(std::max<std::size_t>(1, totals[k].visible));
+    const double bound = precision_bound;
+    std::printf("%-28s %s: tested / visible %.2f\n", label.c_str(), kPathNames[k], precision);
+    CHECK_MSG(precision <= bound, "%s %s: %.2f triangles tested per visible one (bound %.1f)", label.c_str(),
+              kPathNames[k], precision, bound);
+  }
+  std::printf("%-28s %zu triangles, ties accepted %zu\n", label.c_str(), scene.triangle_count(), ties);
+}
+
+Camera cam(const glm::vec3& eye, const glm::vec3& target, float fov, int w, int h) {
+  return support::make_camera(eye, target, fov, w, h, 0.05f, 0.0f);
+}
+
+// Views of make_crowd(seed, side, mixed) (field half-width `half`, plaza to +X when mixed).
+std::vector<View> crowd_views(float half, bool mixed, int w, int h) {
+  std::vector<View> v;
+  if (!mixed) {
+    v.push_back({"whole", cam(glm::vec3(1.1f, 1.0f, 1.3f) * half, {0, 0.5f, 0}, 55, w, h), true, false});
+    v.push_back({"grazing", cam({-half - 3, 1.3f, -half - 2}, {half, 0.4f, half}, 60, w, h), true, false});
+    v.push_back({"inside", cam({0.3f, 0.9f, 0.2f}, {half, 0.6f, 0.4f * half}, 75, w, h), false, false});
+    v.push_back({"inside_over_roofs", cam({-0.3f * half, 2.6f, -0.3f * half}, {0.3f * half, 0, 0.2f * half}, 70, w, h),
+                 true, false});
+  } else {
+    // From +Z, above the line between field and plaza: the field fills the left half of the
+    // screen, the plaza's large blocks the right half.
+    const float side = 2 * half;
+    v.push_back({"field_beside_plaza", cam({half, 0.35f * side, half + 0.6f * side}, {half, 0, -0.2f * half}, 60, w, h),
+                 true, true});
+    v.push_back({"whole", cam({0.2f * side, 0.8f * side, 1.0f * side}, {0.4f * half, 0, 0}, 60, w, h), true, true});
+  }
+  return v;
+}
+
+}  // namespace
+
+int main() {
+  const int W = NCI_SANITIZED ? 80 : 160, H = NCI_SANITIZED ? 60 : 120;
+  const int side = NCI_SANITIZED ? 100 : 150;
+  {
+    const Scene field = support::make_crowd(31, side, false);
+    run_scene("crowd", field, NciParams{}, crowd_views(0.5f * float(side), false, W, H), false,
+              NCI_SANITIZED ? 6 : 12, 3.0, true);
+  }
+  {
+    const Scene mixed = support::make_crowd(32, side, true);
+    // Above the target of 3: measured 3.03 on the walk (the same at grids 32 to 64) and on
+    // automatic, 3.35 on the ray path at 160x120; 3.85 (walk) on the smaller scene at 80x60 under
+    // sanitizers. Where a pixel centre falls inside many small front faces of one slice, the walk
+    // tests each until the nearest is found, and the ray path tests a leaf's triangles together.
+    // The bound guards against it getting worse.
+    run_scene("crowd+plaza", mixed, NciParams{}, crowd_views(0.5f * float(side), true, W, H), false,
+              NCI_SANITIZED ? 6 : 12, NCI_SANITIZED ? 5.0 : 4.0, true);
+  }
+  {
+    // Small enough for the whole brute force; a coarse grid keeps its cells crowded.
+    const Scene small = support::make_crowd(33, 24, true);
+    NciParams p;
+    p.grid = 8;
+    run_scene("small crowd+plaza", small, p, crowd_views(12.0f, true, 48, 36), true, 0, 3.0, false);
+    run_scene("small crowd", support::make_crowd(34, 24, false), p, crowd_views(12.0f, false, 48, 36), true, 0, 3.0,
+              false);
+  }
+  return cullkit_test::report("test_nci_crowded");
+}
