@@ -19,21 +19,27 @@
 //
 // Usage: bench_mesh_occlusion [cameras=60] [width=1920] [height=1080] [reps=3] [flags]
 // Flags (anywhere on the line):
+//   --reasons      also says why the culler keeps what Embree does not see (see `Reasons`; not with --hash).
 //   --hash         the culler only (no Embree check, no peers): per scene, an FNV-1a hash of the kept
 //                  sets over the cameras (each sorted), the kept share, and the cull time, median (min-max)
 //                  of each camera's fastest of `reps`, in this thread's CPU time where the platform has
 //                  it (a shared machine's preemption then does not count). Two builds with the same hash
 //                  gave the same answers.
-//   --phases       with --hash: also where the time of `cull` goes, per named step (an extra, separately
-//                  timed pass with the step probes on; shares of that pass times the median above).
-//   --scene=TEXT   only the scenes whose name contains TEXT.
-//   --grid=WxH     the culler's grid size (default: MeshOcclusionParams's).
+//   --phases       implies --hash: also where the time of `cull` goes, per named step (an extra,
+//                  separately timed pass with the step probes on; shares of that pass times the median above).
+//   --scene=TEXT   only the scenes whose name contains TEXT (each scene keeps the cameras of a full run).
+//   --grid=WxH     the culler's grid size; overrides GW and GH.
+// The environment variables GW, GH, BUDGET, RATIO, MINFRAC, PATCH and OBJTRI override the culler's
+// parameters (grid size, occluder triangle budget, depth band ratio, occluder size floor, patch
+// size, triangle-test patch size) in every mode, for measuring alternatives without rebuilding;
+// --grid, given too, wins over GW and GH.
 // CULLKIT_BENCH_SMOKE=1: the small generated city, 2 cameras, 320x180, 1 rep.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -76,7 +82,8 @@ struct Row {
   double occluders = 0, occluder_triangles = 0;                // culler's, mean per frame
   long culler_false = 0, old_false = 0;
   std::vector<double> frustum_ms, old_ms, culler_ms, embree_ms;
-  double seconds = 0;
+  double seconds = 0, build_ms = 0;
+  bool has_reasons = false;
 };
 
 long missing(const std::vector<std::uint32_t>& kept, const std::vector<std::uint8_t>& seen) {
@@ -100,9 +107,131 @@ std::vector<std::uint8_t> embree_frame(const CullScene& cs, const ObjectMap& map
   return seen;
 }
 
+/// Why the culler keeps objects that Embree does not see, measured by idealised runs of the same
+/// algorithm (detail level, so the grid can be read back). Shares of the scene's triangles, summed
+/// over the cameras (divided at the end). "Cumulative": each kept-but-unseen object is charged to
+/// the first of these steps that hides it, each step keeping the ones before:
+///   near    its box reaches through the near plane (never hidden by rule);
+///   supply  hidden once every in-frustum object occludes (no budget, no size floor, no object cap);
+///   depth   then hidden with one band per distinct depth (depth_band_ratio = 0);
+///   grid    then hidden on a 4x finer grid (1024 x 576 cells);
+///   box     then hidden when tested with its own front-facing triangles instead of its box;
+///   other   none of these: seams that do not fuse (T-junctions, cracks), gaps between pixel
+///           centres, occluders nearer than the near plane, back faces.
+/// "Alone": each of supply, depth, grid, box applied on its own to the default culler.
+struct Reasons {
+  double excess = 0, near = 0, supply = 0, depth = 0, grid = 0, box = 0, other = 0;
+  double alone_supply = 0, alone_depth = 0, alone_grid = 0, alone_box = 0;
+};
+
+namespace dmo = cullkit::detail::mesh_occlusion;
+
+class ReasonProbe {
+ public:
+  ReasonProbe(const support::Scene& scene, const ObjectMap& map, const MeshOcclusionParams& params)
+      : scene_(scene), map_(map), base_(params) {
+    const auto mesh = scene.mesh();
+    dmo::build_index(
+        index_, scene.triangle_count(),
+        [&mesh](std::size_t t, glm::vec3 p[3]) { return triangle_positions<VertexTraits<glm::vec3>>(mesh, t, p); },
+        map.objects.data(), map.objects.size(), AbtParams{}, dmo::sanitize(params).patch_triangles);
+    supply_ = dmo::sanitize(base_);
+    supply_.occluder_triangle_budget = 0xffffffffu;
+    supply_.max_occluder_objects = 0xffffffffu;
+    supply_.min_occluder_screen_fraction = 0.0f;
+    depth_ = dmo::sanitize(base_);
+    depth_.depth_band_ratio = 0.0f;
+    fine_ = dmo::sanitize(base_);
+    fine_.grid_width *= 4;
+    fine_.grid_height *= 4;
+    fine_ = dmo::sanitize(fine_);
+    supply_depth_ = supply_;
+    supply_depth_.depth_band_ratio = 0.0f;
+    all_ = supply_depth_;
+    all_.grid_width = fine_.grid_width;
+    all_.grid_height = fine_.grid_height;
+  }
+
+  /// Adds this camera's breakdown of `kept` objects that `seen` does not list.
+  void add(const Camera& cam, const std::vector<std::uint32_t>& kept, const std::vector<std::uint8_t>& seen,
+           Reasons& r) {
+    const double total = static_cast<double>(std::max<std::size_t>(scene_.triangle_count(), 1));
+    std::vector<std::uint8_t> hid_supply, hid_depth, hid_fine, hid_sd, hid_all;
+    run(cam, supply_, hid_supply);
+    run(cam, depth_, hid_depth);
+    run(cam, fine_, hid_fine);
+    run(cam, supply_depth_, hid_sd);
+    run(cam, all_, hid_all);  // leaves s_ with the finest grid for the triangle test
+    dmo::Scratch& fine_scratch = s_;
+    dmo::Scratch base_scratch;
+    std::vector<std::uint32_t> out;
+    dmo::cull(index_, dmo::sanitize(base_), cam, base_scratch, out);
+    for (std::uint32_t o : kept) {
+      if (o >= seen.size() || seen[o]) continue;
+      const double share = map_.triangle_count[o] / total;
+      r.excess += share;
+      const bool box_alone = triangles_hidden(cam, base_scratch, o);
+      r.alone_supply += hid_supply[o] ? share : 0.0;
+      r.alone_depth += hid_depth[o] ? share : 0.0;
+      r.alone_grid += hid_fine[o] ? share : 0.0;
+      r.alone_box += box_alone ? share : 0.0;
+      const dmo::BoxView b = dmo::project_box(fine_scratch.view, index_.bounds[o]);
+      if (!b.usable) r.near += share;
+      else if (hid_supply[o]) r.supply += share;
+      else if (hid_sd[o]) r.depth += share;
+      else if (hid_all[o]) r.grid += share;
+      else if (triangles_hidden(cam, fine_scratch, o)) r.box += share;
+      else r.other += share;
+    }
+  }
+
+ private:
+  // hidden[o] = 1 when the culler with `p` leaves object o out.
+  void run(const Camera& cam, const MeshOcclusionParams& p, std::vector<std::uint8_t>& hidden) {
+    std::vector<std::uint32_t> out;
+    dmo::cull(index_, p, cam, s_, out);
+    hidden.assign(map_.objects.size(), 1);
+    for (std::uint32_t o : out)
+      if (o < hidden.size()) hidden[o] = 0;
+  }
+
+  // True when every front-facing triangle of object o, tested with its own screen rectangle at its
+  // own nearest depth against the grid `s` was left with, is hidden.
+  bool triangles_hidden(const Camera& cam, const dmo::Scratch& s, std::uint32_t o) const {
+    (void)cam;
+    if (!s.view.enabled) return false;
+    const auto& so = scene_.objects[o];
+    for (std::uint32_t t = so.first_triangle; t < so.first_triangle + so.triangle_count; ++t) {
+      double x[3], y[3], w[3];
+      for (int k = 0; k < 3; ++k) {
+        const glm::vec3& p = scene_.positions[scene_.indices[3 * std::size_t(t) + std::size_t(k)]];
+        const dmo::Projected q = s.view.project(p.x, p.y, p.z);
+        if (!q.usable) return false;
+        x[k] = q.x;
+        y[k] = q.y;
+        w[k] = q.w;
+      }
+      const double area2 = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+      if (area2 * s.view.orient < 0.0) continue;  // a back face is never seen
+      const dmo::CellRect rect = s.grid.cells_of(std::min({x[0], x[1], x[2]}), std::min({y[0], y[1], y[2]}),
+                                                 std::max({x[0], x[1], x[2]}), std::max({y[0], y[1], y[2]}));
+      const double w_min = std::min({w[0], w[1], w[2]});
+      const float threshold = static_cast<float>((1.0 / w_min) * (1.0 + 0x1p-20));
+      if (!rect.empty() && !(std::isfinite(threshold) && s.grid.all_nearer(rect, threshold))) return false;
+    }
+    return true;
+  }
+
+  const support::Scene& scene_;
+  const ObjectMap& map_;
+  MeshOcclusionParams base_, supply_, depth_, fine_, supply_depth_, all_;
+  dmo::MeshIndex index_;
+  dmo::Scratch s_;
+};
+
 template <class Occluders>
 Row measure(const std::string& name, const CullScene& cs, const std::vector<Camera>& cams, Occluders&& occluders,
-            int reps) {
+            int reps, const MeshOcclusionParams& params, Reasons* reasons) {
   const auto t_start = Clock::now();
   Row row;
   row.scene = name;
@@ -112,9 +241,11 @@ Row measure(const std::string& name, const CullScene& cs, const std::vector<Came
   const ObjectMap map(cs.scene);
   const double total = static_cast<double>(std::max<std::size_t>(row.triangles, 1));
   const auto t_build = Clock::now();
-  MeshOcclusionParams params;
   const MeshOcclusionCuller<glm::vec3> culler(cs.scene.mesh(), map.objects.data(), map.objects.size(), params);
-  std::fprintf(stderr, "%s: culler built in %.1f ms\n", name.c_str(), ms_since(t_build));
+  row.build_ms = ms_since(t_build);
+  std::fprintf(stderr, "%s: culler built in %.1f ms\n", name.c_str(), row.build_ms);
+  std::unique_ptr<ReasonProbe> probe;
+  if (reasons) probe = std::make_unique<ReasonProbe>(cs.scene, map, params);
   MeshOcclusionContext context;
   std::vector<std::uint32_t> in_frustum, old_kept, kept;
   OcclusionTree tree(glm::vec3(0.0f));
@@ -155,6 +286,7 @@ Row measure(const std::string& name, const CullScene& cs, const std::vector<Came
       std::fprintf(stderr, "FALSE CULL: %s camera %zu (eye %.7g %.7g %.7g): %ld visible objects left out\n",
                    name.c_str(), c, cam.eye.x, cam.eye.y, cam.eye.z, fc);
     row.culler_false += fc;
+    if (probe) probe->add(cam, kept, seen, *reasons);
   }
   const double n = static_cast<double>(std::max<std::size_t>(cams.size(), 1));
   row.frustum /= n;
@@ -163,6 +295,12 @@ Row measure(const std::string& name, const CullScene& cs, const std::vector<Came
   row.visible /= n;
   row.occluders /= n;
   row.occluder_triangles /= n;
+  if (reasons) {
+    double* fields[] = {&reasons->excess, &reasons->near, &reasons->supply, &reasons->depth, &reasons->grid,
+                        &reasons->box, &reasons->other, &reasons->alone_supply, &reasons->alone_depth,
+                        &reasons->alone_grid, &reasons->alone_box};
+    for (double* f : fields) *f /= n;
+  }
   row.seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
   std::fprintf(stderr, "%s: %zu cameras, %.1f s\n", name.c_str(), cams.size(), row.seconds);
   return row;
@@ -209,6 +347,37 @@ void print(const std::vector<Row>& rows) {
   std::fflush(stdout);
 }
 
+/// Parameters from the environment (for measuring alternatives without rebuilding): GW, GH,
+/// BUDGET, RATIO, MINFRAC, PATCH (patch_triangles), OBJTRI (object_test_triangles).
+MeshOcclusionParams params_from_environment() {
+  MeshOcclusionParams params;
+  if (const char* v = std::getenv("GW")) params.grid_width = std::atoi(v);
+  if (const char* v = std::getenv("GH")) params.grid_height = std::atoi(v);
+  if (const char* v = std::getenv("BUDGET")) params.occluder_triangle_budget = static_cast<std::uint32_t>(std::atol(v));
+  if (const char* v = std::getenv("RATIO")) params.depth_band_ratio = static_cast<float>(std::atof(v));
+  if (const char* v = std::getenv("MINFRAC")) params.min_occluder_screen_fraction = static_cast<float>(std::atof(v));
+  if (const char* v = std::getenv("PATCH")) params.patch_triangles = static_cast<std::uint32_t>(std::atol(v));
+  if (const char* v = std::getenv("OBJTRI")) params.object_test_triangles = static_cast<std::uint32_t>(std::atol(v));
+  return params;
+}
+
+void print_reasons(const std::vector<Row>& rows, const std::vector<Reasons>& reasons) {
+  std::printf("\nkept but unseen (excess), by reason, %% of the scene's triangles, mean per camera; cumulative "
+              "(first idealised step that hides it) and each step alone:\n\n"
+              "| scene | culler | visible | excess | near plane | (a) supply | (c) depth bands | (b) grid | "
+              "(d) box | other | alone: supply | depth | grid | box |\n"
+              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (!rows[i].has_reasons) continue;
+    const Reasons& r = reasons[i];
+    std::printf("| %s | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f |\n",
+                rows[i].scene.c_str(), 100 * rows[i].culler, 100 * rows[i].visible, 100 * r.excess, 100 * r.near,
+                100 * r.supply, 100 * r.depth, 100 * r.grid, 100 * r.box, 100 * r.other, 100 * r.alone_supply,
+                100 * r.alone_depth, 100 * r.alone_grid, 100 * r.alone_box);
+  }
+  std::fflush(stdout);
+}
+
 // ---- --hash / --phases: the culler alone, its answers as a hash and its time per step ----
 
 /// This thread's CPU time in ms (wall time where POSIX thread clocks are missing).
@@ -223,21 +392,17 @@ double thread_ms() {
 }
 
 struct Flags {
-  bool hash = false, phases = false;
+  bool reasons = false, hash = false, phases = false;
   std::string scene;
   int grid_width = 0, grid_height = 0;
 };
 
 void culler_only(const std::string& name, const CullScene& cs, const std::vector<Camera>& cams, int reps,
-                 const Flags& flags) {
+                 const MeshOcclusionParams& given, const Flags& flags) {
   namespace mo = cullkit::detail::mesh_occlusion;
   const ObjectMap map(cs.scene);
-  MeshOcclusionParams params;
-  if (flags.grid_width > 0) {
-    params.grid_width = flags.grid_width;
-    params.grid_height = flags.grid_height;
-  }
-  const MeshOcclusionCuller<glm::vec3> culler(cs.scene.mesh(), map.objects.data(), map.objects.size(), params);
+  const MeshOcclusionCuller<glm::vec3> culler(cs.scene.mesh(), map.objects.data(), map.objects.size(), given);
+  const MeshOcclusionParams& params = culler.params();  // as clamped
   MeshOcclusionContext context;
   std::vector<std::uint32_t> kept;
   std::vector<double> ms;
@@ -274,13 +439,13 @@ void culler_only(const std::string& name, const CullScene& cs, const std::vector
   static const char* const names[mo::phase_count] = {"frustum walk", "object boxes", "occluder choice",
                                                      "triangle setup and sort", "vertex projection", "bands",
                                                      "depths", "counts", "edge marking", "band ends",
-                                                     "finish", "object tests"};
+                                                     "finish", "box occluders", "object tests"};
   std::uint64_t sum = 0;
   for (std::uint64_t t : times.ticks) sum += t;
   const double median = spread(ms).median;
   for (int p = 0; p < mo::phase_count; ++p) {
-    // The triangle setup's time includes the vertex projection it calls: shown apart.
-    const std::uint64_t t = p == mo::phase_gather ? times.ticks[p] - times.ticks[mo::phase_project] : times.ticks[p];
+    // Each tick is charged to one step (vertex projection is taken out of the steps that call it).
+    const std::uint64_t t = times.ticks[p];
     const double part = sum ? static_cast<double>(t) / static_cast<double>(sum) : 0.0;
     std::printf("phase,%s,%s,%.1f%%,%.3f ms\n", name.c_str(), names[p], 100 * part, part * median);
   }
@@ -297,7 +462,8 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg.rfind("--", 0) == 0) {
-      if (arg == "--hash") flags.hash = true;
+      if (arg == "--reasons") flags.reasons = true;
+      else if (arg == "--hash") flags.hash = true;
       else if (arg == "--phases") flags.hash = flags.phases = true;
       else if (arg.rfind("--scene=", 0) == 0) flags.scene = arg.substr(8);
       else if (arg.rfind("--grid=", 0) == 0 && std::sscanf(arg.c_str() + 7, "%dx%d", &flags.grid_width, &flags.grid_height) == 2 &&
@@ -308,59 +474,71 @@ int main(int argc, char** argv) {
       }
       continue;
     }
-    if (positional >= 4) continue;
     const int v = std::atoi(argv[i]);
-    if (v <= 0) {
-      std::fprintf(stderr, "usage: %s [cameras=60] [width=1920] [height=1080] [reps=3]\n", argv[0]);
+    if (v <= 0 || positional >= 4) {
+      std::fprintf(stderr,
+                   "usage: %s [cameras=60] [width=1920] [height=1080] [reps=3] [--reasons] [--hash] [--phases] "
+                   "[--scene=TEXT] [--grid=WxH]\n",
+                   argv[0]);
       return 2;
     }
     *slots[positional++] = v;
+  }
+  MeshOcclusionParams params = params_from_environment();
+  if (flags.grid_width > 0) {  // the command line wins over GW and GH
+    params.grid_width = flags.grid_width;
+    params.grid_height = flags.grid_height;
   }
   std::printf("%d walk cameras per scene, %dx%d, %d alternating reps per camera, one thread.\n", cameras, width, height,
               reps);
   const auto t_all = Clock::now();
   std::vector<Row> rows;
+  std::vector<Reasons> reasons;
+  const auto wanted = [&](const std::string& name) { return name.find(flags.scene) != std::string::npos; };
   const auto run = [&](const std::string& name, support::Scene scene, std::uint64_t seed) {
-    if (name.find(flags.scene) == std::string::npos) return;
+    if (!wanted(name)) return;
     if (flags.hash) {
       const CullScene cs(std::move(scene));
       const auto cams = walk(walk_spec(name, cs.scene, cs.embree, seed), cs.scene, cs.embree, cameras, 4, width, height,
                              seed + 1);
-      culler_only(name, cs, cams, reps, flags);
+      culler_only(name, cs, cams, reps, params, flags);
       return;
     }
     const bool generated = name == "city" || name == "office";
     const CullScene cs(std::move(scene));
     const WalkSpec spec = walk_spec(name, cs.scene, cs.embree, seed);
     const auto cams = walk(spec, cs.scene, cs.embree, cameras, 4, width, height, seed + 1);
+    reasons.emplace_back();
+    Reasons* r = flags.reasons ? &reasons.back() : nullptr;
     if (generated) {
       const BoxOccluderSource source{cs.bounds.data(), cs.box_occluder.data()};
-      rows.push_back(measure(name, cs, cams, source, reps));
+      rows.push_back(measure(name, cs, cams, source, reps, params, r));
     } else {
-      rows.push_back(measure(name, cs, cams, [&](std::uint32_t o, OcclusionTree& t) { cs.insert_occluders(o, t); }, reps));
+      rows.push_back(measure(
+          name, cs, cams, [&](std::uint32_t o, OcclusionTree& t) { cs.insert_occluders(o, t); }, reps, params, r));
     }
+    rows.back().has_reasons = flags.reasons;
   };
   if (smoke) {
     run("city", support::make_city(1, 3), 11);
   } else {
-    run("city", support::make_city(1, 8), 11);
-    run("office", support::make_office(1, 10, 8), 13);
+    if (wanted("city")) run("city", support::make_city(1, 8), 11);
+    if (wanted("office")) run("office", support::make_office(1, 10, 8), 13);
     std::uint64_t seed = 101;
     for (const auto& file : support::real_scene_files()) {
-      if (file.find(flags.scene) == std::string::npos) {
-        ++seed;  // the other scenes keep their cameras
-        continue;
-      }
+      const std::uint64_t scene_seed = seed++;  // the same cameras whichever scenes run
+      if (!wanted(file)) continue;
       auto s = support::load_obj(support::scenes_dir() + "/" + file);
       if (!s) {
         std::fprintf(stderr, "%s: could not be loaded, skipped\n", file.c_str());
         continue;
       }
-      run(file, std::move(*s), seed++);
+      run(file, std::move(*s), scene_seed);
     }
   }
   if (flags.hash) return 0;
   print(rows);
+  if (flags.reasons) print_reasons(rows, reasons);
   long false_culls = 0;
   for (const Row& r : rows) false_culls += r.culler_false;
   std::printf("\nculler false culls in total: %ld; wall time %.1f s\n", false_culls,

@@ -3,8 +3,10 @@
 // from the walk camera whose culler hides the most, writes into argv[1]:
 //   mesh_occlusion_topdown.png  the level from above, cut just above the eye (no ceilings): triangles
 //                               of objects outside the frustum grey, then of kept objects green, then
-//                               of objects hidden by occlusion red on top; the camera and its view
-//                               edges in blue.
+//                               of objects hidden by occlusion red on top, and the occluders the
+//                               culler used (the triangles it put in its coverage grid, and the solid
+//                               boxes it put in its box tree) orange over all; the camera and its
+//                               view edges in blue.
 //   mesh_occlusion_view.png     the camera's view (Embree first hits, shaded by facing; kept objects
 //                               tinted green) with the edges of the hidden objects' triangles drawn
 //                               in red through the walls that hide them.
@@ -35,7 +37,8 @@ enum class Fate : std::uint8_t { outside, hidden, kept };
 const support::Rgb kColour[3] = {{170, 170, 170}, {220, 40, 40}, {40, 170, 60}};
 
 support::Image top_down(const support::Scene& scene, const ObjectMap& map, const std::vector<Fate>& fate,
-                        const Camera& cam, float cut_height, float view_length) {
+                        const std::vector<std::uint8_t>& occluder, const Camera& cam, float cut_height,
+                        float view_length) {
   // The map frames the objects that are not a large part of the whole scene (a sky box or a kill
   // plane under the level would shrink the level to a corner), and leaves those out.
   const float diag = glm::length(scene.bounds.max - scene.bounds.min);
@@ -61,6 +64,13 @@ support::Image top_down(const support::Scene& scene, const ObjectMap& map, const
       if (std::min({a.y, b.y, c.y}) > cut_height) continue;
       top.image().fill_triangle(top.to_pixel(a), top.to_pixel(b), top.to_pixel(c), kColour[pass], pass == 0 ? 0.25f : 0.5f);
     }
+  }
+  for (std::size_t t = 0; t < scene.triangle_count(); ++t) {
+    if (!occluder[t]) continue;
+    const glm::vec3 a = scene.positions[scene.indices[3 * t]], b = scene.positions[scene.indices[3 * t + 1]],
+                    c = scene.positions[scene.indices[3 * t + 2]];
+    if (std::min({a.y, b.y, c.y}) > cut_height) continue;
+    top.image().fill_triangle(top.to_pixel(a), top.to_pixel(b), top.to_pixel(c), {245, 150, 20}, 0.5f);
   }
   top.camera(cam, view_length, {30, 60, 230});
   const glm::vec2 e = top.to_pixel(cam.eye);
@@ -105,6 +115,39 @@ support::Image view(const support::Scene& scene, const ObjectMap& map, const std
     for (int k = 0; k < 3; ++k) img.line(q[k].x, q[k].y, q[(k + 1) % 3].x, q[(k + 1) % 3].y, {230, 40, 40}, 0.45f);
   }
   return img;
+}
+
+/// The occluders of one cull: per triangle, 1 when the culler put it in its coverage grid or it
+/// belongs to a solid box of the box tree. Runs the culler's frame at the detail level, where its
+/// working memory can be read.
+std::vector<std::uint8_t> occluders_of(const support::Scene& scene, const ObjectMap& map, const Camera& cam) {
+  namespace dmo = cullkit::detail::mesh_occlusion;
+  const MeshOcclusionParams params = dmo::sanitize(MeshOcclusionParams{});
+  dmo::MeshIndex index;
+  const auto mesh = scene.mesh();
+  dmo::build_index(
+      index, scene.triangle_count(),
+      [&mesh](std::size_t t, glm::vec3 p[3]) { return triangle_positions<VertexTraits<glm::vec3>>(mesh, t, p); },
+      map.objects.data(), map.objects.size(), params.tree, params.patch_triangles);
+  dmo::Scratch s;
+  std::vector<std::uint32_t> out;
+  dmo::cull(index, params, cam, s, out);
+  std::vector<std::uint8_t> occluder(scene.triangle_count(), 0);
+  for (const auto& o : s.occluders) {
+    const dmo::Patch& patch = index.patches.patches[o.second];
+    for (std::uint32_t k = patch.first; k < patch.first + patch.count; ++k) {
+      const std::uint32_t t = index.patches.triangles[k];
+      occluder[t] = s.triangle_stamp[t] == s.frame;  // inserted, not dropped
+    }
+  }
+  for (const auto& c : s.box_candidates) {
+    bool inserted = false;
+    for (const Aabb& b : s.box_occluders) inserted = inserted || (b.min == index.bounds[c.second].min && b.max == index.bounds[c.second].max);
+    if (!inserted) continue;
+    const MeshObject& r = map.objects[c.second];
+    for (std::uint32_t t = r.first_triangle; t < r.first_triangle + r.triangle_count; ++t) occluder[t] = 1;
+  }
+  return occluder;
 }
 
 }  // namespace
@@ -166,7 +209,9 @@ int main(int argc, char** argv) {
     visible += seen[o] != 0;
     false_culls += seen[o] && fate[o] != Fate::kept;
   }
-  const support::Image top = top_down(scene, map, fate, cam, cam.eye.y + 0.5f * spec.eye_height, 40.0f * spec.step);
+  const std::vector<std::uint8_t> occluder = occluders_of(scene, map, cam);
+  const support::Image top =
+      top_down(scene, map, fate, occluder, cam, cam.eye.y + 0.5f * spec.eye_height, 40.0f * spec.step);
   const support::Image front = view(scene, map, fate, embree, cam);
   const bool ok = top.write_png(dir + "/mesh_occlusion_topdown.png") && front.write_png(dir + "/mesh_occlusion_view.png");
   std::printf("%s, walk camera %zu (eye %.1f %.1f %.1f): %zu objects kept, %zu hidden by occlusion, %zu outside "

@@ -125,7 +125,8 @@ class MeshOcclusionCuller {
     CULLKIT_ASSERT(objects != nullptr || object_count == 0, "objects points to object_count objects");
     if (objects == nullptr) object_count = 0;
     params_ = detail::mesh_occlusion::sanitize(params);
-    detail::mesh_occlusion::build_index(index_, triangle_count, read, objects, object_count, params_.tree);
+    detail::mesh_occlusion::build_index(index_, triangle_count, read, objects, object_count, params_.tree,
+                                        params_.patch_triangles);
   }
 
   MeshOcclusionParams params_;

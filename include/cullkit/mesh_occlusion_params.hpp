@@ -38,8 +38,29 @@ struct MeshOcclusionParams {
   /// 0 makes every distinct depth its own band (tightest depths, slowest); larger values are
   /// faster and hide less behind layered occluders.
   float depth_band_ratio = 0.1f;
-  /// Most occluder objects per frame. Default 4096.
+  /// Most occluder patches per frame. Default 4096.
   std::uint32_t max_occluder_objects = 4096;
+  /// Objects are cut at build time into surface patches of at most this many triangles (grown over
+  /// shared edges, so each is connected and compact). Occluders are chosen patch by patch, so the
+  /// budget takes the part of a big object that is big on screen instead of skipping it whole; an
+  /// object whose box is not hidden is hidden when all its patches' boxes are. Default 256. Smaller
+  /// patches fit the budget and the object tests tighter, at more boxes to project per frame.
+  /// Clamped to [1, 65536].
+  std::uint32_t patch_triangles = 256;
+  /// A patch of at most this many triangles whose box is not hidden is tested triangle by triangle:
+  /// each front-facing triangle by its own screen rectangle at its own nearest depth (triangles
+  /// that clearly face away from the eye are never seen, so an object facing away is hidden). The
+  /// test stops at the first triangle not hidden. Default 256 (every patch of the default size).
+  /// 0 turns it off: objects are then tested by their box and their patches' boxes only.
+  std::uint32_t object_test_triangles = 256;
+  /// Objects whose triangles are exactly a closed box (12 outward triangles on the faces of their
+  /// bounds: buildings and crates of generated scenes, walls of some building models) are solids:
+  /// up to this many of them in the frustum, the biggest on screen (above the occluder size floor,
+  /// wholly beyond the near plane), also go into an object-space OcclusionTree as box occluders, and
+  /// an object the grid does not hide is hidden when that tree hides its box. The tree is exact
+  /// where the grid's cells blur the occluders' outlines (a roof edge in front of a rooftop prop),
+  /// and fuses boxes that touch. Default 128. 0 turns it off.
+  std::uint32_t max_box_occluders = 128;
   /// Parameters of the frustum-culling tree over object bounds.
   AbtParams tree = {};
 };
@@ -59,7 +80,7 @@ struct MeshOcclusionBuildStats {
 /// What one `cull` did (`MeshOcclusionContext::stats`).
 struct MeshOcclusionStats {
   std::size_t objects_in_frustum = 0;          ///< usable objects whose box may meet the frustum
-  std::size_t occluders_used = 0;              ///< occluder objects rasterized
+  std::size_t occluders_used = 0;              ///< occluder patches rasterized
   std::size_t occluder_triangles = 0;          ///< occluder triangles rasterized (front-facing, beyond the near plane)
   std::size_t objects_hidden = 0;              ///< objects in the frustum left out as hidden
   std::size_t objects_unusable_visible = 0;    ///< objects with unusable bounds, reported visible

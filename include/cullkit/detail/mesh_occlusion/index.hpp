@@ -17,6 +17,7 @@
 #include "../../adaptive_binary_tree.hpp"
 #include "../../geometry/aabb.hpp"
 #include "../../mesh_occlusion_params.hpp"
+#include "patches.hpp"
 
 namespace cullkit {
 namespace detail {
@@ -37,12 +38,15 @@ struct MeshIndex {
   std::vector<std::uint32_t> tree_objects;  // tree position -> object
   std::vector<std::uint32_t> unusable;    // objects always reported visible
   AdaptiveBinaryTree<Aabb> tree;          // over the usable objects' bounds
+  PatchSet patches;                       // the objects cut into surface patches
+  std::vector<std::uint8_t> solid_box;    // per object: its triangles are a closed box (is_solid_box)
 };
 
 inline MeshOcclusionParams sanitize(MeshOcclusionParams p) {
   p.grid_width = std::clamp(p.grid_width, 8, 4096);
   p.grid_height = std::clamp(p.grid_height, 8, 4096);
   if (!(p.min_occluder_screen_fraction >= 0.0f)) p.min_occluder_screen_fraction = 0.0f;
+  p.patch_triangles = std::clamp<std::uint32_t>(p.patch_triangles, 1, 65536);
   return p;
 }
 
@@ -153,7 +157,7 @@ inline bool finite(const glm::vec3& p) { return std::isfinite(p.x) && std::isfin
 /// Fills `index`. `read(t, p)` reads triangle t's corners, false when an index is out of range.
 template <class ReadTriangle>
 void build_index(MeshIndex& index, std::size_t triangle_count, ReadTriangle&& read, const MeshObject* objects,
-                 std::size_t object_count, const AbtParams& tree_params) {
+                 std::size_t object_count, const AbtParams& tree_params, std::uint32_t patch_triangles) {
   index = MeshIndex{};
   // Triangle numbers are 32-bit; a larger mesh keeps only what fits (the rest is unusable).
   const std::size_t kept = std::min<std::size_t>(triangle_count, none / 3 - 1);
@@ -221,6 +225,11 @@ void build_index(MeshIndex& index, std::size_t triangle_count, ReadTriangle&& re
   for (std::size_t t = 0; t < kept; ++t)
     if (unusable[t] == 2) index.corners[3 * t] = index.corners[3 * t + 1] = index.corners[3 * t + 2] = none;
   stats.shared_edges = pair_edges(index.corners, index.twins);
+  build_patches(index.patches, index.positions, index.corners, index.twins, index.objects, patch_triangles);
+  index.solid_box.assign(object_count, 0);
+  for (std::size_t o = 0; o < object_count; ++o)
+    if (index.objects[o].triangle_count > 0)
+      index.solid_box[o] = is_solid_box(index.positions, index.corners, index.twins, index.objects[o], index.bounds[o]);
   index.tree = AdaptiveBinaryTree<Aabb>(tree_bounds.data(), tree_bounds.size(), tree_params);
 }
 

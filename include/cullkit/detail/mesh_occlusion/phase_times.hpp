@@ -15,14 +15,15 @@ enum Phase : int {
   phase_frustum,     // frustum tree walk
   phase_boxes,       // object boxes on screen
   phase_choose,      // occluder choice
-  phase_gather,      // occluder triangles: projection, facing, sort (vertex projection included)
-  phase_project,     // of which: vertex projection
+  phase_gather,      // occluder triangles: facing, sort
+  phase_project,     // vertex projection, wherever it happens (occluder triangles, per-triangle object tests)
   phase_bands,       // band assignment and the already-covered test
   phase_depth,       // depth bounds per cell
   phase_counts,      // winding counts at cell centres
   phase_edges,       // outline edge marking
   phase_end_band,    // prefix sums and freezing per band
   phase_finish,      // per-tile summaries
+  phase_box_occluders,  // solid-box occluders: choice and their hidden region
   phase_tests,       // object tests
   phase_count
 };
@@ -51,19 +52,29 @@ inline std::uint64_t phase_tick() {
 }
 
 /// Adds the time since construction (or the last `next`) to a phase, when timing is enabled.
+/// Vertex projection is called from inside other phases (one vertex at a time, by its own probe):
+/// its time is taken out of the enclosing phase, so that every tick is charged exactly once.
 class PhaseProbe {
  public:
-  PhaseProbe() : times_(phase_times()), on_(times_.enabled), start_(on_ ? phase_tick() : 0) {}
-  /// Charges the time since the last mark to `phase` and restarts the clock.
+  PhaseProbe()
+      : times_(phase_times()), on_(times_.enabled), start_(on_ ? phase_tick() : 0),
+        inner_(on_ ? times_.ticks[phase_project] : 0) {}
+  /// Charges the time since the last mark, less the vertex projection done meanwhile, to `phase`
+  /// and restarts the clock.
   void next(Phase phase) {
     if (!on_) return;
     const std::uint64_t now = phase_tick();
-    times_.ticks[phase] += now - start_;
+    const std::uint64_t inner = times_.ticks[phase_project] - inner_;
+    const std::uint64_t spent = now - start_;
+    times_.ticks[phase] += spent > inner ? spent - inner : 0;
     start_ = now;
+    inner_ = times_.ticks[phase_project];
   }
   /// Restarts the clock without charging anything (the time was charged by an inner probe).
   void restart() {
-    if (on_) start_ = phase_tick();
+    if (!on_) return;
+    start_ = phase_tick();
+    inner_ = times_.ticks[phase_project];
   }
   [[nodiscard]] bool on() const { return on_; }
 
@@ -71,6 +82,7 @@ class PhaseProbe {
   PhaseTimes& times_;
   bool on_;
   std::uint64_t start_;
+  std::uint64_t inner_;  // ticks[phase_project] at the last mark
 };
 
 }  // namespace mesh_occlusion
