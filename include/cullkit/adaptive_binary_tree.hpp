@@ -682,6 +682,14 @@ class AdaptiveBinaryTree {
     const std::vector<AbtNode> raw = detail::abt_build_raw(ctx, 0, n, 0, params.threads, grain);
     std::vector<std::uint32_t> from;
     detail::abt_relayout(raw, nodes_, from, stats_);
+    adopt_build(items);
+    if (params.progress) params.progress(1.0f);
+  }
+
+  // After a build of `items` into nodes_: the order, bounds, leaf boxes, split references and
+  // dynamic state follow the items' final order.
+  void adopt_build(const std::vector<detail::AbtBuildItem>& items) {
+    const auto n = static_cast<std::uint32_t>(items.size());
     stats_.objects = n;
     order_.resize(n);
     bounds_.resize(n);
@@ -694,7 +702,6 @@ class AdaptiveBinaryTree {
     for (std::size_t k = 0; k < nodes_.size(); ++k) ref_split_[k] = split_ratio(static_cast<std::uint32_t>(k));
     build_area_ = total_area();
     dyn_.reset(order_, input_count_);
-    if (params.progress) params.progress(1.0f);
   }
 
   static bool is_unbounded_marker(const Aabb& b) noexcept { return b.min == unbounded_box().min && b.max == unbounded_box().max; }
@@ -740,19 +747,8 @@ class AdaptiveBinaryTree {
       std::vector<std::uint32_t> from;
       detail::abt_relayout(raw, nodes_, from, stats_);
     }
-    stats_.objects = n;
-    order_.resize(n);
-    bounds_.resize(n);
-    for (std::uint32_t i = 0; i < n; ++i) {
-      order_[i] = items[i].index;
-      bounds_[i] = items[i].box;
-    }
-    leaf_boxes_.assign(bounds_);
-    ref_split_.resize(nodes_.size());
-    for (std::size_t k = 0; k < nodes_.size(); ++k) ref_split_[k] = split_ratio(static_cast<std::uint32_t>(k));
-    build_area_ = total_area();
+    adopt_build(items);
     refitted_ = false;
-    dyn_.reset(order_, input_count_);
     dyn_.free_ids = std::move(free_ids);
   }
 
