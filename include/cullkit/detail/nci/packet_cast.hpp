@@ -72,15 +72,7 @@ inline constexpr int few_rays = 16;
     mny = std::min(mny, py);
     mxy = std::max(mxy, py);
   }
-  if (!(std::isfinite(mnx) && std::isfinite(mxx) && std::isfinite(mny) && std::isfinite(mxy)))
-    return Rect{Rect::full, 0, 0, 0};
-  const double m = f.margin;
-  const double lx0 = std::ceil(mnx - m), lx1 = std::floor(mxx + m);
-  const double ly0 = std::ceil(mny - m), ly1 = std::floor(mxy + m);
-  if (lx1 < 0.0 || ly1 < 0.0 || lx0 > f.width - 1 || ly0 > f.height - 1) return Rect{0, 0, -1, -1};
-  return Rect{static_cast<std::int16_t>(std::max(0.0, lx0)), static_cast<std::int16_t>(std::max(0.0, ly0)),
-              static_cast<std::int16_t>(std::min(double(f.width - 1), lx1)),
-              static_cast<std::int16_t>(std::min(double(f.height - 1), ly1))};
+  return pixels_of_bounds(f, mnx, mxx, mny, mxy);
 }
 
 // The inverse directions of the tile's rays (TileState::ix), made once per tile.

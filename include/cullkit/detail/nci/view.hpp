@@ -85,6 +85,22 @@ struct ViewSetup {
   return true;
 }
 
+// The pixels whose centres lie in the projected bounds [mnx, mxx] x [mny, mxy] grown by the
+// margin (ViewSetup::margin: the float rounding of the ray directions and the ray test's edge
+// band), clamped to the screen in double first (projected corners may be far off screen); `full`
+// when a bound is not finite.
+[[nodiscard]] inline Rect pixels_of_bounds(const ViewSetup& f, double mnx, double mxx, double mny, double mxy) noexcept {
+  if (!(std::isfinite(mnx) && std::isfinite(mxx) && std::isfinite(mny) && std::isfinite(mxy)))
+    return Rect{Rect::full, 0, 0, 0};
+  const double m = f.margin;
+  const double lx0 = std::ceil(mnx - m), lx1 = std::floor(mxx + m);
+  const double ly0 = std::ceil(mny - m), ly1 = std::floor(mxy + m);
+  if (lx1 < 0.0 || ly1 < 0.0 || lx0 > f.width - 1 || ly0 > f.height - 1) return Rect{0, 0, -1, -1};
+  return Rect{static_cast<std::int16_t>(std::max(0.0, lx0)), static_cast<std::int16_t>(std::max(0.0, ly0)),
+              static_cast<std::int16_t>(std::min(double(f.width - 1), lx1)),
+              static_cast<std::int16_t>(std::min(double(f.height - 1), ly1))};
+}
+
 // The pixels whose centres may see a point of the convex hull of `p` (count points): the
 // bounding rectangle of their projections (the hull projects into the hull of the projected
 // points when every point is in front of the eye: the conditions checked are linear in the
@@ -101,18 +117,8 @@ struct ViewSetup {
     mny = std::min(mny, py);
     mxy = std::max(mxy, py);
   }
-  if (!(std::isfinite(mnx) && std::isfinite(mxx) && std::isfinite(mny) && std::isfinite(mxy)))
-    return Rect{Rect::full, 0, 0, 0};
-  // A pixel centre can see the triangle only inside its projection; the margin (ViewSetup::margin)
-  // covers the float rounding of the ray directions and the ray test's edge band. Clamped to the screen (in double
-  // first: projected corners may be far off screen).
-  const double m = f.margin;
-  const double lx0 = std::ceil(mnx - m), lx1 = std::floor(mxx + m);
-  const double ly0 = std::ceil(mny - m), ly1 = std::floor(mxy + m);
-  if (lx1 < 0.0 || ly1 < 0.0 || lx0 > f.width - 1 || ly0 > f.height - 1) return Rect{0, 0, -1, -1};
-  return Rect{static_cast<std::int16_t>(std::max(0.0, lx0)), static_cast<std::int16_t>(std::max(0.0, ly0)),
-              static_cast<std::int16_t>(std::min(double(f.width - 1), lx1)),
-              static_cast<std::int16_t>(std::min(double(f.height - 1), ly1))};
+  // A pixel centre can see the triangle only inside its projection.
+  return pixels_of_bounds(f, mnx, mxx, mny, mxy);
 }
 
 // Which pixels may see the triangle: an empty rectangle for a back face (or one seen exactly
