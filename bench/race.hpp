@@ -46,6 +46,9 @@ inline void print_header() {
 
 /// Runs every contestant `reps` times (interleaved, so a slow phase of the machine hits them all
 /// alike) after one warm-up run each; prints one CSV row per contestant and returns the results.
+/// Each repetition starts one contestant later than the one before, so every contestant follows
+/// each other one equally often: a contestant that evicts the caches (a slow peer) then costs all
+/// of them alike instead of always the one after it.
 inline std::vector<RaceResult> race(const std::string& race_name, const std::vector<Contestant>& contestants,
                                     int reps = 31) {
   if (smoke()) reps = 2;
@@ -53,7 +56,8 @@ inline std::vector<RaceResult> race(const std::string& race_name, const std::vec
   std::vector<std::vector<double>> times(contestants.size());
   for (auto& c : contestants) c.run();
   for (int r = 0; r < reps; ++r) {
-    for (std::size_t i = 0; i < contestants.size(); ++i) {
+    for (std::size_t j = 0; j < contestants.size(); ++j) {
+      const std::size_t i = (std::size_t(r) + j) % contestants.size();
       const auto t0 = std::chrono::steady_clock::now();
       contestants[i].run();
       const auto t1 = std::chrono::steady_clock::now();

@@ -116,7 +116,8 @@ void views_cull() {
         total_bits += bit;
       }
     }
-    // Each view's bits are exactly what a single cull of that view reports.
+    // Each view's bits are exactly what a single cull of that view reports (random views share no
+    // plane, so nothing merges).
     for (int v = 0; v < n; ++v) {
       std::vector<std::uint32_t> single;
       tree.cull(fr[std::size_t(v)], single);
@@ -135,34 +136,109 @@ void views_cull() {
   CHECK(out.empty() && bits.empty());
 }
 
-// Checks one cull_views call against single culls (bit for bit) and the brute force; returns the
-// number of entries.
-std::size_t check_views(const AdaptiveBinaryTree<Aabb>& tree, const std::vector<Aabb>& boxes,
-                        const std::vector<Frustum>& fr, const std::vector<const abt_test::OracleFrustum*>& oracles,
-                        const char* what) {
-  std::vector<std::uint32_t> out, bits, single;
+// The frustum's planes with every offset moved outward by `relative` of its magnitude: what a view
+// of cull_views may report at most, where its planes were merged with other views' copies.
+ConvexVolume loosened(const Frustum& f, float relative) {
+  ConvexVolume v;
+  for (int i = 0; i < Frustum::max_planes; ++i) {
+    if (!f.has_plane(i)) continue;
+    Plane p = f.plane(i);
+    p.d += relative * std::fabs(p.d) + 1e-30f;
+    v.add_plane(p);
+  }
+  return v;
+}
+
+struct ViewsCheck {
+  std::size_t entries = 0;
+  std::size_t beyond_single = 0;  // bits a single cull of that view does not report
+};
+
+// Checks one cull_views call: every object once, every bit a single cull of the view reports is
+// set, every bit a box meeting the view (brute force) needs is set, and no bit is set for an
+// object outside the view's planes loosened by twice the merge tolerance.
+ViewsCheck check_views(const AdaptiveBinaryTree<Aabb>& tree, const std::vector<Aabb>& boxes,
+                       const std::vector<Frustum>& fr, const std::vector<const abt_test::OracleFrustum*>& oracles,
+                       const char* what) {
+  constexpr float merge_bound = 2.0f * detail::AbtMergedPlanes::merge_tolerance;
+  std::vector<std::uint32_t> out, bits, single, loose;
   tree.cull_views(fr.data(), fr.size(), out, bits);
   CHECK(out.size() == bits.size());
   std::vector<std::uint32_t> got(boxes.size(), 0);
-  std::size_t wrong = 0, missing = 0, differ = 0;
+  std::size_t wrong = 0, missing = 0, below_single = 0, beyond_loose = 0;
+  ViewsCheck result;
   for (std::size_t j = 0; j < out.size(); ++j) {
     wrong += out[j] >= boxes.size() || got[out[j]] != 0 || bits[j] == 0;
     if (out[j] < boxes.size()) got[out[j]] = bits[j];
   }
   for (std::size_t v = 0; v < fr.size(); ++v) {
     tree.cull(fr[v], single);
-    std::vector<std::uint8_t> in_single(boxes.size(), 0);
+    tree.cull(loosened(fr[v], merge_bound), loose);
+    std::vector<std::uint8_t> in_single(boxes.size(), 0), in_loose(boxes.size(), 0);
     for (std::uint32_t i : single) in_single[i] = 1;
+    for (std::uint32_t i : loose) in_loose[i] = 1;
     for (std::uint32_t i = 0; i < boxes.size(); ++i) {
       const bool bit = (got[i] >> v) & 1u;
-      differ += bit != bool(in_single[i]);
+      below_single += in_single[i] && !bit;
+      result.beyond_single += bit && !in_single[i];
+      beyond_loose += bit && !in_loose[i];
       const bool meets = !is_valid(boxes[i]) || oracles[v] == nullptr || oracles[v]->meets(boxes[i]);
       missing += meets && !bit;
     }
   }
-  CHECK_MSG(wrong == 0 && missing == 0 && differ == 0, "%s: %zu wrong entries, %zu missing bits, %zu bits unlike single culls",
-            what, wrong, missing, differ);
-  return out.size();
+  CHECK_MSG(wrong == 0 && missing == 0 && below_single == 0 && beyond_loose == 0,
+            "%s: %zu wrong entries, %zu missing bits, %zu bits a single cull has and cull_views not, %zu bits "
+            "beyond the loosened planes",
+            what, wrong, missing, below_single, beyond_loose);
+  result.entries = out.size();
+  return result;
+}
+
+// Two views whose planes merge (same normals, offsets 2^-20 apart in relative terms), with boxes
+// whose farthest corner lies within a few such offsets of one plane: the merged walk must report
+// what each single cull reports (the outside verdict at the larger offset) and nothing beyond the
+// loosened planes (the inside verdict at the smaller one). Swapping the two offsets fails here.
+void views_merged_planes() {
+  support::Rng rng(25);
+  std::size_t beyond = 0, entries = 0;
+  for (int k = 0; k < 12; ++k) {
+    const abt_test::View view = abt_test::random_view(rng, Aabb{glm::vec3(-130), glm::vec3(130)}, k);
+    const Frustum f0 = Frustum::from_matrix(view.view_proj, view.depth);
+    const glm::mat4 inv = glm::inverse(view.view_proj);
+    // Boxes hugging the planes of f0 from both sides: centre on the plane, pushed so that the
+    // farthest corner along the normal sits at t in [-4, 4] units of 2^-20 |d|.
+    std::vector<Aabb> boxes;
+    for (int b = 0; b < 3000; ++b) {
+      const float lo = view.depth == DepthRange::zero_to_one ? 0.0f : -1.0f;
+      const glm::vec4 ndc(rng.uniform(-0.9f, 0.9f), rng.uniform(-0.9f, 0.9f), rng.uniform(lo + 0.05f, 0.95f), 1.0f);
+      glm::vec4 w = inv * ndc;
+      if (!(std::fabs(w.w) > 1e-12f)) continue;
+      const glm::vec3 q = glm::vec3(w) / w.w;
+      const int i = rng.range(0, Frustum::max_planes - 1);
+      if (!f0.has_plane(i)) continue;
+      const Plane& p = f0.plane(i);
+      const glm::vec3 e(rng.uniform(0.01f, 1.0f), rng.uniform(0.01f, 1.0f), rng.uniform(0.01f, 1.0f));
+      const float r = std::fabs(p.normal.x) * e.x + std::fabs(p.normal.y) * e.y + std::fabs(p.normal.z) * e.z;
+      const float t = rng.uniform(-4.0f, 4.0f) * std::fabs(p.d) / 1048576.0f;
+      const glm::vec3 c = q - (glm::dot(p.normal, q) + p.d) * p.normal + (t - r) * p.normal;
+      boxes.push_back(Aabb{c - e, c + e});
+    }
+    const AdaptiveBinaryTree<Aabb> tree(boxes.data(), boxes.size());
+    // The second view: the same matrix moved by 2^-20 of the offsets, so every plane keeps its
+    // normal bit for bit and merges.
+    const glm::vec3 shift = glm::normalize(glm::vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1))) *
+                            (std::fabs(f0.plane(Frustum::left).d) + 1.0f) / 1048576.0f;
+    const glm::mat4 m1 = view.view_proj * glm::translate(glm::mat4(1.0f), shift);
+    const std::vector<Frustum> fr = {f0, Frustum::from_matrix(m1, view.depth)};
+    const abt_test::OracleFrustum o0(view.view_proj, view.depth), o1(m1, view.depth);
+    const ViewsCheck c = check_views(tree, boxes, fr, {&o0, &o1}, "merged planes");
+    beyond += c.beyond_single;
+    entries += c.entries;
+  }
+  CHECK(entries > 0);
+  // Non-vacuity: the merge happened (some view reports objects its single cull leaves out).
+  CHECK(beyond > 0);
+  std::printf("cull_views merged planes: %zu entries over 12 pairs, %zu bits beyond single culls\n", entries, beyond);
 }
 
 // Views that share normals (the shared-arithmetic path): stereo eyes, cascades, 32 views, views
@@ -192,7 +268,7 @@ void views_fast_paths() {
     if (k % 6 == 5) fr[1] = Frustum::from_matrix(glm::mat4(std::numeric_limits<float>::quiet_NaN()), view.depth);
     std::vector<const abt_test::OracleFrustum*> oracles;
     for (int v = 0; v < n; ++v) oracles.push_back(k % 6 == 5 && v == 1 ? nullptr : &own[std::size_t(v)]);
-    total += check_views(tree, boxes, fr, oracles, "families");
+    total += check_views(tree, boxes, fr, oracles, "families").entries;
     // The NaN frustum keeps everything: every object carries its bit.
     if (k % 6 == 5) {
       std::vector<std::uint32_t> out, bits;
@@ -209,7 +285,7 @@ void views_fast_paths() {
   const abt_test::OracleFrustum ow(wide, DepthRange::zero_to_one), on(narrow, DepthRange::zero_to_one);
   const std::vector<Frustum> both = {Frustum::from_matrix(wide, DepthRange::zero_to_one),
                                      Frustum::from_matrix(narrow, DepthRange::zero_to_one)};
-  CHECK(check_views(tree, boxes, both, {&ow, &on}, "wide and narrow") == boxes.size());
+  CHECK(check_views(tree, boxes, both, {&ow, &on}, "wide and narrow").entries == boxes.size());
   std::vector<std::uint32_t> out, bits;
   tree.cull_views(both.data(), 2, out, bits);
   for (std::size_t j = 0; j < out.size(); ++j) {
@@ -340,6 +416,7 @@ int main() {
   volume_cull();
   views_cull();
   views_fast_paths();
+  views_merged_planes();
   shadow_casters();
   return cullkit_test::report("test_engine_views");
 }

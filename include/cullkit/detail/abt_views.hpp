@@ -29,6 +29,7 @@
 #include "../geometry/frustum.hpp"
 #include "abt_dynamic.hpp"
 #include "abt_leaf.hpp"
+#include "abt_views_merged.hpp"
 
 #if CULLKIT_HAS_SSE2
 #include <emmintrin.h>
@@ -239,35 +240,6 @@ CULLKIT_FORCEINLINE std::uint32_t abt_views_node(const AbtViewPlanes& vp, const 
   return alive;
 }
 
-/// lane_bits[i] = `inside_views` | (bit v for every view v of `straddling` whose `outside[v]` has
-/// bit i clear), for the 16 lanes.
-CULLKIT_FORCEINLINE void abt_transpose_lanes(std::uint32_t straddling, const std::uint32_t* outside,
-                                             std::uint32_t inside_views, std::uint32_t* lane_bits) noexcept {
-  constexpr std::uint32_t lanes = AbtLeafBoxes::lanes;
-#if CULLKIT_HAS_SSE2
-  __m128i acc[lanes / 4];
-  const __m128i select[lanes / 4] = {_mm_setr_epi32(1, 2, 4, 8), _mm_setr_epi32(16, 32, 64, 128),
-                                     _mm_setr_epi32(256, 512, 1024, 2048), _mm_setr_epi32(4096, 8192, 16384, 32768)};
-  for (std::uint32_t q = 0; q < lanes / 4; ++q) acc[q] = _mm_set1_epi32(static_cast<int>(inside_views));
-  for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) {
-    const int v = abt_lowest_bit(rest);
-    const __m128i out = _mm_set1_epi32(static_cast<int>(outside[v]));
-    const __m128i bit = _mm_set1_epi32(static_cast<int>(std::uint32_t{1} << v));
-    for (std::uint32_t q = 0; q < lanes / 4; ++q) {
-      const __m128i in_view = _mm_cmpeq_epi32(_mm_and_si128(out, select[q]), _mm_setzero_si128());
-      acc[q] = _mm_or_si128(acc[q], _mm_and_si128(in_view, bit));
-    }
-  }
-  for (std::uint32_t q = 0; q < lanes / 4; ++q) _mm_storeu_si128(reinterpret_cast<__m128i*>(lane_bits + 4 * q), acc[q]);
-#else
-  for (std::uint32_t i = 0; i < lanes; ++i) lane_bits[i] = inside_views;
-  for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) {
-    const int v = abt_lowest_bit(rest);
-    for (std::uint32_t i = 0; i < lanes; ++i) lane_bits[i] |= ((~outside[v] >> i) & 1u) << v;
-  }
-#endif
-}
-
 /// The objects of a straddling leaf (or small subtree) [begin, end): one output entry per object
 /// some alive view keeps, with its view mask.
 inline void abt_views_leaf(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes, std::uint32_t alive,
@@ -334,6 +306,11 @@ void abt_cull_views(const std::vector<AbtNode>& tree, const std::vector<std::uin
                     const AbtLeafBoxes& boxes, const AbtDynamic& dyn, std::uint32_t scan_below,
                     const Frustum* frusta, std::uint32_t views, std::vector<std::uint32_t>& out,
                     std::vector<std::uint32_t>& view_bits) {
+  AbtMergedPlanes merged;
+  if (merged.assign(frusta, views)) {
+    abt_cull_views_merged<StackSize>(merged, views, tree, order_v, boxes, dyn, scan_below, out, view_bits);
+    return;
+  }
   const AbtViewPlanes vp(frusta, views);
   const std::uint32_t all = views >= 32 ? ~std::uint32_t{0} : ((std::uint32_t{1} << views) - 1u);
   const std::uint32_t* order = order_v.data();

@@ -1,0 +1,367 @@
+// cullkit/detail/abt_views_merged.hpp: the multi-view walk of AdaptiveBinaryTree::cull_views over
+// the views' planes merged into one set (users never name this).
+//
+// Why. Views drawn in one frame share most of their planes. The two eyes of a headset sit apart
+// along a direction that their top, bottom, near and far planes contain, so those planes agree up
+// to float rounding; the shadow cascades of one camera have the same four side planes bit for bit.
+// Each distinct plane is tested once per node and once per object, four planes (node tests) or
+// four objects (leaf tests) at a time, and a view's verdict is read off the bits of its own planes.
+// A stereo pair then costs about one walk over eight planes instead of two walks over six, and the
+// walk carries one plane mask instead of one per view.
+//
+// Merging. Two planes merge when their normals are equal bit for bit and their offsets differ by at
+// most `merge_tolerance` of the larger one. A merged plane uses its largest offset for the outside
+// verdict (a box outside it is outside every copy), its smallest for the inside verdict (a box
+// inside it is inside every copy), and the largest |d| in the rounding slack. Each verdict is formed
+// with the operations of the single-view rule (Frustum::classify, AbtLeafBoxes::classify_lanes) in
+// the same order, so a view's answer holds every object a single cull of that view reports, and is
+// that answer exactly where the views' copies of a plane are equal.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "../config.hpp"
+#include "../geometry/aabb.hpp"
+#include "../geometry/frustum.hpp"
+#include "../geometry/sphere.hpp"
+#include "abt_dynamic.hpp"
+#include "abt_leaf.hpp"
+
+#if CULLKIT_HAS_SSE2
+#include <emmintrin.h>
+#endif
+
+namespace cullkit::detail {
+
+/// The distinct planes of up to 32 views as structure-of-arrays, padded to a multiple of four with
+/// planes no mask ever names, and for each view the set of distinct planes it is made of.
+class AbtMergedPlanes {
+ public:
+  static constexpr std::uint32_t capacity = 32;
+  /// Offsets within this fraction of each other merge (rounding between two eyes is ~2^-23).
+  static constexpr float merge_tolerance = 1.0f / 262144.0f;  // 2^-18
+
+  /// Collects the active planes of `frusta[0, views)`; false when they hold more than `capacity`
+  /// distinct planes (the caller then takes the per-view walk).
+  [[nodiscard]] bool assign(const Frustum* frusta, std::uint32_t views) noexcept {
+    count_ = 0;
+    all_ = 0;
+    for (std::uint32_t v = 0; v < views; ++v) {
+      planes_of_[v] = 0;
+      for (std::uint32_t rest = frusta[v].active_mask(); rest != 0; rest &= rest - 1u) {
+        const Plane& p = frusta[v].plane(abt_lowest_bit(rest));
+        const std::uint32_t u = find_or_add(p);
+        if (u == capacity) return false;
+        planes_of_[v] |= std::uint32_t{1} << u;
+      }
+      all_ |= planes_of_[v];
+    }
+    for (std::uint32_t u = count_; u % 4 != 0; ++u) {
+      nx_[u] = ny_[u] = nz_[u] = d_out_[u] = d_in_[u] = abs_d_[u] = 0.0f;
+    }
+    return true;
+  }
+
+  [[nodiscard]] std::uint32_t count() const noexcept { return count_; }
+  /// Distinct planes (bits) of view v.
+  [[nodiscard]] std::uint32_t planes_of(std::uint32_t v) const noexcept { return planes_of_[v]; }
+  /// The planes of the views in `views`.
+  [[nodiscard]] std::uint32_t planes_of_views(std::uint32_t views) const noexcept {
+    std::uint32_t m = 0;
+    for (; views != 0; views &= views - 1u) m |= planes_of_[abt_lowest_bit(views)];
+    return m;
+  }
+  /// The views of `views` that still have a plane in `mask` (the others hold the node whole).
+  [[nodiscard]] std::uint32_t straddling(std::uint32_t views, std::uint32_t mask) const noexcept {
+    std::uint32_t s = 0;
+    for (std::uint32_t rest = views; rest != 0; rest &= rest - 1u) {
+      const int v = abt_lowest_bit(rest);
+      if (planes_of_[v] & mask) s |= std::uint32_t{1} << v;
+    }
+    return s;
+  }
+  [[nodiscard]] std::uint32_t all_planes() const noexcept { return all_; }
+
+  [[nodiscard]] const float* nx() const noexcept { return nx_; }
+  [[nodiscard]] const float* ny() const noexcept { return ny_; }
+  [[nodiscard]] const float* nz() const noexcept { return nz_; }
+  [[nodiscard]] const float* d_out() const noexcept { return d_out_; }
+  [[nodiscard]] const float* d_in() const noexcept { return d_in_; }
+  [[nodiscard]] const float* abs_d() const noexcept { return abs_d_; }
+
+ private:
+  static bool close(float a, float b) noexcept {
+    return std::fabs(a - b) <= merge_tolerance * std::fmax(std::fabs(a), std::fabs(b));
+  }
+
+  std::uint32_t find_or_add(const Plane& p) noexcept {
+    for (std::uint32_t u = 0; u < count_; ++u) {
+      if (nx_[u] != p.normal.x || ny_[u] != p.normal.y || nz_[u] != p.normal.z) continue;
+      if (!close(p.d, d_out_[u]) || !close(p.d, d_in_[u])) continue;
+      d_out_[u] = std::fmax(d_out_[u], p.d);
+      d_in_[u] = std::fmin(d_in_[u], p.d);
+      abs_d_[u] = std::fmax(abs_d_[u], std::fabs(p.d));
+      return u;
+    }
+    if (count_ == capacity) return capacity;
+    const std::uint32_t u = count_++;
+    nx_[u] = p.normal.x;
+    ny_[u] = p.normal.y;
+    nz_[u] = p.normal.z;
+    d_out_[u] = d_in_[u] = p.d;
+    abs_d_[u] = std::fabs(p.d);
+    return u;
+  }
+
+  std::uint32_t count_ = 0;
+  std::uint32_t all_ = 0;
+  std::uint32_t planes_of_[32] = {};
+  alignas(16) float nx_[capacity];
+  alignas(16) float ny_[capacity];
+  alignas(16) float nz_[capacity];
+  alignas(16) float d_out_[capacity];
+  alignas(16) float d_in_[capacity];
+  alignas(16) float abs_d_[capacity];
+};
+
+/// One pass of the node test (a centre with a radius per plane: the sphere's, or the box's extent
+/// along each normal) over the planes of `mask`: bits of the planes the shape is outside of, and of
+/// those it is inside of. `box_extent` null means the sphere radius `radius` for every plane.
+CULLKIT_FORCEINLINE void abt_merged_pass(const AbtMergedPlanes& mp, std::uint32_t mask, const glm::vec3& c,
+                                         float radius, const glm::vec3* box_extent, std::uint32_t& out,
+                                         std::uint32_t& in) noexcept {
+  out = in = 0;
+#if CULLKIT_HAS_SSE2
+  const __m128 k = _mm_set1_ps(8.0f * std::numeric_limits<float>::epsilon());
+  const __m128 sign = _mm_set1_ps(-0.0f);
+  const __m128 cx = _mm_set1_ps(c.x), cy = _mm_set1_ps(c.y), cz = _mm_set1_ps(c.z);
+  for (std::uint32_t q = 0; q * 4 < mp.count(); ++q) {
+    if (((mask >> (4 * q)) & 0xFu) == 0) continue;
+    const __m128 nx = _mm_load_ps(mp.nx() + 4 * q), ny = _mm_load_ps(mp.ny() + 4 * q);
+    const __m128 nz = _mm_load_ps(mp.nz() + 4 * q);
+    const __m128 px = _mm_mul_ps(nx, cx), py = _mm_mul_ps(ny, cy), pz = _mm_mul_ps(nz, cz);
+    const __m128 s = _mm_add_ps(_mm_add_ps(px, py), pz);
+    const __m128 mag = _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, px), _mm_andnot_ps(sign, py)), _mm_andnot_ps(sign, pz));
+    __m128 r = _mm_set1_ps(radius);
+    if (box_extent != nullptr) {
+      r = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_andnot_ps(sign, nx), _mm_set1_ps(box_extent->x)),
+                                _mm_mul_ps(_mm_andnot_ps(sign, ny), _mm_set1_ps(box_extent->y))),
+                     _mm_mul_ps(_mm_andnot_ps(sign, nz), _mm_set1_ps(box_extent->z)));
+    }
+    const __m128 slack = _mm_mul_ps(_mm_add_ps(_mm_add_ps(mag, _mm_load_ps(mp.abs_d() + 4 * q)), r), k);
+    const __m128 far_side = _mm_add_ps(_mm_add_ps(s, _mm_load_ps(mp.d_out() + 4 * q)), r);
+    const __m128 near_side = _mm_sub_ps(_mm_add_ps(s, _mm_load_ps(mp.d_in() + 4 * q)), r);
+    out |= static_cast<std::uint32_t>(_mm_movemask_ps(_mm_cmplt_ps(far_side, _mm_xor_ps(slack, sign)))) << (4 * q);
+    in |= static_cast<std::uint32_t>(_mm_movemask_ps(_mm_cmpge_ps(near_side, slack))) << (4 * q);
+  }
+#else
+  constexpr float k = 8.0f * std::numeric_limits<float>::epsilon();
+  for (std::uint32_t rest = mask; rest != 0; rest &= rest - 1u) {
+    const int u = abt_lowest_bit(rest);
+    const float nx = mp.nx()[u], ny = mp.ny()[u], nz = mp.nz()[u];
+    const float px = nx * c.x, py = ny * c.y, pz = nz * c.z;
+    const float s = px + py + pz;
+    const float r = box_extent == nullptr
+                        ? radius
+                        : std::fabs(nx) * box_extent->x + std::fabs(ny) * box_extent->y + std::fabs(nz) * box_extent->z;
+    const float slack = (std::fabs(px) + std::fabs(py) + std::fabs(pz) + mp.abs_d()[u] + r) * k;
+    if ((s + mp.d_out()[u]) + r < -slack) out |= std::uint32_t{1} << u;
+    if ((s + mp.d_in()[u]) - r >= slack) in |= std::uint32_t{1} << u;
+  }
+#endif
+  out &= mask;
+  in &= mask;
+}
+
+/// The node test of `abt_node_outside` (sphere, then box) for every view of `alive` at once.
+/// Returns the views not outside the node; `mask` loses the planes the node is inside of and the
+/// planes no surviving view is made of.
+CULLKIT_FORCEINLINE std::uint32_t abt_merged_node(const AbtMergedPlanes& mp, const Aabb& box, const Sphere& sphere,
+                                                  std::uint32_t alive, std::uint32_t& mask) noexcept {
+  if (mask == 0) return alive;
+  if (!(sphere.radius >= 0.0f)) {  // an empty node is outside every view it is not wholly inside
+    alive &= ~mp.straddling(alive, mask);
+    mask &= mp.planes_of_views(alive);
+    return alive;
+  }
+  std::uint32_t out = 0, in = 0;
+  abt_merged_pass(mp, mask, sphere.center, sphere.radius, nullptr, out, in);
+  std::uint32_t outside = out;
+  mask &= ~in;
+  if ((mask & ~outside) != 0) {
+    const glm::vec3 c = (box.min + box.max) * 0.5f;
+    const glm::vec3 e = (box.max - box.min) * 0.5f;
+    abt_merged_pass(mp, mask & ~outside, c, 0.0f, &e, out, in);
+    outside |= out;
+    mask &= ~in;
+  }
+  if (outside != 0) {
+    for (std::uint32_t rest = alive; rest != 0; rest &= rest - 1u) {
+      const int v = abt_lowest_bit(rest);
+      if (mp.planes_of(std::uint32_t(v)) & outside) alive &= ~(std::uint32_t{1} << v);
+    }
+  }
+  mask &= mp.planes_of_views(alive);
+  return alive;
+}
+
+/// Leaf test: bit i of plane_out[u] set when object base + i is outside merged plane u, for the
+/// planes of `planes`, 16 objects from `base` (the SoA leaf test's rule with the outside offset).
+inline void abt_merged_lanes(const AbtMergedPlanes& mp, const AbtLeafBoxes& boxes, std::uint32_t base,
+                             std::uint32_t planes, std::uint32_t* plane_out) noexcept {
+  constexpr std::uint32_t lanes = AbtLeafBoxes::lanes;
+  const float* col[6];
+  for (int k = 0; k < 6; ++k) col[k] = boxes.column(k) + base;
+#if CULLKIT_HAS_SSE2
+  const __m128 k = _mm_set1_ps(8.0f * std::numeric_limits<float>::epsilon());
+  const __m128 sign = _mm_set1_ps(-0.0f);
+  for (; planes != 0; planes &= planes - 1u) {
+    const int u = abt_lowest_bit(planes);
+    const __m128 nx = _mm_set1_ps(mp.nx()[u]), ny = _mm_set1_ps(mp.ny()[u]), nz = _mm_set1_ps(mp.nz()[u]);
+    const __m128 ax = _mm_andnot_ps(sign, nx), ay = _mm_andnot_ps(sign, ny), az = _mm_andnot_ps(sign, nz);
+    const __m128 d = _mm_set1_ps(mp.d_out()[u]), ad = _mm_set1_ps(mp.abs_d()[u]);
+    std::uint32_t bits = 0;
+    for (std::uint32_t q = 0; q < lanes / 4; ++q) {
+      const std::uint32_t o = 4 * q;
+      const __m128 px = _mm_mul_ps(nx, _mm_loadu_ps(col[0] + o)), py = _mm_mul_ps(ny, _mm_loadu_ps(col[1] + o));
+      const __m128 pz = _mm_mul_ps(nz, _mm_loadu_ps(col[2] + o));
+      const __m128 dc = _mm_add_ps(_mm_add_ps(_mm_add_ps(px, py), pz), d);
+      const __m128 r = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, _mm_loadu_ps(col[3] + o)), _mm_mul_ps(ay, _mm_loadu_ps(col[4] + o))),
+                                  _mm_mul_ps(az, _mm_loadu_ps(col[5] + o)));
+      const __m128 mag = _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, px), _mm_andnot_ps(sign, py)), _mm_andnot_ps(sign, pz));
+      const __m128 slack = _mm_mul_ps(_mm_add_ps(_mm_add_ps(mag, ad), r), k);
+      bits |= static_cast<std::uint32_t>(_mm_movemask_ps(_mm_cmplt_ps(_mm_add_ps(dc, r), _mm_xor_ps(slack, sign)))) << o;
+    }
+    plane_out[u] = bits;
+  }
+#else
+  constexpr float k = 8.0f * std::numeric_limits<float>::epsilon();
+  for (; planes != 0; planes &= planes - 1u) {
+    const int u = abt_lowest_bit(planes);
+    const float nx = mp.nx()[u], ny = mp.ny()[u], nz = mp.nz()[u], d = mp.d_out()[u], ad = mp.abs_d()[u];
+    std::uint32_t bits = 0;
+    for (std::uint32_t i = 0; i < lanes; ++i) {
+      const float px = nx * col[0][i], py = ny * col[1][i], pz = nz * col[2][i];
+      const float dc = px + py + pz + d;
+      const float r = std::fabs(nx) * col[3][i] + std::fabs(ny) * col[4][i] + std::fabs(nz) * col[5][i];
+      const float slack = (std::fabs(px) + std::fabs(py) + std::fabs(pz) + ad + r) * k;
+      bits |= static_cast<std::uint32_t>(dc + r < -slack) << i;
+    }
+    plane_out[u] = bits;
+  }
+#endif
+}
+
+/// lane_bits[i] = `inside_views` | (bit v for every view v of `straddling` whose `outside[v]` has
+/// bit i clear), for the 16 lanes.
+CULLKIT_FORCEINLINE void abt_transpose_lanes(std::uint32_t straddling, const std::uint32_t* outside,
+                                             std::uint32_t inside_views, std::uint32_t* lane_bits) noexcept {
+  constexpr std::uint32_t lanes = AbtLeafBoxes::lanes;
+#if CULLKIT_HAS_SSE2
+  __m128i acc[lanes / 4];
+  const __m128i select[lanes / 4] = {_mm_setr_epi32(1, 2, 4, 8), _mm_setr_epi32(16, 32, 64, 128),
+                                     _mm_setr_epi32(256, 512, 1024, 2048), _mm_setr_epi32(4096, 8192, 16384, 32768)};
+  for (std::uint32_t q = 0; q < lanes / 4; ++q) acc[q] = _mm_set1_epi32(static_cast<int>(inside_views));
+  for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) {
+    const int v = abt_lowest_bit(rest);
+    const __m128i out = _mm_set1_epi32(static_cast<int>(outside[v]));
+    const __m128i bit = _mm_set1_epi32(static_cast<int>(std::uint32_t{1} << v));
+    for (std::uint32_t q = 0; q < lanes / 4; ++q) {
+      const __m128i in_view = _mm_cmpeq_epi32(_mm_and_si128(out, select[q]), _mm_setzero_si128());
+      acc[q] = _mm_or_si128(acc[q], _mm_and_si128(in_view, bit));
+    }
+  }
+  for (std::uint32_t q = 0; q < lanes / 4; ++q) _mm_storeu_si128(reinterpret_cast<__m128i*>(lane_bits + 4 * q), acc[q]);
+#else
+  for (std::uint32_t i = 0; i < lanes; ++i) lane_bits[i] = inside_views;
+  for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) {
+    const int v = abt_lowest_bit(rest);
+    for (std::uint32_t i = 0; i < lanes; ++i) lane_bits[i] |= ((~outside[v] >> i) & 1u) << v;
+  }
+#endif
+}
+
+/// The objects of [begin, end) (a straddling leaf, a small subtree, or the pending part): one
+/// output entry per object that some view of `alive` keeps, with its view bits. Views of `alive`
+/// without a plane in `mask` hold every object.
+inline void abt_merged_leaf(const AbtMergedPlanes& mp, const AbtLeafBoxes& boxes, std::uint32_t alive,
+                            std::uint32_t mask, std::uint32_t begin, std::uint32_t end, const std::uint32_t* order,
+                            const AbtDynamic& dyn, std::vector<std::uint32_t>& out,
+                            std::vector<std::uint32_t>& view_bits) {
+  constexpr std::uint32_t lanes = AbtLeafBoxes::lanes;
+  constexpr std::uint32_t all_lanes = (std::uint32_t{1} << lanes) - 1u;
+  const std::uint32_t straddling = mp.straddling(alive, mask);
+  const std::uint32_t inside_views = alive & ~straddling;
+  std::uint32_t plane_out[AbtMergedPlanes::capacity];
+  std::uint32_t outside[32];
+  for (std::uint32_t base = begin; base < end; base += lanes) {
+    abt_merged_lanes(mp, boxes, base, mask, plane_out);
+    const std::uint32_t valid = end - base < lanes ? (std::uint32_t{1} << (end - base)) - 1u : all_lanes;
+    std::uint32_t any = inside_views != 0 ? valid : 0u;
+    for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) {
+      const int v = abt_lowest_bit(rest);
+      std::uint32_t o = 0;
+      for (std::uint32_t p = mp.planes_of(std::uint32_t(v)) & mask; p != 0; p &= p - 1u) o |= plane_out[abt_lowest_bit(p)];
+      outside[v] = o;
+      any |= ~o;
+    }
+    any &= valid & ~dyn.holes16(base);
+    if (any == 0) continue;
+    std::uint32_t lane_bits[lanes];
+    abt_transpose_lanes(straddling, outside, inside_views, lane_bits);
+    for (; any != 0; any &= any - 1u) {
+      const int i = abt_lowest_bit(any);
+      out.push_back(order[base + std::uint32_t(i)]);
+      view_bits.push_back(lane_bits[i]);
+    }
+  }
+}
+
+/// The whole walk over a tree's arrays for the views of `mp` (`views` in [1, 32]); `StackSize`
+/// bounds the depth. Objects inserted since the last rebuild are tested first, one by one.
+template <std::uint32_t StackSize>
+void abt_cull_views_merged(const AbtMergedPlanes& mp, std::uint32_t views, const std::vector<AbtNode>& tree,
+                           const std::vector<std::uint32_t>& order_v, const AbtLeafBoxes& boxes,
+                           const AbtDynamic& dyn, std::uint32_t scan_below, std::vector<std::uint32_t>& out,
+                           std::vector<std::uint32_t>& view_bits) {
+  const std::uint32_t all = views >= 32 ? ~std::uint32_t{0} : ((std::uint32_t{1} << views) - 1u);
+  const std::uint32_t* order = order_v.data();
+  const auto n = static_cast<std::uint32_t>(order_v.size());
+  if (dyn.tree_end < n) abt_merged_leaf(mp, boxes, all, mp.all_planes(), dyn.tree_end, n, order, dyn, out, view_bits);
+  if (tree.empty()) return;
+  const AbtNode* nodes = tree.data();
+  struct Entry {
+    std::uint32_t node, alive, mask;
+  };
+  Entry stack[StackSize];
+  std::uint32_t top = 0;
+  stack[top++] = Entry{0, all, mp.all_planes()};
+  while (top > 0) {
+    const Entry entry = stack[--top];
+    const AbtNode& node = nodes[entry.node];
+    std::uint32_t mask = entry.mask;
+    const std::uint32_t alive = abt_merged_node(mp, node.bounds, node.sphere, entry.alive, mask);
+    if (alive == 0) continue;
+    if (mask == 0) {  // inside every view still alive: one range, one set of bits
+      const auto emit = [&](std::uint32_t b, std::uint32_t e) {
+        out.insert(out.end(), order + b, order + e);
+        view_bits.insert(view_bits.end(), e - b, alive);
+        return true;
+      };
+      if (!dyn.node_has_holes(entry.node)) emit(node.begin, node.end);
+      else dyn.live_runs(node.begin, node.end, emit);
+      continue;
+    }
+    if (node.is_leaf() || node.count() <= scan_below) {
+      abt_merged_leaf(mp, boxes, alive, mask, node.begin, node.end, order, dyn, out, view_bits);
+      continue;
+    }
+    stack[top++] = Entry{node.left + 1, alive, mask};
+    stack[top++] = Entry{node.left, alive, mask};
+  }
+}
+
+}  // namespace cullkit::detail
