@@ -41,3 +41,24 @@
 #define CULLKIT_HAS_SSE2 0
 #endif
 #endif
+
+// Separate compilation of the heavy non-template cores (opt-in). By default every core is inline:
+// a translation unit that uses NormalClassIndex or the worker pool compiles their machinery itself.
+// Define CULLKIT_SEPARATE_CORE in every translation unit of the program, and in exactly one of them
+// also CULLKIT_IMPLEMENTATION before its first cullkit include (src/cullkit_core.cpp is that unit;
+// linking the CMake target `cullkit::core` does both). The other units then see only declarations
+// of the cores' entry points and skip their headers, so they compile faster, and the one unit holds
+// the single definition. The answers are the same in both modes.
+//   CULLKIT_CORE_FN      what a core entry point is declared with: `inline`, or nothing.
+//   CULLKIT_CORE_BODIES  1 where the cores' definitions are compiled in this unit.
+#if defined(CULLKIT_SEPARATE_CORE)
+#define CULLKIT_CORE_FN
+#if defined(CULLKIT_IMPLEMENTATION)
+#define CULLKIT_CORE_BODIES 1
+#else
+#define CULLKIT_CORE_BODIES 0
+#endif
+#else
+#define CULLKIT_CORE_FN inline
+#define CULLKIT_CORE_BODIES 1
+#endif

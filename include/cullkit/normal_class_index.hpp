@@ -82,12 +82,11 @@
 #include "task_runner.hpp"
 #include "mesh_buffers.hpp"
 #include "traits.hpp"
-#include "detail/nci/build.hpp"
 #include "detail/nci/context.hpp"
+#include "detail/nci/core.hpp"
 #include "detail/nci/degenerate_camera.hpp"
 #include "detail/nci/index_data.hpp"
 #include "detail/nci/moving.hpp"
-#include "detail/nci/select.hpp"
 #include "detail/nci/types.hpp"
 
 namespace cullkit {

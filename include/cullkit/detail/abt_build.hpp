@@ -24,7 +24,7 @@
 #include "../geometry/aabb.hpp"
 #include "../geometry/sphere.hpp"
 #include "abt_split.hpp"
-#include "worker_pool.hpp"
+#include "parallel.hpp"
 
 namespace cullkit::detail {
 
@@ -202,7 +202,7 @@ inline std::vector<AbtNode> abt_build_raw(AbtBuildContext ctx, std::uint32_t beg
     std::atomic<std::size_t> next{0};
   } job{&ctx, &tasks, std::vector<std::vector<AbtNode>>(tasks.size()), {}};
   const std::size_t count = std::min<std::size_t>(workers, tasks.size());
-  WorkerPool::shared().run(
+  detail::run_on_pool(
       count,
       [](void* p, std::size_t) {
         Job& j = *static_cast<Job*>(p);

@@ -1,6 +1,10 @@
 // cullkit/detail/abt_views.hpp: the multi-view walk of AdaptiveBinaryTree::cull_views (users never
 // name this).
 //
+// Views whose planes fit in 32 distinct ones (up to five views always; stereo pairs and cascades
+// of one camera share planes) take the merged walk of abt_views_merged.hpp. The walk below is for
+// more: it tests each view's own planes and shares arithmetic only within families.
+//
 // Why it is shaped this way. A walk that tests every node and object against each view in turn
 // does the arithmetic of separate culls plus the cost of writing a view mask per object: measured,
 // no faster than separate culls. The saving comes from views that look alike. The two eyes of a

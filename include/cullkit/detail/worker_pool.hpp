@@ -16,20 +16,13 @@
 #include <vector>
 
 #include "../task_runner.hpp"
+#include "parallel.hpp"
 
 namespace cullkit::detail {
 
-/// Worker count for an option where 0 means "all hardware threads" (hardware_concurrency may
-/// report 0 when unknown: then one), capped at `limit` (at least 1).
-[[nodiscard]] inline unsigned resolve_threads(unsigned requested, std::size_t limit) noexcept {
-  unsigned n = requested != 0 ? requested : std::thread::hardware_concurrency();
-  const std::size_t cap = std::max<std::size_t>(1, limit);
-  return static_cast<unsigned>(std::clamp<std::size_t>(n, 1, cap));
-}
-
 class WorkerPool {
  public:
-  using Task = void (*)(void* job, std::size_t task);
+  using Task = ParallelTask;
 
   /// The process-wide pool, created on first use and joined at exit.
   [[nodiscard]] static WorkerPool& shared() {
@@ -122,9 +115,18 @@ class WorkerPool {
   bool stop_ = false;
 };
 
-/// Runs task(job, i) for i in [0, count): through `runner` when it has a dispatch function,
-/// otherwise on the shared pool.
-inline void run_tasks(const TaskRunner& runner, std::size_t count, WorkerPool::Task task, void* job) {
+#if CULLKIT_CORE_BODIES
+CULLKIT_CORE_FN unsigned resolve_threads(unsigned requested, std::size_t limit) noexcept {
+  unsigned n = requested != 0 ? requested : std::thread::hardware_concurrency();
+  const std::size_t cap = std::max<std::size_t>(1, limit);
+  return static_cast<unsigned>(std::clamp<std::size_t>(n, 1, cap));
+}
+
+CULLKIT_CORE_FN void run_on_pool(std::size_t count, ParallelTask task, void* job) {
+  WorkerPool::shared().run(count, task, job);
+}
+
+CULLKIT_CORE_FN void run_tasks(const TaskRunner& runner, std::size_t count, ParallelTask task, void* job) {
   if (count == 0) return;
   if (runner.dispatch != nullptr && count > 1) {
     runner.dispatch(runner.context, count, task, job);
@@ -132,5 +134,8 @@ inline void run_tasks(const TaskRunner& runner, std::size_t count, WorkerPool::T
   }
   WorkerPool::shared().run(count, task, job);
 }
+
+CULLKIT_CORE_FN std::size_t pool_thread_count() { return WorkerPool::shared().thread_count(); }
+#endif
 
 }  // namespace cullkit::detail

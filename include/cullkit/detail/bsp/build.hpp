@@ -25,7 +25,7 @@
 #include <glm/vec3.hpp>
 
 #include "../../config.hpp"
-#include "../worker_pool.hpp"
+#include "../parallel.hpp"
 
 namespace cullkit {
 
@@ -418,7 +418,7 @@ inline std::vector<Output> build_parallel(std::vector<Item>& items, unsigned thr
     std::atomic<std::size_t> next{0}, done{0};
   } job{&items, std::vector<Output>(items.size()), &ctx, {}, {}};
   const std::size_t count = std::min<std::size_t>(std::max(1u, threads), items.size());
-  WorkerPool::shared().run(
+  detail::run_on_pool(
       count,
       [](void* p, std::size_t task) {
         Job& j = *static_cast<Job*>(p);

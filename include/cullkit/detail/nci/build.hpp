@@ -18,16 +18,14 @@
 #include "cell_bvh.hpp"
 #include "kmeans.hpp"
 #include "overlap.hpp"
-#include "../worker_pool.hpp"
+#include "../parallel.hpp"
+#include "core.hpp"
 #include "index_data.hpp"
 #include "tolerances.hpp"
 
 namespace cullkit::detail::nci {
 
 // ---------------------------------------------------------------- build
-inline void report(const IndexData& data, float f) {
-  if (data.params.progress) data.params.progress(f, data.params.progress_user);
-}
 
 // One class's cells and grids, with offsets local to the class.
 struct ClassGrids {
@@ -236,7 +234,7 @@ inline void build_class_grids(const IndexData& data, const std::vector<std::uint
     }
   };
   using Work = decltype(work);
-  detail::WorkerPool::shared().run(build_threads, [](void* job, std::size_t task) { (*static_cast<Work*>(job))(task == 0); },
+  detail::run_on_pool(build_threads, [](void* job, std::size_t task) { (*static_cast<Work*>(job))(task == 0); },
                                    &work);
 }
 
@@ -508,7 +506,7 @@ inline void make_cell_hierarchies(IndexData& data, const std::vector<std::uint32
     }
   };
   using Work = decltype(work);
-  detail::WorkerPool::shared().run(build_threads, [](void* job, std::size_t) { (*static_cast<Work*>(job))(); }, &work);
+  detail::run_on_pool(build_threads, [](void* job, std::size_t) { (*static_cast<Work*>(job))(); }, &work);
   merge_hierarchies(data, parts);
 }
 
@@ -543,9 +541,9 @@ inline void narrow_forms(IndexData& data) {
   }
 }
 
-// Builds the index from the valid triangles `gather` left in `data` (vertices, tri_vertices,
-// tri_original, box, the skip counts) and their unit normals: the steps above, in order.
-inline void build(IndexData& data, std::vector<glm::vec3>& normals) {
+#if CULLKIT_CORE_BODIES
+// The steps above, in order (declared in core.hpp).
+CULLKIT_CORE_FN void build(IndexData& data, std::vector<glm::vec3>& normals) {
   data.stats.triangles_indexed = data.tri_original.size();
   report(data, 0.1f);
   if (data.tri_original.empty()) {
@@ -571,4 +569,6 @@ inline void build(IndexData& data, std::vector<glm::vec3>& normals) {
   data.bvh_nodes.shrink_to_fit();
   report(data, 1.0f);
 }
+#endif
+
 }  // namespace cullkit::detail::nci

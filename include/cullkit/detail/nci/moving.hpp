@@ -26,7 +26,7 @@
 #include "context.hpp"
 #include "degenerate_camera.hpp"
 #include "index_data.hpp"
-#include "select.hpp"
+#include "core.hpp"
 #include "types.hpp"
 
 namespace cullkit::detail::nci {

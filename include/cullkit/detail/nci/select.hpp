@@ -10,8 +10,9 @@
 #include <limits>
 #include <atomic>
 
-#include "../worker_pool.hpp"
+#include "../parallel.hpp"
 #include "context.hpp"
+#include "core.hpp"
 #include "index_data.hpp"
 #include "slice_walk.hpp"
 #include "view.hpp"
@@ -169,9 +170,9 @@ inline void write_pixels(const IndexData& data, const Scratch& scratch, std::siz
   }
 }
 
-// NormalClassIndex::select_visible for the static scene. `initial_depth` and `initial_solid`
-// (per pixel, or null): the depths the pixels start from (moving objects selected before).
-inline void select_frame(const IndexData& data, const Camera& camera, NciContext& context, VisibleSet& out,
+#if CULLKIT_CORE_BODIES
+// Declared in core.hpp.
+CULLKIT_CORE_FN void select_frame(const IndexData& data, const Camera& camera, NciContext& context, VisibleSet& out,
                          NciPixels* pixels, const float* initial_depth, const float* initial_solid) {
   Scratch& scratch = ContextAccess::scratch(context);
   out.triangles.clear();
@@ -215,5 +216,7 @@ inline void select_frame(const IndexData& data, const Camera& camera, NciContext
   }
   if (pixels) write_pixels(data, scratch, pixel_count, *pixels);
 }
+
+#endif
 
 }  // namespace cullkit::detail::nci
