@@ -46,9 +46,9 @@ inline void print_header() {
 
 /// Runs every contestant `reps` times (interleaved, so a slow phase of the machine hits them all
 /// alike) after one warm-up run each; prints one CSV row per contestant and returns the results.
-/// Each repetition starts one contestant later than the one before, so every contestant follows
-/// each other one equally often: a contestant that evicts the caches (a slow peer) then costs all
-/// of them alike instead of always the one after it.
+/// The order changes from one repetition to the next (every rotation, forward and backward), so
+/// each contestant runs right after each other one about equally often: a contestant that evicts
+/// the caches (a slow peer) then costs all of them alike instead of always the one after it.
 inline std::vector<RaceResult> race(const std::string& race_name, const std::vector<Contestant>& contestants,
                                     int reps = 31) {
   if (smoke()) reps = 2;
@@ -56,8 +56,9 @@ inline std::vector<RaceResult> race(const std::string& race_name, const std::vec
   std::vector<std::vector<double>> times(contestants.size());
   for (auto& c : contestants) c.run();
   for (int r = 0; r < reps; ++r) {
-    for (std::size_t j = 0; j < contestants.size(); ++j) {
-      const std::size_t i = (std::size_t(r) + j) % contestants.size();
+    const std::size_t n = contestants.size(), k = std::size_t(r) % (2 * n), first = k % n;
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::size_t i = k < n ? (first + j) % n : (first + n - 1 - j) % n;
       const auto t0 = std::chrono::steady_clock::now();
       contestants[i].run();
       const auto t1 = std::chrono::steady_clock::now();

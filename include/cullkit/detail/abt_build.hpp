@@ -66,6 +66,26 @@ struct AbtBuildContext {
   return cfg;
 }
 
+/// Appends the nodes of `sub` (a raw array whose root is sub[0]) to `raw`, its root replacing
+/// `raw[at]`; child links are shifted accordingly.
+CULLKIT_CORE_FN void abt_stitch(std::vector<AbtNode>& raw, std::uint32_t at, const std::vector<AbtNode>& sub);
+
+/// Builds a raw node array (root at 0) over items [begin, end), the root at `depth`. `threads`
+/// follows AbtParams::threads (0: all hardware threads, 1: the calling thread only); with more
+/// than one and enough items, subtrees below `grain` items are deferred as tasks and built on the
+/// shared WorkerPool. Split choices depend only on a node's own items and key, and each task
+/// writes its own array, stitched in task order, so the tree is the same for every thread count.
+CULLKIT_CORE_FN std::vector<AbtNode> abt_build_raw(AbtBuildContext ctx, std::uint32_t begin, std::uint32_t end,
+                                                   std::uint32_t depth, unsigned threads, std::uint32_t grain);
+
+/// Canonical layout: pre-order, each inner node's children allocated as a pair when the node is
+/// visited, left subtree before right. Nodes of `raw` unreachable from raw[0] are dropped.
+/// Fills `nodes`, `from` (new index -> raw index) and the shape statistics of `stats`.
+CULLKIT_CORE_FN void abt_relayout(const std::vector<AbtNode>& raw, std::vector<AbtNode>& nodes,
+                                  std::vector<std::uint32_t>& from, AbtStats& stats);
+
+// The definitions: compiled where the cores are (CULLKIT_SEPARATE_CORE, config.hpp).
+#if CULLKIT_CORE_BODIES
 /// Bounds of items [begin, end) and of their centroids.
 inline void abt_range_bounds(const AbtBuildItem* items, std::uint32_t begin, std::uint32_t end, Aabb& box,
                              Aabb& centroids) noexcept {
@@ -156,9 +176,7 @@ inline void abt_build_node(std::vector<AbtNode>& nodes, std::uint32_t node, std:
   abt_build_node(nodes, left + 1, m, end, depth + 1, rbox, rcen, ctx, scratch);
 }
 
-/// Appends the nodes of `sub` (a raw array whose root is sub[0]) to `raw`, its root replacing
-/// `raw[at]`; child links are shifted accordingly.
-inline void abt_stitch(std::vector<AbtNode>& raw, std::uint32_t at, const std::vector<AbtNode>& sub) {
+CULLKIT_CORE_FN void abt_stitch(std::vector<AbtNode>& raw, std::uint32_t at, const std::vector<AbtNode>& sub) {
   const auto offset = static_cast<std::uint32_t>(raw.size()) - 1u;  // sub[1] lands at raw.size()
   AbtNode root = sub[0];
   if (!root.is_leaf()) root.left += offset;
@@ -170,13 +188,8 @@ inline void abt_stitch(std::vector<AbtNode>& raw, std::uint32_t at, const std::v
   }
 }
 
-/// Builds a raw node array (root at 0) over items [begin, end), the root at `depth`. `threads`
-/// follows AbtParams::threads (0: all hardware threads, 1: the calling thread only); with more
-/// than one and enough items, subtrees below `grain` items are deferred as tasks and built on the
-/// shared WorkerPool. Split choices depend only on a node's own items and key, and each task
-/// writes its own array, stitched in task order, so the tree is the same for every thread count.
-inline std::vector<AbtNode> abt_build_raw(AbtBuildContext ctx, std::uint32_t begin, std::uint32_t end,
-                                          std::uint32_t depth, unsigned threads, std::uint32_t grain) {
+CULLKIT_CORE_FN std::vector<AbtNode> abt_build_raw(AbtBuildContext ctx, std::uint32_t begin, std::uint32_t end,
+                                                   std::uint32_t depth, unsigned threads, std::uint32_t grain) {
   std::vector<AbtNode> raw(1);
   raw.reserve(2 * ((end - begin) / ctx.leaf_size + 1));
   AbtSplitScratch scratch;
@@ -220,11 +233,8 @@ inline std::vector<AbtNode> abt_build_raw(AbtBuildContext ctx, std::uint32_t beg
   return raw;
 }
 
-/// Canonical layout: pre-order, each inner node's children allocated as a pair when the node is
-/// visited, left subtree before right. Nodes of `raw` unreachable from raw[0] are dropped.
-/// Fills `nodes`, `from` (new index -> raw index) and the shape statistics of `stats`.
-inline void abt_relayout(const std::vector<AbtNode>& raw, std::vector<AbtNode>& nodes,
-                         std::vector<std::uint32_t>& from, AbtStats& stats) {
+CULLKIT_CORE_FN void abt_relayout(const std::vector<AbtNode>& raw, std::vector<AbtNode>& nodes,
+                                  std::vector<std::uint32_t>& from, AbtStats& stats) {
   struct Move {
     std::uint32_t from, to, depth;
   };
@@ -258,6 +268,7 @@ inline void abt_relayout(const std::vector<AbtNode>& raw, std::vector<AbtNode>& 
   }
   stats.nodes = static_cast<std::uint32_t>(nodes.size());
 }
+#endif  // CULLKIT_CORE_BODIES
 
 /// Surface area in double of a box, 0 for boxes that are empty or `is_unbounded` (a quality
 /// measure must not be swamped by the stand-in box of objects without bounds).

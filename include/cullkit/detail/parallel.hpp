@@ -26,6 +26,9 @@ CULLKIT_CORE_FN void run_on_pool(std::size_t count, ParallelTask task, void* job
 /// otherwise on the shared pool.
 CULLKIT_CORE_FN void run_tasks(const TaskRunner& runner, std::size_t count, ParallelTask task, void* job);
 
+/// Blocks the calling thread for about `ms` milliseconds (a progress loop's pause).
+CULLKIT_CORE_FN void sleep_milliseconds(unsigned ms);
+
 /// Threads the shared pool has started so far (they live until the process ends).
 [[nodiscard]] CULLKIT_CORE_FN std::size_t pool_thread_count();
 

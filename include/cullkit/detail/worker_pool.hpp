@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
@@ -134,6 +135,8 @@ CULLKIT_CORE_FN void run_tasks(const TaskRunner& runner, std::size_t count, Para
   }
   WorkerPool::shared().run(count, task, job);
 }
+
+CULLKIT_CORE_FN void sleep_milliseconds(unsigned ms) { std::this_thread::sleep_for(std::chrono::milliseconds(ms)); }
 
 CULLKIT_CORE_FN std::size_t pool_thread_count() { return WorkerPool::shared().thread_count(); }
 #endif

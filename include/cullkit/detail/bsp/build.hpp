@@ -17,7 +17,6 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
-#include <thread>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -433,21 +432,19 @@ inline std::vector<Output> build_parallel(std::vector<Item>& items, unsigned thr
         if (!report) return;
         while (j.done.load() < n) {
           j.ctx->params->progress(BspProgress{j.ctx->placed.load(), j.ctx->pending.load()});
-          std::this_thread::sleep_for(std::chrono::milliseconds(20));
+          detail::sleep_milliseconds(20);
         }
       },
       &job);
   return std::move(job.outs);
 }
 
-/// The whole build. `triangle_corners(i, out3)` reads triangle i (false: bad index).
-template <class Positions>
-void build(std::size_t triangle_count, const Positions& triangle_corners, const BspParams& params, Data& data) {
-  const auto t0 = std::chrono::steady_clock::now();
-  data = Data();
-  data.stats.triangles = triangle_count;
-  std::vector<DPlane> planes;
-  Item root = gather(triangle_count, triangle_corners, params, planes, data.stats);
+/// The tree over the work item `root` (every usable triangle, from `gather`) and the triangles'
+/// planes: cuts, merges the parallel parts and lays the result out canonically in `data`.
+CULLKIT_CORE_FN void build_tree(Data& data, Item root, const std::vector<DPlane>& planes, const BspParams& params);
+
+#if CULLKIT_CORE_BODIES
+CULLKIT_CORE_FN void build_tree(Data& data, Item root, const std::vector<DPlane>& planes, const BspParams& params) {
   Context ctx;
   ctx.planes = &planes;
   ctx.eps = data.stats.epsilon;
@@ -502,6 +499,17 @@ void build(std::size_t triangle_count, const Positions& triangle_corners, const 
   data.stats.fragments = data.fragments.size();
   data.stats.nodes = data.nodes.size();
   if (params.progress) params.progress(BspProgress{ctx.placed.load(), 0});
+}
+#endif
+
+/// The whole build. `triangle_corners(i, out3)` reads triangle i (false: bad index).
+template <class Positions>
+void build(std::size_t triangle_count, const Positions& triangle_corners, const BspParams& params, Data& data) {
+  const auto t0 = std::chrono::steady_clock::now();
+  data = Data();
+  data.stats.triangles = triangle_count;
+  std::vector<DPlane> planes;
+  build_tree(data, gather(triangle_count, triangle_corners, params, planes, data.stats), planes, params);
   data.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
