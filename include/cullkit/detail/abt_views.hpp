@@ -251,7 +251,6 @@ inline void abt_views_leaf(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes, s
                            std::uint32_t end, const std::uint32_t* order, const AbtDynamic& dyn,
                            std::vector<std::uint32_t>& out, std::vector<std::uint32_t>& view_bits) {
   constexpr std::uint32_t lanes = AbtLeafBoxes::lanes;
-  constexpr std::uint32_t all_lanes = (std::uint32_t{1} << lanes) - 1u;
   const std::uint32_t inside_views = alive & ~straddling;
   std::uint32_t outside[32];
   for (std::uint32_t base = begin; base < end; base += lanes) {
@@ -269,18 +268,7 @@ inline void abt_views_leaf(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes, s
       boxes.classify_lanes(&vp.frustum(std::uint32_t(v)).plane(0), masks[v], base, outside[v], cross);
     }
 #endif
-    const std::uint32_t valid = end - base < lanes ? (std::uint32_t{1} << (end - base)) - 1u : all_lanes;
-    std::uint32_t any = inside_views != 0 ? valid : 0u;
-    for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) any |= ~outside[abt_lowest_bit(rest)];
-    any &= valid & ~dyn.holes16(base);
-    if (any == 0) continue;
-    std::uint32_t lane_bits[lanes];
-    abt_transpose_lanes(straddling, outside, inside_views, lane_bits);
-    for (; any != 0; any &= any - 1u) {
-      const int i = abt_lowest_bit(any);
-      out.push_back(order[base + std::uint32_t(i)]);
-      view_bits.push_back(lane_bits[i]);
-    }
+    abt_emit_lanes(base, end, straddling, outside, inside_views, order, dyn, out, view_bits);
   }
 }
 

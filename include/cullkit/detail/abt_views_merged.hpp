@@ -284,6 +284,29 @@ CULLKIT_FORCEINLINE void abt_transpose_lanes(std::uint32_t straddling, const std
 #endif
 }
 
+/// The output of one lane group of a straddling range: every live object in [base, min(base +
+/// 16, end)) that a view keeps (a view of `inside_views`, or one of `straddling` whose outside[v]
+/// has its bit clear), with its view bits.
+CULLKIT_FORCEINLINE void abt_emit_lanes(std::uint32_t base, std::uint32_t end, std::uint32_t straddling,
+                                        const std::uint32_t* outside, std::uint32_t inside_views,
+                                        const std::uint32_t* order, const AbtDynamic& dyn,
+                                        std::vector<std::uint32_t>& out, std::vector<std::uint32_t>& view_bits) {
+  constexpr std::uint32_t lanes = AbtLeafBoxes::lanes;
+  constexpr std::uint32_t all_lanes = (std::uint32_t{1} << lanes) - 1u;
+  const std::uint32_t valid = end - base < lanes ? (std::uint32_t{1} << (end - base)) - 1u : all_lanes;
+  std::uint32_t any = inside_views != 0 ? valid : 0u;
+  for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) any |= ~outside[abt_lowest_bit(rest)];
+  any &= valid & ~dyn.holes16(base);
+  if (any == 0) return;
+  std::uint32_t lane_bits[lanes];
+  abt_transpose_lanes(straddling, outside, inside_views, lane_bits);
+  for (; any != 0; any &= any - 1u) {
+    const int i = abt_lowest_bit(any);
+    out.push_back(order[base + std::uint32_t(i)]);
+    view_bits.push_back(lane_bits[i]);
+  }
+}
+
 /// The objects of [begin, end) (a straddling leaf, a small subtree, or the pending part): one
 /// output entry per object that some view of `alive` keeps, with its view bits. Views of `alive`
 /// without a plane in `mask` hold every object.
@@ -292,31 +315,19 @@ inline void abt_merged_leaf(const AbtMergedPlanes& mp, const AbtLeafBoxes& boxes
                             const AbtDynamic& dyn, std::vector<std::uint32_t>& out,
                             std::vector<std::uint32_t>& view_bits) {
   constexpr std::uint32_t lanes = AbtLeafBoxes::lanes;
-  constexpr std::uint32_t all_lanes = (std::uint32_t{1} << lanes) - 1u;
   const std::uint32_t straddling = mp.straddling(alive, mask);
   const std::uint32_t inside_views = alive & ~straddling;
   std::uint32_t plane_out[AbtMergedPlanes::capacity];
   std::uint32_t outside[32];
   for (std::uint32_t base = begin; base < end; base += lanes) {
     abt_merged_lanes(mp, boxes, base, mask, plane_out);
-    const std::uint32_t valid = end - base < lanes ? (std::uint32_t{1} << (end - base)) - 1u : all_lanes;
-    std::uint32_t any = inside_views != 0 ? valid : 0u;
     for (std::uint32_t rest = straddling; rest != 0; rest &= rest - 1u) {
       const int v = abt_lowest_bit(rest);
       std::uint32_t o = 0;
       for (std::uint32_t p = mp.planes_of(std::uint32_t(v)) & mask; p != 0; p &= p - 1u) o |= plane_out[abt_lowest_bit(p)];
       outside[v] = o;
-      any |= ~o;
     }
-    any &= valid & ~dyn.holes16(base);
-    if (any == 0) continue;
-    std::uint32_t lane_bits[lanes];
-    abt_transpose_lanes(straddling, outside, inside_views, lane_bits);
-    for (; any != 0; any &= any - 1u) {
-      const int i = abt_lowest_bit(any);
-      out.push_back(order[base + std::uint32_t(i)]);
-      view_bits.push_back(lane_bits[i]);
-    }
+    abt_emit_lanes(base, end, straddling, outside, inside_views, order, dyn, out, view_bits);
   }
 }
 
