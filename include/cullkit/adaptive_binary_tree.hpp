@@ -163,7 +163,7 @@ class AdaptiveBinaryTree {
   /// are tested once at the looser offset, so a view may also get an object that far outside it.
   /// pre: `view_count <= 32` (views beyond the 32nd are ignored) and `frusta` points to them.
   /// Cost: one walk over the views' distinct planes (up to 32 of them; beyond that, a walk that
-  /// tests each view's planes); a stereo pair costs 0.55-0.7 of two separate culls (bench_views).
+  /// tests each view's planes); a stereo pair costs 0.55-0.62 of two separate culls (bench_views).
   /// Allocation: growth of `out` and `view_bits` only. Thread safety: as `cull`.
   void cull_views(const Frustum* frusta, std::size_t view_count, std::vector<std::uint32_t>& out,
                   std::vector<std::uint32_t>& view_bits) const {
