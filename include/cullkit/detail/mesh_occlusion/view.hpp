@@ -145,12 +145,15 @@ struct View {
   /// when the segment does not cross that level with exactly one endpoint inside, or the point is
   /// not usable. The caller passes each edge's endpoints in one fixed order (by welded vertex id), so
   /// the two triangles sharing the edge get bit-identical points and the edge still cancels.
-  [[nodiscard]] bool clip_point(const double* a, const double* b, Projected& out) const {
+  /// `at`, when given, receives the world point.
+  [[nodiscard]] bool clip_point(const double* a, const double* b, Projected& out, double* at = nullptr) const {
     const double na = near_value(a[0], a[1], a[2]), nb = near_value(b[0], b[1], b[2]);
     if ((na >= clip_level) == (nb >= clip_level)) return false;
     const double t = (clip_level - na) / (nb - na);
     if (!(t >= 0.0 && t <= 1.0)) return false;
-    out = project(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2]));
+    const double p[3] = {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])};
+    if (at) std::copy(p, p + 3, at);
+    out = project(p[0], p[1], p[2]);
     // The point's near-plane value is clip_level up to rounding, far above the usable margin.
     return out.usable;
   }
