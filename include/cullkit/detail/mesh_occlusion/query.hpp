@@ -475,6 +475,94 @@ inline bool rect_hidden(const CoverageGrid& grid, const BoxView& b) {
   return r.empty() || (std::isfinite(threshold) && grid.all_nearer(r, threshold));
 }
 
+/// The object test of a triangle with a corner not clearly beyond the near plane (which cannot be
+/// projected whole). True when no ray through the frustum can see it unhidden: it lies outside the
+/// frustum, or is clearly back-facing (the eye on its back side, in world space), or its part that
+/// can be drawn (near-plane value at least -clip_level: a margin on the near side this time), cut to
+/// the grid's rectangle on screen, has its rectangle hidden at that part's nearest depth. 1/w is
+/// affine on screen over the triangle's plane, so the cut interpolates it exactly up to rounding.
+inline bool crossing_triangle_hidden(const MeshIndex& index, const Scratch& s, const std::uint32_t* c) {
+  const View& view = s.view;
+  const glm::vec3 &p0 = index.positions[c[0]], &p1 = index.positions[c[1]], &p2 = index.positions[c[2]];
+  const Aabb box{glm::min(p0, glm::min(p1, p2)), glm::max(p0, glm::max(p1, p2))};
+  if (s.frustum.classify(box) == Containment::outside) return true;
+  double q[3][3];
+  for (int k = 0; k < 3; ++k) {
+    const glm::vec3& p = index.positions[c[k]];
+    for (int a = 0; a < 3; ++a) q[k][a] = double(p[a]) - view.eye[a];
+  }
+  // Front-facing means det[p0 - e, p1 - e, p2 - e] < 0 (see View::setup).
+  const double det = q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1]) - q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) +
+                     q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0]);
+  const auto len = [](const double* v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); };
+  if (det > 1e-9 * len(q[0]) * len(q[1]) * len(q[2])) return true;
+  // The drawable part: clipped at -clip_level, in the triangle's own order (no fusion needed here).
+  double x[8], y[8], iw[8];
+  int n = 0;
+  const double level = -view.clip_level;
+  double value[3];
+  for (int k = 0; k < 3; ++k) {
+    const glm::vec3& p = index.positions[c[k]];
+    value[k] = view.near_value(p.x, p.y, p.z);
+  }
+  const auto put = [&](double px, double py, double pz) {
+    const double qx = px - view.eye[0], qy = py - view.eye[1], qz = pz - view.eye[2];
+    const double cw = view.row[2][0] * qx + view.row[2][1] * qy + view.row[2][2] * qz;
+    if (!(cw > 0.0)) return false;
+    x[n] = (view.row[0][0] * qx + view.row[0][1] * qy + view.row[0][2] * qz) / cw * view.scale_x + view.offset_x;
+    y[n] = (view.row[1][0] * qx + view.row[1][1] * qy + view.row[1][2] * qz) / cw * view.scale_y + view.offset_y;
+    iw[n] = 1.0 / cw;
+    return std::isfinite(x[n]) && std::isfinite(y[n]) && std::isfinite(iw[n++]);
+  };
+  for (int k = 0; k < 3; ++k) {
+    const int l = k == 2 ? 0 : k + 1;
+    const glm::vec3 &a = index.positions[c[k]], &b = index.positions[c[l]];
+    if (value[k] >= level && !put(a.x, a.y, a.z)) return false;
+    if ((value[k] >= level) != (value[l] >= level)) {
+      const double t = (level - value[k]) / (value[l] - value[k]);
+      if (!(t >= 0.0 && t <= 1.0) ||
+          !put(a.x + t * (double(b.x) - a.x), a.y + t * (double(b.y) - a.y), a.z + t * (double(b.z) - a.z)))
+        return false;
+    }
+  }
+  if (n < 3) return true;  // nothing of it can be drawn
+  // Cut to the grid's rectangle widened by a cell, one side at a time.
+  for (int side = 0; side < 4; ++side) {
+    const double bound = side & 1 ? (side < 2 ? s.grid.width() : s.grid.height()) + 1.0 : -1.0;
+    double* u = side < 2 ? x : y;
+    const auto keep = [&](int i) { return side & 1 ? u[i] <= bound : u[i] >= bound; };
+    double nx[8], ny[8], niw[8];
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+      const int j = i + 1 == n ? 0 : i + 1;
+      if (keep(i)) {
+        nx[m] = x[i], ny[m] = y[i], niw[m++] = iw[i];
+      }
+      if (keep(i) != keep(j)) {
+        const double t = (bound - u[i]) / (u[j] - u[i]);
+        nx[m] = x[i] + t * (x[j] - x[i]), ny[m] = y[i] + t * (y[j] - y[i]), niw[m++] = iw[i] + t * (iw[j] - iw[i]);
+      }
+    }
+    n = m;
+    if (n == 0) return true;  // off the grid: no ray through the frustum meets it
+    std::copy(nx, nx + n, x);
+    std::copy(ny, ny + n, y);
+    std::copy(niw, niw + n, iw);
+  }
+  BoxView b{x[0], y[0], x[0], y[0], 0.0, true};
+  double iw_max = iw[0];
+  for (int i = 1; i < n; ++i) {
+    b.x0 = std::min(b.x0, x[i]);
+    b.x1 = std::max(b.x1, x[i]);
+    b.y0 = std::min(b.y0, y[i]);
+    b.y1 = std::max(b.y1, y[i]);
+    iw_max = std::max(iw_max, iw[i]);
+  }
+  // Rounding of the interpolation, far inside this margin (rect_hidden adds its own 2^-20).
+  b.w_min = 1.0 / (iw_max * (1.0 + 0x1p-30));
+  return std::isfinite(b.w_min) && b.w_min > 0.0 && rect_hidden(s.grid, b);
+}
+
 /// True when each of the patch's triangles is clearly back-facing (no ray sees its front) or hidden
 /// by its own screen rectangle at its own nearest depth. Corners are projected as for occluders.
 inline bool patch_triangles_hidden(const MeshIndex& index, Scratch& s, const Patch& patch) {
@@ -482,9 +570,10 @@ inline bool patch_triangles_hidden(const MeshIndex& index, Scratch& s, const Pat
     const std::uint32_t* c = &index.corners[3 * std::size_t(index.patches.triangles[k])];
     BoxView b{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, HUGE_VAL, true};
     double x[3], y[3];
-    for (int v = 0; v < 3; ++v) {
+    bool usable = true;
+    for (int v = 0; v < 3 && usable; ++v) {
       const Projected& p = project_vertex(index, s, c[v]);
-      if (!p.usable) return false;  // through the near plane: cannot be measured
+      usable = p.usable;  // else through the near plane: tested below
       x[v] = p.x;
       y[v] = p.y;
       b.x0 = std::min(b.x0, p.x);
@@ -492,6 +581,10 @@ inline bool patch_triangles_hidden(const MeshIndex& index, Scratch& s, const Pat
       b.y0 = std::min(b.y0, p.y);
       b.y1 = std::max(b.y1, p.y);
       b.w_min = std::min(b.w_min, p.w);
+    }
+    if (!usable) {
+      if (!crossing_triangle_hidden(index, s, c)) return false;
+      continue;
     }
     // The mirror of the occluders' front-facing rule, with the same margin: only a triangle that is
     // clearly back-facing is passed over; an edge-on one is tested like any other.
