@@ -228,8 +228,8 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
   }
 }
 
-/// Clips occluder triangle t (welded corners c, `inside` a bit per corner beyond the clipping level,
-/// neither none nor all of them) to its part beyond the clipping level, into `poly`. False when a
+/// Clips the occluder triangle of welded corners c (`inside`: a bit per corner beyond the clipping
+/// level, neither none nor all of them) to its part beyond the clipping level, into `poly`. False when a
 /// clip point cannot be had. Each clip point is computed from its edge's endpoints ordered by welded
 /// id, so a neighbour clipped on the same edge gets the same point: the shared part still cancels.
 inline bool clip_occluder(const MeshIndex& index, const Scratch& s, const std::uint32_t* c, unsigned inside,
@@ -262,8 +262,9 @@ inline bool clip_occluder(const MeshIndex& index, const Scratch& s, const std::u
 
 /// Projects the occluder patches' triangles and keeps those that can occlude: clearly front-facing,
 /// touching the grid, and with some corner beyond the clipping level (a triangle with a corner short
-/// of it is clipped to its part beyond). Fills `s.triangles` with (smallest corner depth as float
-/// bits, triangle), nearest first, and `s.clipped` with the clipped ones' polygons.
+/// of it is clipped to its part beyond). Fills `s.triangles` with (sort key as float bits, triangle),
+/// smallest key first, the key being the nearest corner's depth (the farthest corner's for a clipped
+/// polygon), and `s.clipped` with the clipped ones' polygons.
 inline void gather_triangles(const MeshIndex& index, Scratch& s) {
   const int orient = s.view.orient;
   const double gw = s.grid.width(), gh = s.grid.height();
@@ -505,6 +506,8 @@ inline bool crossing_triangle_hidden(const MeshIndex& index, const Scratch& s, c
     const glm::vec3& p = index.positions[c[k]];
     value[k] = view.near_value(p.x, p.y, p.z);
   }
+  // Projects a corner of the drawable part; false (the triangle stays visible) when it is not in
+  // front of the eye or so far off screen that the cut below could lose precision.
   const auto put = [&](double px, double py, double pz) {
     const double qx = px - view.eye[0], qy = py - view.eye[1], qz = pz - view.eye[2];
     const double cw = view.row[2][0] * qx + view.row[2][1] * qy + view.row[2][2] * qz;
@@ -512,7 +515,9 @@ inline bool crossing_triangle_hidden(const MeshIndex& index, const Scratch& s, c
     x[n] = (view.row[0][0] * qx + view.row[0][1] * qy + view.row[0][2] * qz) / cw * view.scale_x + view.offset_x;
     y[n] = (view.row[1][0] * qx + view.row[1][1] * qy + view.row[1][2] * qz) / cw * view.scale_y + view.offset_y;
     iw[n] = 1.0 / cw;
-    return std::isfinite(x[n]) && std::isfinite(y[n]) && std::isfinite(iw[n++]);
+    const bool ok = std::fabs(x[n]) < 0x1p40 && std::fabs(y[n]) < 0x1p40 && std::isfinite(iw[n]);
+    ++n;
+    return ok;
   };
   for (int k = 0; k < 3; ++k) {
     const int l = k == 2 ? 0 : k + 1;
@@ -560,7 +565,8 @@ inline bool crossing_triangle_hidden(const MeshIndex& index, const Scratch& s, c
   }
   // Rounding of the interpolation, far inside this margin (rect_hidden adds its own 2^-20).
   b.w_min = 1.0 / (iw_max * (1.0 + 0x1p-30));
-  return std::isfinite(b.w_min) && b.w_min > 0.0 && rect_hidden(s.grid, b);
+  const bool finite = std::isfinite(b.x0) && std::isfinite(b.x1) && std::isfinite(b.y0) && std::isfinite(b.y1);
+  return finite && std::isfinite(b.w_min) && b.w_min > 0.0 && rect_hidden(s.grid, b);
 }
 
 /// True when each of the patch's triangles is clearly back-facing (no ray sees its front) or hidden
