@@ -1,10 +1,11 @@
 // MeshOcclusionCuller against brute force: many random small scenes (closed boxes, walls made of
 // jittered triangle grids cut into objects, random triangle soups), many random cameras (both depth
 // ranges, reversed-Z, infinite far planes, near planes from 0.01 to 2, eyes inside objects, eyes
-// nearer a wall than the near plane, views grazing a wall), random grid sizes. For every object the
-// culler hides, dense and jittered rays over its screen rectangle must all meet another object's
-// front face first (beyond the near plane). The test also counts what it hid and how many visible
-// objects the oracle confirms, so it shows it can fail: hiding any of those would be caught.
+// nearer a wall than the near plane, eyes beside a wall that reaches behind them, views grazing a
+// wall), random grid sizes. For every object the culler hides, dense and jittered rays over its
+// screen rectangle must all meet another object's front face first (beyond the near plane). The
+// test also counts what it hid and how many visible objects the oracle confirms, so it shows it can
+// fail: hiding any of those would be caught.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -139,6 +140,13 @@ int main() {
         const auto& w = walls[std::size_t(rng.range(0, int(walls.size()) - 1))];
         eye = w.first + w.second * rng.uniform(0.5f, 10.0f) + random_unit(rng) * rng.uniform(0.0f, 2.0f);
         target = w.first + random_unit(rng) * rng.uniform(0.0f, 2.0f);
+      } else if (kind == 7 && !walls.empty()) {
+        // Beside a wall that reaches behind the eye, looking along it at a slant: its triangles
+        // cross the near plane and are clipped there.
+        const auto& w = walls[std::size_t(rng.range(0, int(walls.size()) - 1))];
+        const glm::vec3 along = glm::normalize(glm::cross(w.second, random_unit(rng)));
+        eye = w.first + along * rng.uniform(-1.0f, 1.0f) + w.second * rng.uniform(0.02f, 1.5f);
+        target = w.first - along * rng.uniform(3.0f, 8.0f) - w.second * rng.uniform(0.0f, 3.0f);
       } else if (kind == 2) {
         // Inside an object's box (or a box's surface).
         const cullkit::MeshObject& o = s.objects[std::size_t(rng.range(0, int(s.objects.size()) - 1))];

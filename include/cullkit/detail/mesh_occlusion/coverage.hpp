@@ -301,10 +301,15 @@ class CoverageGrid {
     return true;
   }
 
-  /// True when every cell the triangle's box touches (with a margin) is covered already.
-  [[nodiscard]] bool all_frozen(const double* x, const double* y) const {
-    const double xmin = std::min(std::min(x[0], x[1]), x[2]), xmax = std::max(std::max(x[0], x[1]), x[2]);
-    const double ymin = std::min(std::min(y[0], y[1]), y[2]), ymax = std::max(std::max(y[0], y[1]), y[2]);
+  /// True when every cell the box of the n corners touches (with a margin) is covered already.
+  [[nodiscard]] bool all_frozen(const double* x, const double* y, int n = 3) const {
+    double xmin = x[0], xmax = x[0], ymin = y[0], ymax = y[0];
+    for (int k = 1; k < n; ++k) {
+      xmin = std::min(xmin, x[k]);
+      xmax = std::max(xmax, x[k]);
+      ymin = std::min(ymin, y[k]);
+      ymax = std::max(ymax, y[k]);
+    }
     const CellRect r = cells_of(xmin, ymin, xmax, ymax);
     if (r.empty()) return false;
     for (int j = r.y0; j <= r.y1; ++j)

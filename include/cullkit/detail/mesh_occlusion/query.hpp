@@ -32,6 +32,15 @@ struct BoxView {
   bool usable;
 };
 
+/// An occluder triangle clipped at the near plane (View::clip_level): its part beyond, a triangle or a
+/// quadrilateral in the triangle's own order. Corner k runs to corner k + 1 along the triangle's edge
+/// `edge[k]` (0 to 2), or along the clipping line (-1: always outline, never shared).
+struct ClippedPolygon {
+  double x[4], y[4], w[4];
+  int edge[4];
+  int n;
+};
+
 /// Per-thread working memory of a query; only grows.
 struct Scratch {
   MeshOcclusionStats stats;
@@ -46,6 +55,8 @@ struct Scratch {
   const void* owner = nullptr;
   std::uint32_t frame = 0;
   std::vector<std::uint32_t> vertex_stamp, vertex_slot, triangle_stamp, triangle_band, patch_stamp;
+  std::vector<std::uint32_t> clip_stamp, clip_slot;  // per triangle: its polygon in `clipped`
+  std::vector<ClippedPolygon> clipped;                // this frame's clipped occluder triangles
   std::vector<BoxView> patch_boxes;       // per patch, valid where patch_stamp equals `frame`
   std::vector<Projected> projected;
   View view;
@@ -84,6 +95,8 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
     s.vertex_slot.assign(index.positions.size(), 0);
     s.triangle_stamp.assign(index.corners.size() / 3, 0);
     s.triangle_band.assign(index.corners.size() / 3, 0);
+    s.clip_stamp.assign(index.corners.size() / 3, 0);
+    s.clip_slot.assign(index.corners.size() / 3, 0);
     s.patch_stamp.assign(index.patches.patches.size(), 0);
     s.patch_boxes.resize(index.patches.patches.size());
     s.frame = 0;
@@ -91,10 +104,12 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
   if (++s.frame == 0) {
     std::fill(s.vertex_stamp.begin(), s.vertex_stamp.end(), 0);
     std::fill(s.triangle_stamp.begin(), s.triangle_stamp.end(), 0);
+    std::fill(s.clip_stamp.begin(), s.clip_stamp.end(), 0);
     std::fill(s.patch_stamp.begin(), s.patch_stamp.end(), 0);
     s.frame = 1;
   }
   s.projected.clear();
+  s.clipped.clear();
 }
 
 inline const Projected& project_vertex(const MeshIndex& index, Scratch& s, std::uint32_t v) {
@@ -213,9 +228,43 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
   }
 }
 
-/// Projects the occluder patches' triangles and keeps those that can occlude: every corner
-/// clearly beyond the near plane, clearly front-facing, touching the grid. Fills `s.triangles`
-/// with (largest corner depth as float bits, triangle), nearest first.
+/// Clips the occluder triangle of welded corners c (`inside`: a bit per corner beyond the clipping
+/// level, neither none nor all of them) to its part beyond the clipping level, into `poly`. False when a
+/// clip point cannot be had. Each clip point is computed from its edge's endpoints ordered by welded
+/// id, so a neighbour clipped on the same edge gets the same point: the shared part still cancels.
+inline bool clip_occluder(const MeshIndex& index, const Scratch& s, const std::uint32_t* c, unsigned inside,
+                          ClippedPolygon& poly) {
+  poly.n = 0;
+  for (int k = 0; k < 3; ++k) {
+    const int l = k == 2 ? 0 : k + 1;
+    const bool in_k = (inside >> k) & 1u, in_l = (inside >> l) & 1u;
+    if (in_k) {
+      const Projected& p = s.projected[s.vertex_slot[c[k]]];
+      poly.x[poly.n] = p.x;
+      poly.y[poly.n] = p.y;
+      poly.w[poly.n] = p.w;
+      poly.edge[poly.n++] = k;  // on to corner l, or to the clip point of this edge
+    }
+    if (in_k == in_l) continue;
+    const glm::vec3& pa = index.positions[std::min(c[k], c[l])];
+    const glm::vec3& pb = index.positions[std::max(c[k], c[l])];
+    const double a[3] = {pa.x, pa.y, pa.z}, b[3] = {pb.x, pb.y, pb.z};
+    Projected q;
+    if (!s.view.clip_point(a, b, q)) return false;
+    poly.x[poly.n] = q.x;
+    poly.y[poly.n] = q.y;
+    poly.w[poly.n] = q.w;
+    // Leaving: on along the clipping line; entering: on along this edge to corner l.
+    poly.edge[poly.n++] = in_k ? -1 : k;
+  }
+  return true;
+}
+
+/// Projects the occluder patches' triangles and keeps those that can occlude: clearly front-facing,
+/// touching the grid, and with some corner beyond the clipping level (a triangle with a corner short
+/// of it is clipped to its part beyond). Fills `s.triangles` with (sort key as float bits, triangle),
+/// smallest key first, the key being the nearest corner's depth (the farthest corner's for a clipped
+/// polygon), and `s.clipped` with the clipped ones' polygons.
 inline void gather_triangles(const MeshIndex& index, Scratch& s) {
   const int orient = s.view.orient;
   const double gw = s.grid.width(), gh = s.grid.height();
@@ -228,27 +277,52 @@ inline void gather_triangles(const MeshIndex& index, Scratch& s) {
       const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
       // Objects may overlap: a triangle goes in once.
       if (c[0] == none || s.triangle_stamp[t] == s.frame) continue;
-      double x[3], y[3], w[3];
-      bool usable = true;
-      for (int k = 0; k < 3 && usable; ++k) {
+      double x[4], y[4], w[4];
+      int n = 3;
+      unsigned inside = 0;
+      for (int k = 0; k < 3; ++k) {
         const Projected& p = project_vertex(index, s, c[k]);
-        usable = p.usable;
+        inside |= p.inside ? 1u << k : 0u;
         x[k] = p.x;
         y[k] = p.y;
         w[k] = p.w;
       }
-      // A corner not clearly beyond the near plane: the triangle is left out, and its
-      // neighbours' edges become outline.
-      if (!usable) continue;
-      const double xmin = std::min(std::min(x[0], x[1]), x[2]), xmax = std::max(std::max(x[0], x[1]), x[2]);
-      const double ymin = std::min(std::min(y[0], y[1]), y[2]), ymax = std::max(std::max(y[0], y[1]), y[2]);
+      if (inside != 7u) {
+        // Wholly short of the clipping level: nothing of it occludes.
+        if (inside == 0u) continue;
+        ClippedPolygon poly;
+        if (!clip_occluder(index, s, c, inside, poly)) continue;
+        n = poly.n;
+        std::copy(poly.x, poly.x + n, x);
+        std::copy(poly.y, poly.y + n, y);
+        std::copy(poly.w, poly.w + n, w);
+        s.clip_stamp[t] = s.frame;
+        s.clip_slot[t] = static_cast<std::uint32_t>(s.clipped.size());
+        s.clipped.push_back(poly);
+      }
+      double xmin = x[0], xmax = x[0], ymin = y[0], ymax = y[0], wmin = w[0];
+      for (int k = 1; k < n; ++k) {
+        xmin = std::min(xmin, x[k]);
+        xmax = std::max(xmax, x[k]);
+        ymin = std::min(ymin, y[k]);
+        ymax = std::max(ymax, y[k]);
+        wmin = std::min(wmin, w[k]);
+      }
       if (xmax < 0.0 || xmin > gw || ymax < 0.0 || ymin > gh) continue;
       // Clearly front-facing: back-facing and edge-on triangles are left out (their neighbours'
-      // edges then stay on the outline, which only covers less).
-      const double area2 = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+      // edges then stay on the outline, which only covers less). A clipped polygon lies in its
+      // triangle's plane: it faces the eye as the triangle does.
+      double area2 = 0.0;
+      for (int k = 1; k + 1 < n; ++k) area2 += (x[k] - x[0]) * (y[k + 1] - y[0]) - (x[k + 1] - x[0]) * (y[k] - y[0]);
       const double extent = std::max(xmax - xmin, ymax - ymin);
       if (!(area2 * orient > 1e-9 * extent * extent)) continue;
-      const float key = static_cast<float>(std::min(std::min(w[0], w[1]), w[2]));
+      // A clipped polygon's nearest point is on the clipping line, nearer than anything else, and
+      // mostly off screen (a floor under the eye): sorted by its nearest depth it would freeze every
+      // cell it shares with nearer occluders (a wall standing on the floor) at its own far depth
+      // there. It goes in by its farthest depth instead, after what stands on it.
+      double wmax = w[0];
+      for (int k = 1; k < n; ++k) wmax = std::max(wmax, w[k]);
+      const float key = static_cast<float>(inside != 7u ? wmax : wmin);
       std::uint32_t bits;
       std::memcpy(&bits, &key, sizeof bits);  // positive floats order as their bits
       s.triangles.emplace_back(bits, t);
@@ -256,6 +330,46 @@ inline void gather_triangles(const MeshIndex& index, Scratch& s) {
     }
   }
   radix_sort(s.triangles, s.sort_buffer);
+}
+
+/// Inserts a clipped occluder polygon as insert_triangles does a triangle: its depth and counts as a
+/// fan of triangles whose diagonals are left out of the counts (each would cancel its twin in the
+/// fan exactly), its edges along the triangle's edges shared with neighbours as the triangle's
+/// would be (`inner`, `twin_band`: per triangle edge, as insert_triangles finds them; the shared
+/// part is the same segment on both sides), and its edge along the clipping line as outline.
+inline void insert_clipped(CoverageGrid& grid, const ClippedPolygon& poly, int orient, unsigned inner,
+                           const std::uint32_t* twin_band, std::uint32_t my_band, PhaseProbe& probe) {
+  const int n = poly.n;
+  const auto skipped = [&](int k) { return poly.edge[k] >= 0 && ((inner >> poly.edge[k]) & 1u); };
+  probe.next(phase_bands);
+  for (int f = 1; f + 1 < n; ++f) {
+    const double x[3] = {poly.x[0], poly.x[f], poly.x[f + 1]}, y[3] = {poly.y[0], poly.y[f], poly.y[f + 1]};
+    const double w[3] = {poly.w[0], poly.w[f], poly.w[f + 1]};
+    grid.add_depth(x, y, w);
+  }
+  probe.next(phase_depth);
+  for (int f = 1; f + 1 < n; ++f) {
+    const double x[3] = {poly.x[0], poly.x[f], poly.x[f + 1]}, y[3] = {poly.y[0], poly.y[f], poly.y[f + 1]};
+    // Fan edge 0 -> f is the polygon's edge 0 only for the first triangle, f + 1 -> 0 its last edge
+    // only for the last one; otherwise they are diagonals.
+    unsigned skip = skipped(f) ? 2u : 0u;
+    skip |= f == 1 ? (skipped(0) ? 1u : 0u) : 1u;
+    skip |= f + 2 == n ? (skipped(n - 1) ? 4u : 0u) : 4u;
+    grid.add_count(x, y, orient, skip);
+  }
+  probe.next(phase_counts);
+  for (int k = 0; k < n; ++k) {
+    const int l = k + 1 == n ? 0 : k + 1;
+    const int e = poly.edge[k];
+    if (e < 0) {
+      grid.touch_edge(poly.x[k], poly.y[k], poly.x[l], poly.y[l], orient, 1);
+      continue;
+    }
+    if ((inner >> e) & 1u) continue;
+    if (twin_band[e] < my_band) grid.touch_edge(poly.x[l], poly.y[l], poly.x[k], poly.y[k], orient, -1);
+    else grid.touch_edge(poly.x[k], poly.y[k], poly.x[l], poly.y[l], orient, 1);
+  }
+  probe.next(phase_edges);
 }
 
 /// Inserts the gathered triangles nearest first, in bands of similar depth, so a cell freezes at
@@ -279,7 +393,16 @@ inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionP
     s.triangle_band[s.triangles[i].second] = band;
   }
   std::size_t covered = 0;
+  const bool any_clipped = !s.clipped.empty();
+  // The triangle's corners, or its clipped polygon's; returns their number.
   const auto corners_of = [&](std::uint32_t t, double* x, double* y, double* w) {
+    if (any_clipped && s.clip_stamp[t] == s.frame) {
+      const ClippedPolygon& poly = s.clipped[s.clip_slot[t]];
+      std::copy(poly.x, poly.x + poly.n, x);
+      std::copy(poly.y, poly.y + poly.n, y);
+      std::copy(poly.w, poly.w + poly.n, w);
+      return poly.n;
+    }
     const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
     for (int k = 0; k < 3; ++k) {
       const Projected& p = s.projected[s.vertex_slot[c[k]]];
@@ -287,6 +410,7 @@ inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionP
       y[k] = p.y;
       w[k] = p.w;
     }
+    return 3;
   };
   for (std::size_t begin = 0, end = 0; begin < s.triangles.size(); begin = end) {
     const std::uint32_t my_band = s.triangle_band[s.triangles[begin].second];
@@ -297,20 +421,15 @@ inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionP
     // cancel against a neighbour's).
     for (std::size_t i = begin; i < end; ++i) {
       const std::uint32_t t = s.triangles[i].second;
-      double x[3], y[3], w[3];
-      corners_of(t, x, y, w);
-      if (grid.all_frozen(x, y)) s.triangle_stamp[t] = 0;
+      double x[4], y[4], w[4];
+      const int n = corners_of(t, x, y, w);
+      if (grid.all_frozen(x, y, n)) s.triangle_stamp[t] = 0;
     }
     probe.next(phase_bands);
     for (std::size_t i = begin; i < end; ++i) {
       const std::uint32_t t = s.triangles[i].second;
       if (s.triangle_stamp[t] != s.frame) continue;
       ++s.stats.occluder_triangles;
-      double x[3], y[3], w[3];
-      corners_of(t, x, y, w);
-      probe.next(phase_bands);
-      grid.add_depth(x, y, w);
-      probe.next(phase_depth);
       std::uint32_t twin_band[3];
       unsigned inner = 0;  // edges shared with a triangle of this band
       for (int k = 0; k < 3; ++k) {
@@ -319,6 +438,15 @@ inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionP
         twin_band[k] = twin_here ? s.triangle_band[twin / 3] : none;
         if (twin_band[k] == my_band) inner |= 1u << k;
       }
+      if (any_clipped && s.clip_stamp[t] == s.frame) {
+        insert_clipped(grid, s.clipped[s.clip_slot[t]], orient, inner, twin_band, my_band, probe);
+        continue;
+      }
+      double x[3], y[3], w[3];
+      corners_of(t, x, y, w);
+      probe.next(phase_bands);
+      grid.add_depth(x, y, w);
+      probe.next(phase_depth);
       // An edge shared within the band adds crossings from both triangles that cancel bit for bit
       // (the same endpoints, the same arithmetic, opposite signs): both leave them out.
       grid.add_count(x, y, orient, inner);
@@ -348,6 +476,99 @@ inline bool rect_hidden(const CoverageGrid& grid, const BoxView& b) {
   return r.empty() || (std::isfinite(threshold) && grid.all_nearer(r, threshold));
 }
 
+/// The object test of a triangle with a corner not clearly beyond the near plane (which cannot be
+/// projected whole). True when no ray through the frustum can see it unhidden: it lies outside the
+/// frustum, or is clearly back-facing (the eye on its back side, in world space), or its part that
+/// can be drawn (near-plane value at least -clip_level: a margin on the near side this time), cut to
+/// the grid's rectangle on screen, has its rectangle hidden at that part's nearest depth. 1/w is
+/// affine on screen over the triangle's plane, so the cut interpolates it exactly up to rounding.
+inline bool crossing_triangle_hidden(const MeshIndex& index, const Scratch& s, const std::uint32_t* c) {
+  const View& view = s.view;
+  const glm::vec3 &p0 = index.positions[c[0]], &p1 = index.positions[c[1]], &p2 = index.positions[c[2]];
+  const Aabb box{glm::min(p0, glm::min(p1, p2)), glm::max(p0, glm::max(p1, p2))};
+  if (s.frustum.classify(box) == Containment::outside) return true;
+  double q[3][3];
+  for (int k = 0; k < 3; ++k) {
+    const glm::vec3& p = index.positions[c[k]];
+    for (int a = 0; a < 3; ++a) q[k][a] = double(p[a]) - view.eye[a];
+  }
+  // Front-facing means det[p0 - e, p1 - e, p2 - e] < 0 (see View::setup).
+  const double det = q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1]) - q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) +
+                     q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0]);
+  const auto len = [](const double* v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); };
+  if (det > 1e-9 * len(q[0]) * len(q[1]) * len(q[2])) return true;
+  // The drawable part: clipped at -clip_level, in the triangle's own order (no fusion needed here).
+  double x[8], y[8], iw[8];
+  int n = 0;
+  const double level = -view.clip_level;
+  double value[3];
+  for (int k = 0; k < 3; ++k) {
+    const glm::vec3& p = index.positions[c[k]];
+    value[k] = view.near_value(p.x, p.y, p.z);
+  }
+  // Projects a corner of the drawable part; false (the triangle stays visible) when it is not in
+  // front of the eye or so far off screen that the cut below could lose precision.
+  const auto put = [&](double px, double py, double pz) {
+    const double qx = px - view.eye[0], qy = py - view.eye[1], qz = pz - view.eye[2];
+    const double cw = view.row[2][0] * qx + view.row[2][1] * qy + view.row[2][2] * qz;
+    if (!(cw > 0.0)) return false;
+    x[n] = (view.row[0][0] * qx + view.row[0][1] * qy + view.row[0][2] * qz) / cw * view.scale_x + view.offset_x;
+    y[n] = (view.row[1][0] * qx + view.row[1][1] * qy + view.row[1][2] * qz) / cw * view.scale_y + view.offset_y;
+    iw[n] = 1.0 / cw;
+    const bool ok = std::fabs(x[n]) < 0x1p40 && std::fabs(y[n]) < 0x1p40 && std::isfinite(iw[n]);
+    ++n;
+    return ok;
+  };
+  for (int k = 0; k < 3; ++k) {
+    const int l = k == 2 ? 0 : k + 1;
+    const glm::vec3 &a = index.positions[c[k]], &b = index.positions[c[l]];
+    if (value[k] >= level && !put(a.x, a.y, a.z)) return false;
+    if ((value[k] >= level) != (value[l] >= level)) {
+      const double t = (level - value[k]) / (value[l] - value[k]);
+      if (!(t >= 0.0 && t <= 1.0) ||
+          !put(a.x + t * (double(b.x) - a.x), a.y + t * (double(b.y) - a.y), a.z + t * (double(b.z) - a.z)))
+        return false;
+    }
+  }
+  if (n < 3) return true;  // nothing of it can be drawn
+  // Cut to the grid's rectangle widened by a cell, one side at a time.
+  for (int side = 0; side < 4; ++side) {
+    const double bound = side & 1 ? (side < 2 ? s.grid.width() : s.grid.height()) + 1.0 : -1.0;
+    double* u = side < 2 ? x : y;
+    const auto keep = [&](int i) { return side & 1 ? u[i] <= bound : u[i] >= bound; };
+    double nx[8], ny[8], niw[8];
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+      const int j = i + 1 == n ? 0 : i + 1;
+      if (keep(i)) {
+        nx[m] = x[i], ny[m] = y[i], niw[m++] = iw[i];
+      }
+      if (keep(i) != keep(j)) {
+        const double t = (bound - u[i]) / (u[j] - u[i]);
+        nx[m] = x[i] + t * (x[j] - x[i]), ny[m] = y[i] + t * (y[j] - y[i]), niw[m++] = iw[i] + t * (iw[j] - iw[i]);
+      }
+    }
+    n = m;
+    if (n == 0) return true;  // off the grid: no ray through the frustum meets it
+    std::copy(nx, nx + n, x);
+    std::copy(ny, ny + n, y);
+    std::copy(niw, niw + n, iw);
+  }
+  BoxView b{x[0], y[0], x[0], y[0], 0.0, true};
+  double iw_max = iw[0];
+  for (int i = 1; i < n; ++i) {
+    b.x0 = std::min(b.x0, x[i]);
+    b.x1 = std::max(b.x1, x[i]);
+    b.y0 = std::min(b.y0, y[i]);
+    b.y1 = std::max(b.y1, y[i]);
+    iw_max = std::max(iw_max, iw[i]);
+  }
+  // Rounding of the interpolation, far inside this margin (rect_hidden adds its own 2^-20).
+  b.w_min = 1.0 / (iw_max * (1.0 + 0x1p-30));
+  const bool finite = std::isfinite(b.x0) && std::isfinite(b.x1) && std::isfinite(b.y0) && std::isfinite(b.y1);
+  return finite && std::isfinite(b.w_min) && b.w_min > 0.0 && rect_hidden(s.grid, b);
+}
+
 /// True when each of the patch's triangles is clearly back-facing (no ray sees its front) or hidden
 /// by its own screen rectangle at its own nearest depth. Corners are projected as for occluders.
 inline bool patch_triangles_hidden(const MeshIndex& index, Scratch& s, const Patch& patch) {
@@ -355,9 +576,10 @@ inline bool patch_triangles_hidden(const MeshIndex& index, Scratch& s, const Pat
     const std::uint32_t* c = &index.corners[3 * std::size_t(index.patches.triangles[k])];
     BoxView b{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, HUGE_VAL, true};
     double x[3], y[3];
-    for (int v = 0; v < 3; ++v) {
+    bool usable = true;
+    for (int v = 0; v < 3 && usable; ++v) {
       const Projected& p = project_vertex(index, s, c[v]);
-      if (!p.usable) return false;  // through the near plane: cannot be measured
+      usable = p.usable;  // else through the near plane: tested below
       x[v] = p.x;
       y[v] = p.y;
       b.x0 = std::min(b.x0, p.x);
@@ -365,6 +587,10 @@ inline bool patch_triangles_hidden(const MeshIndex& index, Scratch& s, const Pat
       b.y0 = std::min(b.y0, p.y);
       b.y1 = std::max(b.y1, p.y);
       b.w_min = std::min(b.w_min, p.w);
+    }
+    if (!usable) {
+      if (!crossing_triangle_hidden(index, s, c)) return false;
+      continue;
     }
     // The mirror of the occluders' front-facing rule, with the same margin: only a triangle that is
     // clearly back-facing is passed over; an edge-on one is tested like any other.
@@ -530,6 +756,10 @@ inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, cons
     return;
   }
   probe.next(phase_frustum);
+  // Occluders are clipped beyond a level set by the extent of the usable objects (the tree's root).
+  const Aabb& all = index.tree.nodes().front().bounds;
+  const double lo[3] = {all.min.x, all.min.y, all.min.z}, hi[3] = {all.max.x, all.max.y, all.max.z};
+  s.view.set_clip_level(lo, hi);
   begin_frame(index, s);
   s.grid.reset(params.grid_width, params.grid_height);
   s.boxes.resize(s.in_frustum.size());

@@ -20,10 +20,12 @@ namespace mesh_occlusion {
 /// A point seen from the eye: grid coordinates (x right, y down, one unit per cell) and depth w
 /// (clip-space w measured from the eye, which grows along every ray from it). `usable` is false
 /// when the point is not clearly beyond the near plane (or not in front of the eye): such a point
-/// may neither occlude nor be hidden.
+/// may neither occlude nor be hidden. `inside` (implies `usable`) is true when the point is also
+/// beyond the occluder clipping level (`View::clip_level`): occluder triangles keep only that part.
 struct Projected {
   double x, y, w;
   bool usable;
+  bool inside;
 };
 
 /// Projection of one frame. Points are projected through `eye` itself with the linear part of
@@ -38,6 +40,8 @@ struct View {
   double scale_x = 0, scale_y = 0, offset_x = 0, offset_y = 0;  // ndc -> grid
   int width = 0, height = 0;
   int orient = 1;  // front-facing triangles have grid signed area of this sign
+  // Occluder triangles are clipped where the near-plane value falls below this (see set_clip_level).
+  double clip_level = HUGE_VAL;
 
   /// Sets up the frame; `enabled` is false when the matrix is not a usable perspective projection
   /// centred (within a small fraction of the near distance) on the eye.
@@ -119,6 +123,41 @@ struct View {
     enabled = true;
   }
 
+  /// Sets the occluder clipping level for points inside the box [lo, hi] (the mesh's usable
+  /// objects). A point is usable only when its near-plane value exceeds 2^-18 of its magnitude sum
+  /// (see `project`), which differs from point to point; clipping needs one plane, so the level is
+  /// twice that margin taken at its largest over the box (the magnitude sum is convex, largest at a
+  /// corner). Every point of a clipped polygon is then usable by the per-point rule, with room for
+  /// the rounding of the clip points.
+  void set_clip_level(const double* lo, const double* hi) {
+    double sum = std::fabs(near_plane[3]);
+    for (int a = 0; a < 3; ++a) sum += std::max(std::fabs(near_plane[a] * lo[a]), std::fabs(near_plane[a] * hi[a]));
+    clip_level = 0x1p-17 * sum;
+    if (!std::isfinite(clip_level)) clip_level = HUGE_VAL;  // nothing is inside: no clipping
+  }
+
+  /// Near-plane value of a world point (positive beyond the near plane).
+  [[nodiscard]] double near_value(double px, double py, double pz) const {
+    return near_plane[0] * px + near_plane[1] * py + near_plane[2] * pz + near_plane[3];
+  }
+
+  /// The point of the segment a-b where the near-plane value reaches `clip_level`, projected; false
+  /// when the segment does not cross that level with exactly one endpoint inside, or the point is
+  /// not usable. The caller passes each edge's endpoints in one fixed order (by welded vertex id), so
+  /// the two triangles sharing the edge get bit-identical points and the edge still cancels.
+  /// `at`, when given, receives the world point.
+  [[nodiscard]] bool clip_point(const double* a, const double* b, Projected& out, double* at = nullptr) const {
+    const double na = near_value(a[0], a[1], a[2]), nb = near_value(b[0], b[1], b[2]);
+    if ((na >= clip_level) == (nb >= clip_level)) return false;
+    const double t = (clip_level - na) / (nb - na);
+    if (!(t >= 0.0 && t <= 1.0)) return false;
+    const double p[3] = {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])};
+    if (at) std::copy(p, p + 3, at);
+    out = project(p[0], p[1], p[2]);
+    // The point's near-plane value is clip_level up to rounding, far above the usable margin.
+    return out.usable;
+  }
+
   /// Projects a world point.
   [[nodiscard]] Projected project(double px, double py, double pz) const {
     const double qx = px - eye[0], qy = py - eye[1], qz = pz - eye[2];
@@ -133,6 +172,7 @@ struct View {
                                    std::fabs(near_plane[2] * pz) + std::fabs(near_plane[3]));
     Projected out;
     out.usable = n > ntol && cw > 1e-8 * wscale && cw > 0.0;
+    out.inside = false;
     if (!out.usable) {
       out.x = out.y = out.w = 0.0;
       return out;
@@ -141,6 +181,7 @@ struct View {
     out.x = cx / cw * scale_x + offset_x;
     out.y = cy / cw * scale_y + offset_y;
     out.usable = std::isfinite(out.x) && std::isfinite(out.y) && std::isfinite(out.w);
+    out.inside = out.usable && n >= clip_level;
     return out;
   }
 };
