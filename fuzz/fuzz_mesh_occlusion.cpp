@@ -13,6 +13,7 @@
 
 #include <glm/ext/matrix_clip_space.hpp>
 #include <glm/ext/matrix_transform.hpp>
+#include <glm/common.hpp>
 #include <glm/ext/vector_double3.hpp>
 #include <glm/geometric.hpp>
 
@@ -49,7 +50,15 @@ double hit(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a, const 
   const glm::dvec3 s = o - a, q = glm::cross(s, e1);
   const double u = glm::dot(s, p) * inv, v = glm::dot(d, q) * inv, t = glm::dot(e2, q) * inv;
   if (!(u >= -grow && v >= -grow && u + v <= 1.0 + grow)) return -1.0;
-  return t > 0.0 && std::isfinite(t) ? t : -1.0;
+  if (!(t > 0.0) || !std::isfinite(t)) return -1.0;
+  // A needle (corners 1e-22 apart, 3e7 long) makes u and v meaningless: the ray can pass the
+  // needle's line far outside the triangle. A hit must lie in the triangle's box (up to rounding).
+  const glm::dvec3 h = o + t * d, lo = glm::min(a, glm::min(b, c)), hi = glm::max(a, glm::max(b, c));
+  for (int k = 0; k < 3; ++k) {
+    const double slack = 1e-9 * (hi[k] - lo[k]) + 1e-12 * (std::fabs(h[k]) + 1.0);
+    if (h[k] < lo[k] - slack || h[k] > hi[k] + slack) return -1.0;
+  }
+  return t;
 }
 }  // namespace
 
