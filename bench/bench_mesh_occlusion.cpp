@@ -111,13 +111,14 @@ std::vector<std::uint8_t> embree_frame(const CullScene& cs, const ObjectMap& map
 /// algorithm (detail level, so the grid can be read back). Shares of the scene's triangles, summed
 /// over the cameras (divided at the end). "Cumulative": each kept-but-unseen object is charged to
 /// the first of these steps that hides it, each step keeping the ones before:
-///   near    its box reaches through the near plane (never hidden by rule);
+///   near    its box reaches through the near plane (hidden only part by part, see object tests);
 ///   supply  hidden once every in-frustum object occludes (no budget, no size floor, no object cap);
 ///   depth   then hidden with one band per distinct depth (depth_band_ratio = 0);
 ///   grid    then hidden on a 4x finer grid (1024 x 576 cells);
 ///   box     then hidden when tested with its own front-facing triangles instead of its box;
-///   other   none of these: seams that do not fuse (T-junctions, cracks), gaps between pixel
-///           centres, occluders nearer than the near plane, back faces.
+///   other   none of these: seams that do not fuse (cracks, overlapping parts), gaps between
+///           pixel centres, the part of an occluder within the clipping margin of the near plane,
+///           back faces.
 /// "Alone": each of supply, depth, grid, box applied on its own to the default culler.
 struct Reasons {
   double excess = 0, near = 0, supply = 0, depth = 0, grid = 0, box = 0, other = 0;
