@@ -2,6 +2,7 @@
 // and once with CULLKIT_SEPARATE_CORE, its cores compiled in cullkit::core and used from two
 // translation units. Each build prints one hash per container; the test compares the two outputs,
 // so the modes must give the same answers (and the separate build must link: one definition each).
+#include <algorithm>
 #include <cstdio>
 #include <vector>
 
@@ -57,10 +58,25 @@ int main() {
     order = fnv(order, out);
   }
 
+  // Mesh occlusion: each box one object of 12 triangles (the floor is object 0).
+  std::vector<cullkit::MeshObject> objects;
+  for (std::uint32_t b = 0; b < scene.indices.size() / 36; ++b) objects.push_back(cullkit::MeshObject{12 * b, 12});
+  const cullkit::MeshOcclusionCuller<glm::vec3> culler(mesh, objects.data(), objects.size());
+  cullkit::MeshOcclusionContext occlusion_context;
+  std::uint64_t occlusion = 0xCBF29CE484222325ull;
+  std::size_t hidden = 0;
+  for (const cullkit::Camera& cam : cams) {
+    culler.cull(cam, occlusion_context, out);
+    std::sort(out.begin(), out.end());
+    occlusion = fnv(occlusion, out);
+    hidden += occlusion_context.stats().objects_hidden;
+  }
+
   std::printf("nci %016llx (%zu triangles selected last)\n", static_cast<unsigned long long>(nci), seen.triangles.size());
   std::printf("abt %016llx\n", static_cast<unsigned long long>(abt));
   std::printf("bsp %016llx\n", static_cast<unsigned long long>(order));
+  std::printf("mesh occlusion %016llx (%zu objects hidden)\n", static_cast<unsigned long long>(occlusion), hidden);
   std::printf("second unit %016llx\n", static_cast<unsigned long long>(second_unit_hash(scene)));
-  // Non-vacuity: the scene is seen, and not whole.
-  return seen.triangles.empty() || seen.triangles.size() >= scene.indices.size() / 3 ? 1 : 0;
+  // Non-vacuity: the scene is seen, and not whole; occlusion hides something.
+  return seen.triangles.empty() || seen.triangles.size() >= scene.indices.size() / 3 || hidden == 0 ? 1 : 0;
 }

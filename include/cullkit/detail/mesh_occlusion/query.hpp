@@ -13,6 +13,7 @@
 #include <glm/ext/matrix_double4x4.hpp>
 #include <glm/matrix.hpp>
 
+#include "../../config.hpp"
 #include "../../geometry/camera.hpp"
 #include "../../occlusion_tree.hpp"
 #include "coverage.hpp"
@@ -65,6 +66,12 @@ struct Scratch {
   std::vector<Aabb> box_occluders;
   OcclusionTree box_tree{glm::vec3(0.0f)};  // the solid boxes' hidden region, when box_occluders is not empty
 };
+
+/// One frame of MeshOcclusionCuller::cull: clears `out`, then writes every object that may be
+/// visible from `camera`. A core entry point (CULLKIT_SEPARATE_CORE, config.hpp): the steps below
+/// are compiled only where its definition is.
+CULLKIT_CORE_FN void cull(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera, Scratch& s,
+                          std::vector<std::uint32_t>& out);
 
 /// Sorts (key, value) pairs by key, stable: three passes of 11 bits.
 inline void radix_sort(std::vector<std::pair<std::uint32_t, std::uint32_t>>& items,
@@ -733,8 +740,9 @@ inline bool object_hidden(const MeshIndex& index, const MeshOcclusionParams& par
   return true;
 }
 
-inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera, Scratch& s,
-                 std::vector<std::uint32_t>& out) {
+#if CULLKIT_CORE_BODIES
+CULLKIT_CORE_FN void cull(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera, Scratch& s,
+                          std::vector<std::uint32_t>& out) {
   out.clear();
   PhaseProbe probe;
   if (probe.on()) ++phase_times().calls;
@@ -784,6 +792,8 @@ inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, cons
   }
   probe.next(phase_tests);
 }
+
+#endif  // CULLKIT_CORE_BODIES
 
 }  // namespace mesh_occlusion
 }  // namespace detail
