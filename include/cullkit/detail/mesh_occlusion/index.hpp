@@ -18,6 +18,7 @@
 #include "../../geometry/aabb.hpp"
 #include "../../mesh_occlusion_params.hpp"
 #include "patches.hpp"
+#include "tjunctions.hpp"
 
 namespace cullkit {
 namespace detail {
@@ -26,12 +27,14 @@ namespace mesh_occlusion {
 inline constexpr std::uint32_t none = 0xffffffffu;
 
 /// The flat arrays a culler queries. Triangle t keeps its mesh number; a triangle that cannot
-/// occlude (unusable or degenerate) has corner[3t] == none.
+/// occlude (unusable or degenerate) has corner[3t] == none. A triangle cut at T-junctions keeps its
+/// first part in its slot; its other parts follow the user's triangles (`parts`).
 struct MeshIndex {
   std::size_t object_count = 0;
   MeshOcclusionBuildStats build_stats;
   std::vector<glm::vec3> positions;       // welded corner positions
-  std::vector<std::uint32_t> corners;     // 3 per triangle: welded ids
+  std::vector<std::uint32_t> corners;     // 3 per triangle slot: welded ids
+  TrianglePartsMap parts;                 // slots past the user's triangles: parts of cut triangles
   std::vector<std::uint32_t> twins;       // 3 per triangle: the opposite directed edge (3u + l), or none
   std::vector<MeshObject> objects;        // clamped ranges (usable objects only are ever walked)
   std::vector<Aabb> bounds;               // per object; meaningful for usable objects only
@@ -155,9 +158,11 @@ inline std::size_t pair_edges(const std::vector<std::uint32_t>& corners, std::ve
 inline bool finite(const glm::vec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
 /// Fills `index`. `read(t, p)` reads triangle t's corners, false when an index is out of range.
+/// `cut`: cut triangles at T-junctions (MeshOcclusionParams::cut_tjunctions).
 template <class ReadTriangle>
 void build_index(MeshIndex& index, std::size_t triangle_count, ReadTriangle&& read, const MeshObject* objects,
-                 std::size_t object_count, const AbtParams& tree_params, std::uint32_t patch_triangles) {
+                 std::size_t object_count, const AbtParams& tree_params, std::uint32_t patch_triangles,
+                 bool cut = true) {
   index = MeshIndex{};
   // Triangle numbers are 32-bit; a larger mesh keeps only what fits (the rest is unusable).
   const std::size_t kept = std::min<std::size_t>(triangle_count, none / 3 - 1);
@@ -225,11 +230,18 @@ void build_index(MeshIndex& index, std::size_t triangle_count, ReadTriangle&& re
   for (std::size_t t = 0; t < kept; ++t)
     if (unusable[t] == 2) index.corners[3 * t] = index.corners[3 * t + 1] = index.corners[3 * t + 2] = none;
   stats.shared_edges = pair_edges(index.corners, index.twins);
-  build_patches(index.patches, index.positions, index.corners, index.twins, index.objects, patch_triangles);
+  // Solid boxes are judged on the user's triangles (a box has no unpaired edge, so it is never cut).
   index.solid_box.assign(object_count, 0);
   for (std::size_t o = 0; o < object_count; ++o)
     if (index.objects[o].triangle_count > 0)
       index.solid_box[o] = is_solid_box(index.positions, index.corners, index.twins, index.objects[o], index.bounds[o]);
+  const TjunctionCuts cuts = cut ? cut_tjunctions(index.positions, index.corners, index.twins, index.parts) : TjunctionCuts{};
+  stats.tjunction_corners = cuts.corners_on_edges;
+  stats.triangles_cut = cuts.triangles_cut;
+  stats.triangle_parts_added = cuts.parts_added;
+  if (cuts.triangles_cut > 0) stats.shared_edges = pair_edges(index.corners, index.twins);
+  build_patches(index.patches, index.positions, index.corners, index.twins, index.objects, patch_triangles, index.parts,
+                kept);
   index.tree = AdaptiveBinaryTree<Aabb>(tree_bounds.data(), tree_bounds.size(), tree_params);
 }
 
