@@ -27,7 +27,9 @@
 #include <utility>
 #include <vector>
 
+#include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
+#include <glm/ext/vector_double3.hpp>
 
 namespace cullkit {
 namespace detail {
@@ -176,11 +178,12 @@ struct EdgePoint {
 };
 
 /// Every (unpaired edge, corner of an unpaired edge) with the corner exactly on the edge's open
-/// segment, grouped by edge and sorted along it from the edge's start. `corners` as in the index
+/// segment, grouped by edge and sorted along it from the edge's start; consecutive corners (and the
+/// edge's ends) are at least `min_piece` of the edge's length apart along its longest axis. `corners` as in the index
 /// (none for triangles that cannot occlude), `twins` from pair_edges.
 inline std::vector<EdgePoint> find_tjunctions(const std::vector<glm::vec3>& positions,
                                               const std::vector<std::uint32_t>& corners,
-                                              const std::vector<std::uint32_t>& twins) {
+                                              const std::vector<std::uint32_t>& twins, double min_piece) {
   constexpr std::uint32_t none = 0xffffffffu;
   std::vector<std::uint32_t> edges, points;
   for (std::size_t e = 0; e < corners.size(); ++e) {
@@ -215,7 +218,17 @@ inline std::vector<EdgePoint> find_tjunctions(const std::vector<glm::vec3>& posi
     std::sort(on_edge.begin(), on_edge.end(), [&](std::uint32_t u, std::uint32_t v) {
       return up ? positions[u][axis] < positions[v][axis] : positions[u][axis] > positions[v][axis];
     });
-    for (std::uint32_t v : on_edge) found.push_back(EdgePoint{e, v});
+    // Pieces shorter than min_piece of the edge would make parts so thin that a frame may find them
+    // edge-on and leave them out, opening the long inner edges of their neighbours: such corners
+    // are left alone (their short piece of seam stays an outline).
+    const double length = std::fabs(double(q[axis]) - p[axis]);
+    double last = 0.0;
+    for (std::size_t i = 0; i < on_edge.size(); ++i) {
+      const double at = std::fabs(double(positions[on_edge[i]][axis]) - p[axis]);
+      if (at - last < min_piece * length || length - at < min_piece * length) continue;
+      found.push_back(EdgePoint{e, on_edge[i]});
+      last = at;
+    }
   }
   return found;
 }
@@ -227,8 +240,8 @@ inline std::vector<EdgePoint> find_tjunctions(const std::vector<glm::vec3>& posi
 /// two points or along a side) and its neighbours share no side (else the rest would be flat).
 /// Appends the parts, winding as the triangle, to `out` (3 corners each); false (nothing appended)
 /// when no such cut exists, which leaves the triangle whole.
-inline bool cut_triangle(const std::uint32_t c[3], const std::vector<std::uint32_t> on_side[3],
-                         std::vector<std::uint32_t>& out) {
+inline bool cut_triangle(const std::vector<glm::vec3>& positions, const std::uint32_t c[3],
+                         const std::vector<std::uint32_t> on_side[3], std::vector<std::uint32_t>& out) {
   struct Vertex {
     std::uint32_t id;
     unsigned sides;  // bit k: lies on side k (corner k -> corner k + 1)
@@ -238,22 +251,35 @@ inline bool cut_triangle(const std::uint32_t c[3], const std::vector<std::uint32
     poly.push_back(Vertex{c[k], (1u << k) | (1u << ((k + 2) % 3))});
     for (std::uint32_t v : on_side[k]) poly.push_back(Vertex{v, 1u << k});
   }
+  // Of the ears, the fattest (area over longest side squared) goes first: thin parts may be left
+  // out by a frame that sees them nearly edge-on, and their neighbours' edges then stay outline.
+  const auto fatness = [&positions](std::uint32_t a, std::uint32_t v, std::uint32_t b) {
+    const glm::dvec3 pa(positions[a]), pv(positions[v]), pb(positions[b]);
+    const glm::dvec3 n = glm::cross(pv - pa, pb - pa);
+    const double longest = std::max({glm::dot(pv - pa, pv - pa), glm::dot(pb - pv, pb - pv), glm::dot(pa - pb, pa - pb)});
+    return longest > 0.0 ? std::sqrt(glm::dot(n, n)) / longest : 0.0;
+  };
   const std::size_t start = out.size();
   while (poly.size() >= 3) {
     const std::size_t n = poly.size();
-    bool cut = false;
-    for (std::size_t i = 0; i < n && !cut; ++i) {
+    std::size_t best = n;
+    double best_fatness = -1.0;
+    for (std::size_t i = 0; i < n; ++i) {
       const Vertex &a = poly[(i + n - 1) % n], &v = poly[i], &b = poly[(i + 1) % n];
       if ((a.sides & v.sides & b.sides) != 0) continue;
       if (n > 3 && (a.sides & b.sides) != 0) continue;
-      out.insert(out.end(), {a.id, v.id, b.id});
-      poly.erase(poly.begin() + std::ptrdiff_t(i));
-      cut = true;
+      const double f = fatness(a.id, v.id, b.id);
+      if (f > best_fatness) {
+        best_fatness = f;
+        best = i;
+      }
     }
-    if (!cut) {
+    if (best == n) {
       out.resize(start);
       return false;
     }
+    out.insert(out.end(), {poly[(best + n - 1) % n].id, poly[best].id, poly[(best + 1) % n].id});
+    poly.erase(poly.begin() + std::ptrdiff_t(best));
     if (n == 3) break;
   }
   return true;
@@ -265,6 +291,11 @@ inline bool cut_triangle(const std::uint32_t c[3], const std::vector<std::uint32
 struct TrianglePartsMap {
   std::vector<std::uint32_t> origin;
   std::vector<std::uint32_t> first;
+  /// Per slot: for a part, i such that whole_corners[3i, 3i + 3) are the cut triangle's corners;
+  /// none for a triangle that was not cut. Parts are ordered by the whole triangle's nearest corner,
+  /// so that they go into one depth band together, as the triangle would.
+  std::vector<std::uint32_t> whole;
+  std::vector<std::uint32_t> whole_corners;
   /// The user's triangle that slot u belongs to.
   std::uint32_t user_triangle(std::uint32_t u, std::size_t user_count) const {
     return u < user_count ? u : origin[u - user_count];
@@ -282,10 +313,11 @@ struct TjunctionCuts {
 /// other parts are appended to `corners` (which then holds more slots than the user has triangles),
 /// and `parts` records where they came from. The caller pairs the edges again.
 inline TjunctionCuts cut_tjunctions(const std::vector<glm::vec3>& positions, std::vector<std::uint32_t>& corners,
-                                    const std::vector<std::uint32_t>& twins, TrianglePartsMap& parts) {
+                                    const std::vector<std::uint32_t>& twins, TrianglePartsMap& parts,
+                                    double min_piece = 0x1p-10) {
   TjunctionCuts cuts;
   parts = TrianglePartsMap{};
-  const std::vector<EdgePoint> found = find_tjunctions(positions, corners, twins);
+  const std::vector<EdgePoint> found = find_tjunctions(positions, corners, twins, min_piece);
   cuts.corners_on_edges = found.size();
   if (found.empty()) return cuts;
   const std::size_t user_count = corners.size() / 3;
@@ -299,10 +331,11 @@ inline TjunctionCuts cut_tjunctions(const std::vector<glm::vec3>& positions, std
     const std::uint32_t c[3] = {corners[3 * std::size_t(t)], corners[3 * std::size_t(t) + 1],
                                 corners[3 * std::size_t(t) + 2]};
     pieces.clear();
-    if (!cut_triangle(c, on_side, pieces)) continue;
+    if (!cut_triangle(positions, c, on_side, pieces)) continue;
     // Edge numbers (3 slot + side) stay 32-bit, as for the user's triangles.
     if (corners.size() + pieces.size() - 3 >= std::size_t(0xffffffffu) - 3) continue;
     ++cuts.triangles_cut;
+    parts.whole_corners.insert(parts.whole_corners.end(), c, c + 3);
     std::copy(pieces.begin(), pieces.begin() + 3, corners.begin() + std::ptrdiff_t(3 * std::size_t(t)));
     corners.insert(corners.end(), pieces.begin() + 3, pieces.end());
     const std::size_t added = pieces.size() / 3 - 1;
@@ -311,6 +344,16 @@ inline TjunctionCuts cut_tjunctions(const std::vector<glm::vec3>& positions, std
   }
   for (std::size_t t = 0; t < user_count; ++t) parts.first[t + 1] += parts.first[t];
   cuts.parts_added = parts.origin.size();
+  parts.whole.assign(corners.size() / 3, 0xffffffffu);
+  std::uint32_t whole = 0;
+  for (std::size_t t = 0; t < user_count; ++t) {
+    // A cut triangle's slot holds a part: its corners are no longer the triangle's.
+    const bool cut = parts.first[t + 1] > parts.first[t];
+    if (!cut) continue;
+    parts.whole[t] = whole;
+    for (std::uint32_t u = parts.first[t]; u < parts.first[t + 1]; ++u) parts.whole[user_count + u] = whole;
+    ++whole;
+  }
   return cuts;
 }
 
