@@ -79,8 +79,8 @@ inline bool on_open_segment(const glm::vec3& p, const glm::vec3& q, const glm::v
 /// over h, not its box's volume.
 class PointGrid {
  public:
-  PointGrid(const std::vector<glm::vec3>& positions, std::vector<std::uint32_t> points, double h)
-      : positions_(positions), h_(h > 0.0 && std::isfinite(h) ? h : 1.0) {
+  PointGrid(const std::vector<glm::vec3>& positions, const std::vector<std::uint32_t>& points, double h)
+      : h_(h > 0.0 && std::isfinite(h) ? h : 1.0) {
     entries_.reserve(points.size());
     for (std::uint32_t v : points) {
       const glm::vec3& p = positions[v];
@@ -142,7 +142,6 @@ class PointGrid {
     x *= 0xbf58476d1ce4e5b9ull;
     return x ^ (x >> 32);
   }
-  const std::vector<glm::vec3>& positions_;
   double h_;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> entries_;
 };
