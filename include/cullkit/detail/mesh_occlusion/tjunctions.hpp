@@ -96,9 +96,10 @@ class PointGrid {
     for (int k = 1; k < 3; ++k)
       if (std::fabs(d[k]) > std::fabs(d[a])) a = k;
     const int b = (a + 1) % 3, c = (a + 2) % 3;
-    // Rounding in the slab bounds below only matters for which cells are visited: widen a little.
-    const double slack = pad + 1e-6 * h_ + 1e-6 * (std::fabs(double(p[a])) + std::fabs(double(p[b])) +
-                                                   std::fabs(double(p[c])) + std::fabs(d[a]));
+    // Rounding in the slab bounds below (double, about 1e-16 relative) only matters for which cells
+    // are visited: widen a little.
+    const double slack = pad + 1e-9 * h_ + 1e-12 * (std::fabs(double(p[a])) + std::fabs(double(p[b])) +
+                                                    std::fabs(double(p[c])) + std::fabs(d[a]));
     const double lo = std::min(double(p[a]), double(q[a])) - slack, hi = std::max(double(p[a]), double(q[a])) + slack;
     const std::int64_t s0 = cell(lo), s1 = cell(hi);
     for (std::int64_t s = s0; s <= s1; ++s) {
