@@ -7,3 +7,5 @@ cullkit_add_test(test_mesh_occlusion_input SOURCES ${CMAKE_CURRENT_LIST_DIR}/tes
 include(${CMAKE_CURRENT_LIST_DIR}/embree.cmake)
 # Surface patches, triangle-level object tests and solid-box occluders, each against its control.
 cullkit_add_test(test_mesh_occlusion_patches SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_patches.cpp TIMEOUT 300)
+# The T-junction cuts' exact test and ear clipping on their own.
+cullkit_add_test(test_mesh_occlusion_tjunctions SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_tjunctions.cpp)
