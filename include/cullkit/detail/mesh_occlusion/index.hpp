@@ -112,6 +112,41 @@ class PositionWelder {
   std::vector<std::uint32_t> slots_;
 };
 
+/// Pairs the directed edges that `for_each_edge(visit)` visits (in its order, `count` of them, none
+/// of them paired yet) among themselves: each (a, b) with the first unpaired (b, a) met before it.
+/// Returns the pairs made.
+template <class ForEachEdge>
+std::size_t pair_listed_edges(const std::vector<std::uint32_t>& corners, std::vector<std::uint32_t>& twins,
+                              std::size_t count, ForEachEdge&& for_each_edge) {
+  struct Slot {
+    std::uint64_t key;
+    std::uint32_t edge;  // none: empty; dead: removed
+  };
+  constexpr std::uint32_t dead = none - 1;
+  std::vector<Slot> table(table_size_for(count), Slot{0, none});
+  const std::size_t mask = table.size() - 1;
+  std::size_t pairs = 0;
+  for_each_edge([&](std::uint32_t e) {
+    const std::size_t t = e / 3, k = e % 3;
+    const std::uint32_t a = corners[3 * t + k], b = corners[3 * t + (k + 1) % 3];
+    const std::uint64_t opposite = std::uint64_t(b) << 32 | a;
+    for (std::size_t i = mix64(opposite) & mask; table[i].edge != none; i = (i + 1) & mask) {
+      if (table[i].edge != dead && table[i].key == opposite) {
+        twins[e] = table[i].edge;
+        twins[table[i].edge] = e;
+        table[i].edge = dead;
+        ++pairs;
+        return;
+      }
+    }
+    const std::uint64_t key = std::uint64_t(a) << 32 | b;
+    std::size_t i = mix64(key) & mask;
+    while (table[i].edge != none && table[i].edge != dead) i = (i + 1) & mask;
+    table[i] = Slot{key, e};
+  });
+  return pairs;
+}
+
 /// Pairs every directed edge (a, b) with at most one edge (b, a) of another triangle, one to one,
 /// so that the pair can cancel when both triangles occlude. Non-manifold edges pair greedily; the
 /// unpaired rest simply stays on the outline (safe, only less fusion).
@@ -120,39 +155,35 @@ inline std::size_t pair_edges(const std::vector<std::uint32_t>& corners, std::ve
   twins.assign(edge_count, none);
   std::size_t live = 0;
   for (std::size_t t = 0; t < edge_count / 3; ++t) live += corners[3 * t] != none ? 3 : 0;
-  struct Slot {
-    std::uint64_t key;
-    std::uint32_t edge;  // none: empty; dead: removed
-  };
-  constexpr std::uint32_t dead = none - 1;
-  std::vector<Slot> table(table_size_for(live), Slot{0, none});
-  const std::size_t mask = table.size() - 1;
-  std::size_t pairs = 0;
-  for (std::size_t t = 0; t < edge_count / 3; ++t) {
-    if (corners[3 * t] == none) continue;
+  return pair_listed_edges(corners, twins, live, [&](auto&& visit) {
+    for (std::size_t t = 0; t < edge_count / 3; ++t)
+      if (corners[3 * t] != none)
+        for (std::size_t k = 0; k < 3; ++k) visit(static_cast<std::uint32_t>(3 * t + k));
+  });
+}
+
+/// After cut_tjunctions: the cut triangles' old pairs are undone, and the edges left unpaired (the
+/// seams' and the parts') are paired among themselves. The pairs of uncut triangles stay as they
+/// were, so this costs the unpaired edges, not the mesh. Returns the pairs now.
+inline std::size_t pair_edges_after_cuts(const std::vector<std::uint32_t>& corners, std::vector<std::uint32_t>& twins,
+                                         const TrianglePartsMap& parts, std::size_t pairs) {
+  twins.resize(corners.size(), none);
+  for (std::size_t t = 0; t < parts.whole.size() && t < parts.first.size() - 1; ++t) {
+    if (parts.whole[t] == none) continue;
     for (std::size_t k = 0; k < 3; ++k) {
-      const std::uint32_t a = corners[3 * t + k], b = corners[3 * t + (k + 1) % 3];
-      const std::uint64_t opposite = std::uint64_t(b) << 32 | a;
-      const std::uint32_t e = static_cast<std::uint32_t>(3 * t + k);
-      bool paired = false;
-      for (std::size_t i = mix64(opposite) & mask; table[i].edge != none; i = (i + 1) & mask) {
-        if (table[i].edge != dead && table[i].key == opposite) {
-          twins[e] = table[i].edge;
-          twins[table[i].edge] = e;
-          table[i].edge = dead;
-          paired = true;
-          ++pairs;
-          break;
-        }
-      }
-      if (paired) continue;
-      const std::uint64_t key = std::uint64_t(a) << 32 | b;
-      std::size_t i = mix64(key) & mask;
-      while (table[i].edge != none && table[i].edge != dead) i = (i + 1) & mask;
-      table[i] = Slot{key, e};
+      const std::uint32_t twin = twins[3 * t + k];
+      if (twin == none) continue;
+      twins[twin] = none;
+      twins[3 * t + k] = none;
+      --pairs;
     }
   }
-  return pairs;
+  std::vector<std::uint32_t> open;
+  for (std::size_t e = 0; e < corners.size(); ++e)
+    if (twins[e] == none && corners[e - e % 3] != none) open.push_back(static_cast<std::uint32_t>(e));
+  return pairs + pair_listed_edges(corners, twins, open.size(), [&](auto&& visit) {
+           for (std::uint32_t e : open) visit(e);
+         });
 }
 
 inline bool finite(const glm::vec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
@@ -239,7 +270,8 @@ void build_index(MeshIndex& index, std::size_t triangle_count, ReadTriangle&& re
   stats.tjunction_corners = cuts.corners_on_edges;
   stats.triangles_cut = cuts.triangles_cut;
   stats.triangle_parts_added = cuts.parts_added;
-  if (cuts.triangles_cut > 0) stats.shared_edges = pair_edges(index.corners, index.twins);
+  if (cuts.triangles_cut > 0)
+    stats.shared_edges = pair_edges_after_cuts(index.corners, index.twins, index.parts, stats.shared_edges);
   build_patches(index.patches, index.positions, index.corners, index.twins, index.objects, patch_triangles, index.parts,
                 kept);
   index.tree = AdaptiveBinaryTree<Aabb>(tree_bounds.data(), tree_bounds.size(), tree_params);
