@@ -266,7 +266,8 @@ void build_index(MeshIndex& index, std::size_t triangle_count, ReadTriangle&& re
   for (std::size_t o = 0; o < object_count; ++o)
     if (index.objects[o].triangle_count > 0)
       index.solid_box[o] = is_solid_box(index.positions, index.corners, index.twins, index.objects[o], index.bounds[o]);
-  const TjunctionCuts cuts = cut ? cut_tjunctions(index.positions, index.corners, index.twins, index.parts) : TjunctionCuts{};
+  const TjunctionCuts cuts =
+      cut ? cut_tjunctions(index.positions, index.corners, index.twins, index.parts) : TjunctionCuts{};
   stats.tjunction_corners = cuts.corners_on_edges;
   stats.triangles_cut = cuts.triangles_cut;
   stats.triangle_parts_added = cuts.parts_added;

@@ -179,8 +179,8 @@ struct EdgePoint {
 
 /// Every (unpaired edge, corner of an unpaired edge) with the corner exactly on the edge's open
 /// segment, grouped by edge and sorted along it from the edge's start; consecutive corners (and the
-/// edge's ends) are at least `min_piece` of the edge's length apart along its longest axis. `corners` as in the index
-/// (none for triangles that cannot occlude), `twins` from pair_edges.
+/// edge's ends) are at least `min_piece` of the edge's length apart along its longest axis.
+/// `corners` as in the index (none for triangles that cannot occlude), `twins` from pair_edges.
 inline std::vector<EdgePoint> find_tjunctions(const std::vector<glm::vec3>& positions,
                                               const std::vector<std::uint32_t>& corners,
                                               const std::vector<std::uint32_t>& twins, double min_piece) {
