@@ -29,9 +29,9 @@
 //                  separately timed pass with the step probes on; shares of that pass times the median above).
 //   --scene=TEXT   only the scenes whose name contains TEXT (each scene keeps the cameras of a full run).
 //   --grid=WxH     the culler's grid size; overrides GW and GH.
-// The environment variables GW, GH, BUDGET, RATIO, MINFRAC, PATCH and OBJTRI override the culler's
-// parameters (grid size, occluder triangle budget, depth band ratio, occluder size floor, patch
-// size, triangle-test patch size) in every mode, for measuring alternatives without rebuilding;
+// The environment variables GW, GH, BUDGET, RATIO, MINFRAC, PATCH, OBJTRI and TJUNCTIONS override the
+// culler's parameters (grid size, occluder triangle budget, depth band ratio, occluder size floor,
+// patch size, triangle-test patch size, T-junction cuts 0/1) in every mode, for measuring alternatives without rebuilding;
 // --grid, given too, wins over GW and GH.
 // CULLKIT_BENCH_SMOKE=1: the small generated city, 2 cameras, 320x180, 1 rep.
 #include <algorithm>
@@ -60,6 +60,12 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+/// The culler's construction time and what its T-junction cuts did (stderr).
+void print_build(const std::string& name, const MeshOcclusionBuildStats& b, double ms) {
+  std::fprintf(stderr, "%s: culler built in %.1f ms; T-junctions: %zu corners on unpaired edges, %zu triangles cut into %zu more parts; %zu shared edges\n",
+               name.c_str(), ms, b.tjunction_corners, b.triangles_cut, b.triangle_parts_added, b.shared_edges);
+}
 
 struct Spread {
   double median = 0, lo = 0, hi = 0;
@@ -135,7 +141,8 @@ class ReasonProbe {
     dmo::build_index(
         index_, scene.triangle_count(),
         [&mesh](std::size_t t, glm::vec3 p[3]) { return triangle_positions<VertexTraits<glm::vec3>>(mesh, t, p); },
-        map.objects.data(), map.objects.size(), AbtParams{}, dmo::sanitize(params).patch_triangles);
+        map.objects.data(), map.objects.size(), AbtParams{}, dmo::sanitize(params).patch_triangles,
+        params.cut_tjunctions);
     supply_ = dmo::sanitize(base_);
     supply_.occluder_triangle_budget = 0xffffffffu;
     supply_.max_occluder_objects = 0xffffffffu;
@@ -244,7 +251,7 @@ Row measure(const std::string& name, const CullScene& cs, const std::vector<Came
   const auto t_build = Clock::now();
   const MeshOcclusionCuller<glm::vec3> culler(cs.scene.mesh(), map.objects.data(), map.objects.size(), params);
   row.build_ms = ms_since(t_build);
-  std::fprintf(stderr, "%s: culler built in %.1f ms\n", name.c_str(), row.build_ms);
+  print_build(name, culler.build_stats(), row.build_ms);
   std::unique_ptr<ReasonProbe> probe;
   if (reasons) probe = std::make_unique<ReasonProbe>(cs.scene, map, params);
   MeshOcclusionContext context;
@@ -349,7 +356,8 @@ void print(const std::vector<Row>& rows) {
 }
 
 /// Parameters from the environment (for measuring alternatives without rebuilding): GW, GH,
-/// BUDGET, RATIO, MINFRAC, PATCH (patch_triangles), OBJTRI (object_test_triangles).
+/// BUDGET, RATIO, MINFRAC, PATCH (patch_triangles), OBJTRI (object_test_triangles), TJUNCTIONS
+/// (cut_tjunctions: 0 or 1).
 MeshOcclusionParams params_from_environment() {
   MeshOcclusionParams params;
   if (const char* v = std::getenv("GW")) params.grid_width = std::atoi(v);
@@ -359,6 +367,7 @@ MeshOcclusionParams params_from_environment() {
   if (const char* v = std::getenv("MINFRAC")) params.min_occluder_screen_fraction = static_cast<float>(std::atof(v));
   if (const char* v = std::getenv("PATCH")) params.patch_triangles = static_cast<std::uint32_t>(std::atol(v));
   if (const char* v = std::getenv("OBJTRI")) params.object_test_triangles = static_cast<std::uint32_t>(std::atol(v));
+  if (const char* v = std::getenv("TJUNCTIONS")) params.cut_tjunctions = std::atoi(v) != 0;
   return params;
 }
 
@@ -402,7 +411,9 @@ void culler_only(const std::string& name, const CullScene& cs, const std::vector
                  const MeshOcclusionParams& given, const Flags& flags) {
   namespace mo = cullkit::detail::mesh_occlusion;
   const ObjectMap map(cs.scene);
+  const auto t_build = Clock::now();
   const MeshOcclusionCuller<glm::vec3> culler(cs.scene.mesh(), map.objects.data(), map.objects.size(), given);
+  print_build(name, culler.build_stats(), ms_since(t_build));
   const MeshOcclusionParams& params = culler.params();  // as clamped
   MeshOcclusionContext context;
   std::vector<std::uint32_t> kept;

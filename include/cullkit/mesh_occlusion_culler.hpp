@@ -126,7 +126,7 @@ class MeshOcclusionCuller {
     if (objects == nullptr) object_count = 0;
     params_ = detail::mesh_occlusion::sanitize(params);
     detail::mesh_occlusion::build_index(index_, triangle_count, read, objects, object_count, params_.tree,
-                                        params_.patch_triangles);
+                                        params_.patch_triangles, params_.cut_tjunctions);
   }
 
   MeshOcclusionParams params_;

@@ -61,6 +61,13 @@ struct MeshOcclusionParams {
   /// where the grid's cells blur the occluders' outlines (a roof edge in front of a rooftop prop),
   /// and fuses boxes that touch. Default 128. 0 turns it off.
   std::uint32_t max_box_occluders = 128;
+  /// At build time, a triangle whose unpaired edge has corners of other triangles lying exactly on
+  /// it (a T-junction: a long edge P-Q against the edges Q-M and M-P of smaller neighbours) is cut
+  /// at those corners, so that the seam's edges are shared and fuse on the coverage grid. Only
+  /// corners exactly on the edge (exact arithmetic) are taken: the parts cover exactly the
+  /// triangle, so no answer can become less conservative. The cut triangles remain one triangle
+  /// for everything but occlusion. Default true. false: triangles are used as given.
+  bool cut_tjunctions = true;
   /// Parameters of the frustum-culling tree over object bounds.
   AbtParams tree = {};
 };
@@ -72,6 +79,10 @@ struct MeshOcclusionBuildStats {
   std::size_t triangles_degenerate = 0;  ///< finite, but two corners coincide or all three are collinear
   std::size_t welded_vertices = 0;       ///< distinct corner positions (exact float equality)
   std::size_t shared_edges = 0;          ///< edges used by two triangles in opposite directions
+                                         ///< (after the cuts below)
+  std::size_t tjunction_corners = 0;     ///< corners lying exactly on another triangle's unpaired edge
+  std::size_t triangles_cut = 0;         ///< triangles cut at those corners (occluder parts only)
+  std::size_t triangle_parts_added = 0;  ///< parts beyond the cut triangles' own slots
   std::size_t objects = 0;               ///< objects given
   std::size_t objects_unusable = 0;      ///< always reported visible: range outside the mesh, no
                                          ///< triangles, or an unusable triangle (bounds unknown)

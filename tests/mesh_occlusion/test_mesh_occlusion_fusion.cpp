@@ -1,8 +1,12 @@
 // Occluder fusion: one wall given as 2 triangles (both diagonals, welded or not), as a finely
-// triangulated mesh with jittered inner vertices, as several objects sharing edges, and as a curved
-// triangulated wall. From many eyes, every cube whose screen rectangle (widened by three cells) lies
-// on the wall must be hidden, and every cube the culler hides must be unseen by the brute-force
-// oracle (cubes peeking past the wall's edges among them).
+// triangulated mesh with jittered inner vertices, as several objects sharing edges, as a curved
+// triangulated wall, and as two halves meeting in T-junctions (one big triangle's edge against the
+// edges of several small triangles, along an axis or a slanted seam, within one object or across
+// two). From many eyes, every cube whose screen rectangle (widened by three cells) lies on the wall
+// must be hidden, and every cube the culler hides must be unseen by the brute-force oracle (cubes
+// peeking past the wall's edges among them). The T-junction walls are also culled without the
+// T-junction cuts (the control): then cubes behind the seam must stay visible, or the variant would
+// not test the cuts.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -72,10 +76,32 @@ void curved_wall(TestScene& s, int segments, int ny, int objects) {
   }
 }
 
+// The flat wall as two halves meeting along a seam from (x0, 0) to (x1, 3): the left half is two
+// big triangles, one of whose edges is the whole seam; the right half is `pieces` strips whose
+// corners lie on the seam at exactly representable points (the seam's ends are chosen so), so the
+// big edge meets the small triangles' edges in T-junctions. `two_objects`: the halves are separate
+// objects.
+void tjunction_wall(TestScene& s, float x0, float x1, int pieces, bool two_objects) {
+  const glm::vec3 a(-kWallX, kWallY0, 0.0f), b(x0, kWallY0, 0.0f), c(x1, kWallY1, 0.0f), d(-kWallX, kWallY1, 0.0f);
+  s.begin_object();
+  s.triangle(a, b, c);  // b -> c is the seam
+  s.triangle(a, c, d);
+  if (two_objects) s.begin_object();
+  for (int k = 0; k < pieces; ++k) {
+    const float t0 = float(k) / float(pieces), t1 = float(k + 1) / float(pieces);
+    const glm::vec3 s0(x0 + (x1 - x0) * t0, kWallY0 + (kWallY1 - kWallY0) * t0, 0.0f);
+    const glm::vec3 s1(x0 + (x1 - x0) * t1, kWallY0 + (kWallY1 - kWallY0) * t1, 0.0f);
+    const glm::vec3 r0(kWallX, s0.y, 0.0f), r1(kWallX, s1.y, 0.0f);
+    s.triangle(s0, r0, r1);
+    s.triangle(s0, r1, s1);  // s1 -> s0 runs against the seam
+  }
+}
+
 struct Variant {
   std::string name;
   std::function<void(TestScene&, Rng&)> wall;
   bool curved;
+  bool tjunction = false;  // also run the control without T-junction cuts
 };
 
 // Must-hide rule: the cube's screen rectangle widened by three cells is on the wall everywhere
@@ -124,6 +150,8 @@ int main() {
       {"many_objects_jittered", [](TestScene& s, Rng& rng) { flat_wall(s, 8, 6, 8, 0.3f, true, rng); }, false},
       {"curved", [](TestScene& s, Rng&) { curved_wall(s, 24, 4, 1); }, true},
       {"curved_objects", [](TestScene& s, Rng&) { curved_wall(s, 24, 4, 6); }, true},
+      {"tjunction_axis", [](TestScene& s, Rng&) { tjunction_wall(s, 0.0f, 0.0f, 3, false); }, false, true},
+      {"tjunction_slanted_objects", [](TestScene& s, Rng&) { tjunction_wall(s, -1.0f, 1.0f, 4, true); }, false, true},
   };
   // Depth bands of one distinct depth each: the cubes stand only 10% behind the curved wall, and
   // this test is about fusion, not about how coarse bands may be.
@@ -163,6 +191,7 @@ int main() {
     cullkit::MeshOcclusionContext context;
     std::vector<std::uint32_t> visible;
     std::size_t must = 0, must_failed = 0, hidden = 0, peek_visible = 0;
+    std::vector<std::pair<cullkit::Camera, mesh_oracle::NearSide>> cameras;  // for the control
     for (int e = 0; e < 24; ++e) {
       const glm::vec3 eye = variant.curved ? glm::vec3(rng.uniform(-1.0f, 1.0f), rng.uniform(1.0f, 2.0f), 6.0f + rng.uniform(-1.0f, 1.0f))
                                            : glm::vec3(rng.uniform(-1.5f, 1.5f), rng.uniform(1.0f, 2.0f), rng.uniform(3.0f, 8.0f));
@@ -171,6 +200,7 @@ int main() {
       const float fov = rng.uniform(60.0f, 90.0f);
       const cullkit::Camera cam = cullkit::support::make_camera(eye, target, fov, 1280, 720, 0.1f, 100.0f);
       const mesh_oracle::NearSide ns{glm::dvec3(eye), glm::normalize(glm::dvec3(target) - glm::dvec3(eye)), 0.1};
+      cameras.emplace_back(cam, ns);
       culler.cull(cam, context, visible);
       std::vector<char> is_visible(s.objects.size(), 0);
       for (std::uint32_t o : visible) is_visible[o] = 1;
@@ -193,6 +223,26 @@ int main() {
                 variant.name.c_str(), must, must_failed, hidden, peek_visible);
     CHECK_MSG(must_failed == 0, "%s: %zu cubes behind the wall not hidden", variant.name.c_str(), must_failed);
     CHECK_MSG(must > 60, "%s: the must-hide rule applied to only %zu cubes", variant.name.c_str(), must);
+    if (variant.tjunction) {
+      // The control: the same wall and cameras without the cuts. Cubes behind the seam then touch
+      // the seam's outline cells and stay visible.
+      cullkit::MeshOcclusionParams uncut = params;
+      uncut.cut_tjunctions = false;
+      const cullkit::MeshOcclusionCuller<glm::vec3> control(s.mesh(), s.objects.data(), s.objects.size(), uncut);
+      CHECK(culler.build_stats().triangles_cut == 1 && control.build_stats().triangles_cut == 0);
+      std::size_t control_failed = 0;
+      for (const auto& [cam, ns] : cameras) {
+        control.cull(cam, context, visible);
+        std::vector<char> is_visible(s.objects.size(), 0);
+        for (std::uint32_t o : visible) is_visible[o] = 1;
+        for (std::uint32_t o = wall_objects; o < s.objects.size(); ++o)
+          if (is_visible[o] && on_wall(s, cam, ns, o, wall_objects, params.grid_width, params.grid_height))
+            ++control_failed;
+      }
+      std::printf("%-22s without T-junction cuts: %zu of those cubes reported visible\n", "", control_failed);
+      CHECK_MSG(control_failed >= 24, "%s: only %zu cubes on the wall visible without the cuts", variant.name.c_str(),
+                control_failed);
+    }
     total_must += must;
     total_hidden += hidden;
     total_peek_visible += peek_visible;

@@ -9,3 +9,5 @@ include(${CMAKE_CURRENT_LIST_DIR}/embree.cmake)
 cullkit_add_test(test_mesh_occlusion_patches SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_patches.cpp TIMEOUT 300)
 # Occluder triangles clipped at the near plane: floors and walls reaching behind the eye.
 cullkit_add_test(test_mesh_occlusion_nearclip SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_nearclip.cpp TIMEOUT 300)
+# The T-junction cuts' exact test and ear clipping on their own.
+cullkit_add_test(test_mesh_occlusion_tjunctions SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_tjunctions.cpp)

@@ -18,6 +18,7 @@
 #include "../../geometry/aabb.hpp"
 #include "../../mesh_occlusion_params.hpp"
 #include "patches.hpp"
+#include "tjunctions.hpp"
 
 namespace cullkit {
 namespace detail {
@@ -26,12 +27,14 @@ namespace mesh_occlusion {
 inline constexpr std::uint32_t none = 0xffffffffu;
 
 /// The flat arrays a culler queries. Triangle t keeps its mesh number; a triangle that cannot
-/// occlude (unusable or degenerate) has corner[3t] == none.
+/// occlude (unusable or degenerate) has corner[3t] == none. A triangle cut at T-junctions keeps its
+/// first part in its slot; its other parts follow the user's triangles (`parts`).
 struct MeshIndex {
   std::size_t object_count = 0;
   MeshOcclusionBuildStats build_stats;
   std::vector<glm::vec3> positions;       // welded corner positions
-  std::vector<std::uint32_t> corners;     // 3 per triangle: welded ids
+  std::vector<std::uint32_t> corners;     // 3 per triangle slot: welded ids
+  TrianglePartsMap parts;                 // slots past the user's triangles: parts of cut triangles
   std::vector<std::uint32_t> twins;       // 3 per triangle: the opposite directed edge (3u + l), or none
   std::vector<MeshObject> objects;        // clamped ranges (usable objects only are ever walked)
   std::vector<Aabb> bounds;               // per object; meaningful for usable objects only
@@ -109,6 +112,41 @@ class PositionWelder {
   std::vector<std::uint32_t> slots_;
 };
 
+/// Pairs the directed edges that `for_each_edge(visit)` visits (in its order, `count` of them, none
+/// of them paired yet) among themselves: each (a, b) with the first unpaired (b, a) met before it.
+/// Returns the pairs made.
+template <class ForEachEdge>
+std::size_t pair_listed_edges(const std::vector<std::uint32_t>& corners, std::vector<std::uint32_t>& twins,
+                              std::size_t count, ForEachEdge&& for_each_edge) {
+  struct Slot {
+    std::uint64_t key;
+    std::uint32_t edge;  // none: empty; dead: removed
+  };
+  constexpr std::uint32_t dead = none - 1;
+  std::vector<Slot> table(table_size_for(count), Slot{0, none});
+  const std::size_t mask = table.size() - 1;
+  std::size_t pairs = 0;
+  for_each_edge([&](std::uint32_t e) {
+    const std::size_t t = e / 3, k = e % 3;
+    const std::uint32_t a = corners[3 * t + k], b = corners[3 * t + (k + 1) % 3];
+    const std::uint64_t opposite = std::uint64_t(b) << 32 | a;
+    for (std::size_t i = mix64(opposite) & mask; table[i].edge != none; i = (i + 1) & mask) {
+      if (table[i].edge != dead && table[i].key == opposite) {
+        twins[e] = table[i].edge;
+        twins[table[i].edge] = e;
+        table[i].edge = dead;
+        ++pairs;
+        return;
+      }
+    }
+    const std::uint64_t key = std::uint64_t(a) << 32 | b;
+    std::size_t i = mix64(key) & mask;
+    while (table[i].edge != none && table[i].edge != dead) i = (i + 1) & mask;
+    table[i] = Slot{key, e};
+  });
+  return pairs;
+}
+
 /// Pairs every directed edge (a, b) with at most one edge (b, a) of another triangle, one to one,
 /// so that the pair can cancel when both triangles occlude. Non-manifold edges pair greedily; the
 /// unpaired rest simply stays on the outline (safe, only less fusion).
@@ -117,47 +155,45 @@ inline std::size_t pair_edges(const std::vector<std::uint32_t>& corners, std::ve
   twins.assign(edge_count, none);
   std::size_t live = 0;
   for (std::size_t t = 0; t < edge_count / 3; ++t) live += corners[3 * t] != none ? 3 : 0;
-  struct Slot {
-    std::uint64_t key;
-    std::uint32_t edge;  // none: empty; dead: removed
-  };
-  constexpr std::uint32_t dead = none - 1;
-  std::vector<Slot> table(table_size_for(live), Slot{0, none});
-  const std::size_t mask = table.size() - 1;
-  std::size_t pairs = 0;
-  for (std::size_t t = 0; t < edge_count / 3; ++t) {
-    if (corners[3 * t] == none) continue;
+  return pair_listed_edges(corners, twins, live, [&](auto&& visit) {
+    for (std::size_t t = 0; t < edge_count / 3; ++t)
+      if (corners[3 * t] != none)
+        for (std::size_t k = 0; k < 3; ++k) visit(static_cast<std::uint32_t>(3 * t + k));
+  });
+}
+
+/// After cut_tjunctions: the cut triangles' old pairs are undone, and the edges left unpaired (the
+/// seams' and the parts') are paired among themselves. The pairs of uncut triangles stay as they
+/// were, so this costs the unpaired edges, not the mesh. Returns the pairs now.
+inline std::size_t pair_edges_after_cuts(const std::vector<std::uint32_t>& corners, std::vector<std::uint32_t>& twins,
+                                         const TrianglePartsMap& parts, std::size_t pairs) {
+  twins.resize(corners.size(), none);
+  for (std::size_t t = 0; t < parts.whole.size() && t < parts.first.size() - 1; ++t) {
+    if (parts.whole[t] == none) continue;
     for (std::size_t k = 0; k < 3; ++k) {
-      const std::uint32_t a = corners[3 * t + k], b = corners[3 * t + (k + 1) % 3];
-      const std::uint64_t opposite = std::uint64_t(b) << 32 | a;
-      const std::uint32_t e = static_cast<std::uint32_t>(3 * t + k);
-      bool paired = false;
-      for (std::size_t i = mix64(opposite) & mask; table[i].edge != none; i = (i + 1) & mask) {
-        if (table[i].edge != dead && table[i].key == opposite) {
-          twins[e] = table[i].edge;
-          twins[table[i].edge] = e;
-          table[i].edge = dead;
-          paired = true;
-          ++pairs;
-          break;
-        }
-      }
-      if (paired) continue;
-      const std::uint64_t key = std::uint64_t(a) << 32 | b;
-      std::size_t i = mix64(key) & mask;
-      while (table[i].edge != none && table[i].edge != dead) i = (i + 1) & mask;
-      table[i] = Slot{key, e};
+      const std::uint32_t twin = twins[3 * t + k];
+      if (twin == none) continue;
+      twins[twin] = none;
+      twins[3 * t + k] = none;
+      --pairs;
     }
   }
-  return pairs;
+  std::vector<std::uint32_t> open;
+  for (std::size_t e = 0; e < corners.size(); ++e)
+    if (twins[e] == none && corners[e - e % 3] != none) open.push_back(static_cast<std::uint32_t>(e));
+  return pairs + pair_listed_edges(corners, twins, open.size(), [&](auto&& visit) {
+           for (std::uint32_t e : open) visit(e);
+         });
 }
 
 inline bool finite(const glm::vec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
 /// Fills `index`. `read(t, p)` reads triangle t's corners, false when an index is out of range.
+/// `cut`: cut triangles at T-junctions (MeshOcclusionParams::cut_tjunctions).
 template <class ReadTriangle>
 void build_index(MeshIndex& index, std::size_t triangle_count, ReadTriangle&& read, const MeshObject* objects,
-                 std::size_t object_count, const AbtParams& tree_params, std::uint32_t patch_triangles) {
+                 std::size_t object_count, const AbtParams& tree_params, std::uint32_t patch_triangles,
+                 bool cut = true) {
   index = MeshIndex{};
   // Triangle numbers are 32-bit; a larger mesh keeps only what fits (the rest is unusable).
   const std::size_t kept = std::min<std::size_t>(triangle_count, none / 3 - 1);
@@ -225,11 +261,20 @@ void build_index(MeshIndex& index, std::size_t triangle_count, ReadTriangle&& re
   for (std::size_t t = 0; t < kept; ++t)
     if (unusable[t] == 2) index.corners[3 * t] = index.corners[3 * t + 1] = index.corners[3 * t + 2] = none;
   stats.shared_edges = pair_edges(index.corners, index.twins);
-  build_patches(index.patches, index.positions, index.corners, index.twins, index.objects, patch_triangles);
+  // Solid boxes are judged on the user's triangles (a box has no unpaired edge, so it is never cut).
   index.solid_box.assign(object_count, 0);
   for (std::size_t o = 0; o < object_count; ++o)
     if (index.objects[o].triangle_count > 0)
       index.solid_box[o] = is_solid_box(index.positions, index.corners, index.twins, index.objects[o], index.bounds[o]);
+  const TjunctionCuts cuts =
+      cut ? cut_tjunctions(index.positions, index.corners, index.twins, index.parts) : TjunctionCuts{};
+  stats.tjunction_corners = cuts.corners_on_edges;
+  stats.triangles_cut = cuts.triangles_cut;
+  stats.triangle_parts_added = cuts.parts_added;
+  if (cuts.triangles_cut > 0)
+    stats.shared_edges = pair_edges_after_cuts(index.corners, index.twins, index.parts, stats.shared_edges);
+  build_patches(index.patches, index.positions, index.corners, index.twins, index.objects, patch_triangles, index.parts,
+                kept);
   index.tree = AdaptiveBinaryTree<Aabb>(tree_bounds.data(), tree_bounds.size(), tree_params);
 }
 

@@ -20,6 +20,7 @@
 
 #include "../../geometry/aabb.hpp"
 #include "../../mesh_occlusion_params.hpp"
+#include "tjunctions.hpp"
 
 namespace cullkit {
 namespace detail {
@@ -44,10 +45,12 @@ struct PatchSet {
 
 /// Cuts the objects into patches. `corners` (3 per triangle, none for triangles that cannot occlude)
 /// and `twins` (the opposite directed edge or none) are the index's; `objects[o].triangle_count` is 0
-/// for unusable objects. O(triangles), allocates.
+/// for unusable objects. Slots past `user_count` are parts of cut triangles (`parts`, see
+/// tjunctions.hpp): they belong to the objects of their user triangle, and each is seeded right after
+/// it. O(triangles), allocates.
 inline void build_patches(PatchSet& set, const std::vector<glm::vec3>& positions, const std::vector<std::uint32_t>& corners,
                           const std::vector<std::uint32_t>& twins, const std::vector<MeshObject>& objects,
-                          std::uint32_t max_triangles) {
+                          std::uint32_t max_triangles, const TrianglePartsMap& parts, std::size_t user_count) {
   constexpr std::uint32_t none = 0xffffffffu;
   if (max_triangles == 0) max_triangles = 1;
   set.patches.clear();
@@ -61,7 +64,25 @@ inline void build_patches(PatchSet& set, const std::vector<glm::vec3>& positions
     set.object_first[o] = static_cast<std::uint32_t>(set.patches.size());
     const std::uint32_t first = objects[o].first_triangle, end = first + objects[o].triangle_count;
     const auto object = static_cast<std::uint32_t>(o);
-    for (std::uint32_t seed = first; seed < end; ++seed) {
+    const auto in_object = [&](std::uint32_t u) {
+      const std::uint32_t t = parts.user_triangle(u, user_count);
+      return t >= first && t < end;
+    };
+    // Seeds: each user triangle's slot, then the slots of its other parts.
+    std::uint32_t next_user = first, part = 0, part_end = 0;
+    for (;;) {
+      std::uint32_t seed;
+      if (part < part_end) {
+        seed = static_cast<std::uint32_t>(user_count) + part++;
+      } else if (next_user < end) {
+        seed = next_user++;
+        if (!parts.first.empty()) {
+          part = parts.first[seed];
+          part_end = parts.first[seed + 1];
+        }
+      } else {
+        break;
+      }
       if (corners[3 * std::size_t(seed)] == none || owner[seed] == object) continue;
       Patch p{static_cast<std::uint32_t>(set.triangles.size()), 0, object,
               Aabb{glm::vec3(std::numeric_limits<float>::infinity()), glm::vec3(-std::numeric_limits<float>::infinity())}};
@@ -78,7 +99,7 @@ inline void build_patches(PatchSet& set, const std::vector<glm::vec3>& positions
           const std::uint32_t twin = twins[3 * std::size_t(t) + std::size_t(k)];
           if (twin == none) continue;
           const std::uint32_t u = twin / 3;
-          if (u < first || u >= end || owner[u] == object || corners[3 * std::size_t(u)] == none) continue;
+          if (!in_object(u) || owner[u] == object || corners[3 * std::size_t(u)] == none) continue;
           owner[u] = object;
           queue.push_back(u);
         }
