@@ -188,46 +188,18 @@ inline std::size_t pair_edges_after_cuts(const std::vector<std::uint32_t>& corne
 
 inline bool finite(const glm::vec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
 
-/// Fills `index`. `read(t, p)` reads triangle t's corners, false when an index is out of range.
-/// `cut`: cut triangles at T-junctions (MeshOcclusionParams::cut_tjunctions).
-template <class ReadTriangle>
-void build_index(MeshIndex& index, std::size_t triangle_count, ReadTriangle&& read, const MeshObject* objects,
-                 std::size_t object_count, const AbtParams& tree_params, std::uint32_t patch_triangles,
-                 bool cut = true) {
-  index = MeshIndex{};
-  // Triangle numbers are 32-bit; a larger mesh keeps only what fits (the rest is unusable).
-  const std::size_t kept = std::min<std::size_t>(triangle_count, none / 3 - 1);
+/// The build after the triangles were read and welded (`index.positions`, `index.corners`, and per
+/// triangle `unusable`: 1 unreadable, 2 degenerate): object bounds, edge pairs, solid boxes,
+/// T-junction cuts, patches and the tree. A core entry point (CULLKIT_SEPARATE_CORE, config.hpp).
+CULLKIT_CORE_FN void finish_index(MeshIndex& index, const std::vector<std::uint8_t>& unusable, std::size_t triangle_count,
+                                  std::size_t kept, const MeshObject* objects, std::size_t object_count,
+                                  const AbtParams& tree_params, std::uint32_t patch_triangles, bool cut);
+
+#if CULLKIT_CORE_BODIES
+CULLKIT_CORE_FN void finish_index(MeshIndex& index, const std::vector<std::uint8_t>& unusable, std::size_t triangle_count,
+                                  std::size_t kept, const MeshObject* objects, std::size_t object_count,
+                                  const AbtParams& tree_params, std::uint32_t patch_triangles, bool cut) {
   MeshOcclusionBuildStats& stats = index.build_stats;
-  stats.triangles = triangle_count;
-  stats.objects = object_count;
-  index.object_count = object_count;
-  index.corners.assign(3 * kept, none);
-  std::vector<std::uint8_t> unusable(kept, 0);
-  PositionWelder welder(kept);
-  for (std::size_t t = 0; t < kept; ++t) {
-    glm::vec3 p[3];
-    if (!read(t, p) || !finite(p[0]) || !finite(p[1]) || !finite(p[2])) {
-      unusable[t] = 1;
-      ++stats.triangles_unusable;
-      continue;
-    }
-    std::uint32_t id[3];
-    for (int k = 0; k < 3; ++k) id[k] = welder.id(p[k], index.positions);
-    // Exactly zero area (in double, from float input the cross product is nearly exact; a tiny
-    // area is handled per frame by the screen-area test anyway).
-    const glm::dvec3 a(p[0]), b(p[1]), c(p[2]);
-    const glm::dvec3 n = glm::cross(b - a, c - a);
-    if (id[0] == id[1] || id[1] == id[2] || id[0] == id[2] || (n.x == 0.0 && n.y == 0.0 && n.z == 0.0)) {
-      ++stats.triangles_degenerate;
-      // Keep the corners for the object's bounds, but mark it as no occluder below.
-      index.corners[3 * t] = id[0];
-      index.corners[3 * t + 1] = id[1];
-      index.corners[3 * t + 2] = id[2];
-      unusable[t] = 2;
-      continue;
-    }
-    for (int k = 0; k < 3; ++k) index.corners[3 * t + static_cast<std::size_t>(k)] = id[k];
-  }
   stats.triangles_unusable += triangle_count - kept;
   stats.welded_vertices = index.positions.size();
 
@@ -276,6 +248,50 @@ void build_index(MeshIndex& index, std::size_t triangle_count, ReadTriangle&& re
   build_patches(index.patches, index.positions, index.corners, index.twins, index.objects, patch_triangles, index.parts,
                 kept);
   index.tree = AdaptiveBinaryTree<Aabb>(tree_bounds.data(), tree_bounds.size(), tree_params);
+}
+#endif  // CULLKIT_CORE_BODIES
+
+/// Fills `index`. `read(t, p)` reads triangle t's corners, false when an index is out of range.
+/// `cut`: cut triangles at T-junctions (MeshOcclusionParams::cut_tjunctions).
+template <class ReadTriangle>
+void build_index(MeshIndex& index, std::size_t triangle_count, ReadTriangle&& read, const MeshObject* objects,
+                 std::size_t object_count, const AbtParams& tree_params, std::uint32_t patch_triangles,
+                 bool cut = true) {
+  index = MeshIndex{};
+  // Triangle numbers are 32-bit; a larger mesh keeps only what fits (the rest is unusable).
+  const std::size_t kept = std::min<std::size_t>(triangle_count, none / 3 - 1);
+  MeshOcclusionBuildStats& stats = index.build_stats;
+  stats.triangles = triangle_count;
+  stats.objects = object_count;
+  index.object_count = object_count;
+  index.corners.assign(3 * kept, none);
+  std::vector<std::uint8_t> unusable(kept, 0);
+  PositionWelder welder(kept);
+  for (std::size_t t = 0; t < kept; ++t) {
+    glm::vec3 p[3];
+    if (!read(t, p) || !finite(p[0]) || !finite(p[1]) || !finite(p[2])) {
+      unusable[t] = 1;
+      ++stats.triangles_unusable;
+      continue;
+    }
+    std::uint32_t id[3];
+    for (int k = 0; k < 3; ++k) id[k] = welder.id(p[k], index.positions);
+    // Exactly zero area (in double, from float input the cross product is nearly exact; a tiny
+    // area is handled per frame by the screen-area test anyway).
+    const glm::dvec3 a(p[0]), b(p[1]), c(p[2]);
+    const glm::dvec3 n = glm::cross(b - a, c - a);
+    if (id[0] == id[1] || id[1] == id[2] || id[0] == id[2] || (n.x == 0.0 && n.y == 0.0 && n.z == 0.0)) {
+      ++stats.triangles_degenerate;
+      // Keep the corners for the object's bounds, but mark it as no occluder below.
+      index.corners[3 * t] = id[0];
+      index.corners[3 * t + 1] = id[1];
+      index.corners[3 * t + 2] = id[2];
+      unusable[t] = 2;
+      continue;
+    }
+    for (int k = 0; k < 3; ++k) index.corners[3 * t + static_cast<std::size_t>(k)] = id[k];
+  }
+  finish_index(index, unusable, triangle_count, kept, objects, object_count, tree_params, patch_triangles, cut);
 }
 
 }  // namespace mesh_occlusion
