@@ -1,0 +1,192 @@
+// cullkit/detail/mesh_occlusion/frame.hpp: the per-frame state of MeshOcclusionCuller::cull (its
+// scratch memory, kept between calls) and the projection of corners and boxes onto the grid.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+#include <glm/ext/matrix_double4x4.hpp>
+#include <glm/matrix.hpp>
+
+#include "../../config.hpp"
+#include "../../geometry/camera.hpp"
+#include "../../occlusion_tree.hpp"
+#include "coverage.hpp"
+#include "index.hpp"
+#include "phase_times.hpp"
+#include "view.hpp"
+
+namespace cullkit {
+namespace detail {
+namespace mesh_occlusion {
+
+/// An object's box seen from the eye: its grid rectangle and its smallest depth, when every corner
+/// is clearly beyond the near plane (`usable`); otherwise it can be neither hidden nor measured.
+struct BoxView {
+  double x0, y0, x1, y1;
+  double w_min;
+  bool usable;
+};
+
+/// An occluder triangle clipped at the near plane (View::clip_level): its part beyond, a triangle or a
+/// quadrilateral in the triangle's own order. Corner k runs to corner k + 1 along the triangle's edge
+/// `edge[k]` (0 to 2), or along the clipping line (-1: always outline, never shared).
+struct ClippedPolygon {
+  double x[4], y[4], w[4];
+  int edge[4];
+  int n;
+};
+
+/// Per-thread working memory of a query; only grows.
+struct Scratch {
+  MeshOcclusionStats stats;
+  Frustum frustum;                        // this frame's
+  glm::vec3 view_eye{0.0f};               // this frame's eye
+  std::vector<std::uint32_t> in_frustum;  // tree positions, then objects
+  std::vector<BoxView> boxes;             // parallel to in_frustum
+  std::vector<std::pair<float, std::uint32_t>> candidates;  // (screen cells, patch)
+  std::vector<std::pair<double, std::uint32_t>> occluders;  // (depth key, patch)
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> triangles, sort_buffer;  // (depth bits, triangle)
+  // Per-frame caches, valid where the stamp equals `frame`.
+  const void* owner = nullptr;
+  std::uint32_t frame = 0;
+  std::vector<std::uint32_t> vertex_stamp, vertex_slot, triangle_stamp, triangle_band, patch_stamp;
+  std::vector<std::uint32_t> clip_stamp, clip_slot;  // per triangle: its polygon in `clipped`
+  std::vector<ClippedPolygon> clipped;                // this frame's clipped occluder triangles
+  std::vector<BoxView> patch_boxes;       // per patch, valid where patch_stamp equals `frame`
+  std::vector<Projected> projected;
+  View view;
+  CoverageGrid grid;
+  std::vector<std::pair<float, std::uint32_t>> box_candidates;  // (screen cells, object)
+  std::vector<Aabb> box_occluders;
+  OcclusionTree box_tree{glm::vec3(0.0f)};  // the solid boxes' hidden region, when box_occluders is not empty
+};
+
+
+/// Sorts (key, value) pairs by key, stable: three passes of 11 bits.
+inline void radix_sort(std::vector<std::pair<std::uint32_t, std::uint32_t>>& items,
+                       std::vector<std::pair<std::uint32_t, std::uint32_t>>& buffer) {
+  if (items.size() < 2) return;
+  buffer.resize(items.size());
+  for (int pass = 0; pass < 3; ++pass) {
+    const int shift = 11 * pass;
+    std::uint32_t offsets[2048] = {};
+    for (const auto& it : items) ++offsets[(it.first >> shift) & 2047u];
+    std::uint32_t sum = 0;
+    for (std::uint32_t& o : offsets) {
+      const std::uint32_t n = o;
+      o = sum;
+      sum += n;
+    }
+    for (const auto& it : items) buffer[offsets[(it.first >> shift) & 2047u]++] = it;
+    items.swap(buffer);
+  }
+}
+
+/// Makes the caches fit `index` and starts a new frame.
+inline void begin_frame(const MeshIndex& index, Scratch& s) {
+  if (s.owner != &index || s.vertex_stamp.size() != index.positions.size() ||
+      s.triangle_stamp.size() != index.corners.size() / 3 || s.patch_stamp.size() != index.patches.patches.size()) {
+    s.owner = &index;
+    s.vertex_stamp.assign(index.positions.size(), 0);
+    s.vertex_slot.assign(index.positions.size(), 0);
+    s.triangle_stamp.assign(index.corners.size() / 3, 0);
+    s.triangle_band.assign(index.corners.size() / 3, 0);
+    s.clip_stamp.assign(index.corners.size() / 3, 0);
+    s.clip_slot.assign(index.corners.size() / 3, 0);
+    s.patch_stamp.assign(index.patches.patches.size(), 0);
+    s.patch_boxes.resize(index.patches.patches.size());
+    s.frame = 0;
+  }
+  if (++s.frame == 0) {
+    std::fill(s.vertex_stamp.begin(), s.vertex_stamp.end(), 0);
+    std::fill(s.triangle_stamp.begin(), s.triangle_stamp.end(), 0);
+    std::fill(s.clip_stamp.begin(), s.clip_stamp.end(), 0);
+    std::fill(s.patch_stamp.begin(), s.patch_stamp.end(), 0);
+    s.frame = 1;
+  }
+  s.projected.clear();
+  s.clipped.clear();
+}
+
+inline const Projected& project_vertex(const MeshIndex& index, Scratch& s, std::uint32_t v) {
+  if (s.vertex_stamp[v] != s.frame) {
+    PhaseProbe probe;
+    s.vertex_stamp[v] = s.frame;
+    s.vertex_slot[v] = static_cast<std::uint32_t>(s.projected.size());
+    const glm::vec3& p = index.positions[v];
+    s.projected.push_back(s.view.project(p.x, p.y, p.z));
+    probe.next(phase_project);
+  }
+  return s.projected[s.vertex_slot[v]];
+}
+
+inline BoxView project_box(const View& view, const Aabb& box) {
+  // Clip x, y, w and the near-plane value are affine: the corners are the values at box.min
+  // plus any of the three edge vectors' contributions.
+  const double q[3] = {double(box.min.x) - view.eye[0], double(box.min.y) - view.eye[1], double(box.min.z) - view.eye[2]};
+  const double e[3] = {double(box.max.x) - double(box.min.x), double(box.max.y) - double(box.min.y),
+                       double(box.max.z) - double(box.min.z)};
+  double base[4], step[3][4], scale[4];
+  for (int r = 0; r < 3; ++r) {
+    base[r] = view.row[r][0] * q[0] + view.row[r][1] * q[1] + view.row[r][2] * q[2];
+    for (int a = 0; a < 3; ++a) step[a][r] = view.row[r][a] * e[a];
+  }
+  const double* n = view.near_plane;
+  base[3] = n[0] * box.min.x + n[1] * box.min.y + n[2] * box.min.z + n[3];
+  for (int a = 0; a < 3; ++a) step[a][3] = n[a] * e[a];
+  // Tolerances as in View::project, taken at their largest over the box.
+  const double reach[3] = {std::max(std::fabs(q[0]), std::fabs(q[0] + e[0])), std::max(std::fabs(q[1]), std::fabs(q[1] + e[1])),
+                           std::max(std::fabs(q[2]), std::fabs(q[2] + e[2]))};
+  const double far_coord[3] = {std::max(std::fabs(double(box.min.x)), std::fabs(double(box.max.x))),
+                               std::max(std::fabs(double(box.min.y)), std::fabs(double(box.max.y))),
+                               std::max(std::fabs(double(box.min.z)), std::fabs(double(box.max.z)))};
+  scale[2] = std::fabs(view.row[2][0]) * reach[0] + std::fabs(view.row[2][1]) * reach[1] + std::fabs(view.row[2][2]) * reach[2];
+  scale[3] = std::fabs(n[0]) * far_coord[0] + std::fabs(n[1]) * far_coord[1] + std::fabs(n[2]) * far_coord[2] + std::fabs(n[3]);
+  // Rounding of the sums below is far inside these tolerances (2^-18 relative).
+  const double ntol = 0x1p-18 * scale[3] + 0x1p-40 * scale[3];
+  const double wtol = 1e-8 * scale[2];
+  BoxView b{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, HUGE_VAL, false};
+  for (int k = 0; k < 8; ++k) {
+    double c[4] = {base[0], base[1], base[2], base[3]};
+    for (int a = 0; a < 3; ++a)
+      if ((k >> a) & 1)
+        for (int r = 0; r < 4; ++r) c[r] += step[a][r];
+    if (!(c[3] > ntol) || !(c[2] > wtol)) return b;
+    const double inv = 1.0 / c[2];
+    const double x = c[0] * inv * view.scale_x + view.offset_x, y = c[1] * inv * view.scale_y + view.offset_y;
+    b.x0 = std::min(b.x0, x);
+    b.x1 = std::max(b.x1, x);
+    b.y0 = std::min(b.y0, y);
+    b.y1 = std::max(b.y1, y);
+    b.w_min = std::min(b.w_min, c[2]);
+  }
+  b.usable = std::isfinite(b.x0) && std::isfinite(b.x1) && std::isfinite(b.y0) && std::isfinite(b.y1) && std::isfinite(b.w_min);
+  return b;
+}
+
+/// A patch's box seen from the eye, projected once per frame.
+inline const BoxView& patch_box(const MeshIndex& index, Scratch& s, std::uint32_t patch) {
+  if (s.patch_stamp[patch] != s.frame) {
+    s.patch_stamp[patch] = s.frame;
+    s.patch_boxes[patch] = project_box(s.view, index.patches.patches[patch].box);
+  }
+  return s.patch_boxes[patch];
+}
+
+/// Grid cells a box view covers on screen (all of them for a box through the near plane: it is
+/// near the eye, likely big).
+inline double screen_cells(const BoxView& b, const CoverageGrid& grid) {
+  if (!b.usable) return double(grid.width()) * double(grid.height());
+  const double w = std::min(b.x1, double(grid.width())) - std::max(b.x0, 0.0);
+  const double h = std::min(b.y1, double(grid.height())) - std::max(b.y0, 0.0);
+  return w > 0.0 && h > 0.0 ? w * h : 0.0;
+}
+
+}  // namespace mesh_occlusion
+}  // namespace detail
+}  // namespace cullkit

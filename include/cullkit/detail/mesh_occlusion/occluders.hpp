@@ -1,0 +1,322 @@
+// cullkit/detail/mesh_occlusion/occluders.hpp: a frame's occluders: the patches chosen by size on
+// screen, their triangles clipped at the near plane and sorted nearest first, and their insertion
+// into the coverage grid in depth bands.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+#include "coverage.hpp"
+#include "frame.hpp"
+#include "index.hpp"
+#include "phase_times.hpp"
+
+namespace cullkit {
+namespace detail {
+namespace mesh_occlusion {
+
+/// Picks occluder patches by size on screen, biggest first, within the triangle budget; fills
+/// `s.occluders`. A patch too big for what is left of the budget is skipped, smaller ones still fit.
+/// An object of one patch is measured by its own box (already projected).
+inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+  const double grid_cells = double(s.grid.width()) * double(s.grid.height());
+  const double min_cells = std::max(1.0, params.min_occluder_screen_fraction * grid_cells);
+  const PatchSet& ps = index.patches;
+  s.candidates.clear();
+  for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
+    const std::uint32_t o = s.in_frustum[i];
+    const std::uint32_t p0 = ps.object_first[o], p1 = ps.object_first[o + 1];
+    if (p0 == p1) continue;
+    const double object_cells = screen_cells(s.boxes[i], s.grid);
+    if (object_cells < min_cells) continue;
+    if (p1 - p0 == 1) {
+      s.candidates.emplace_back(static_cast<float>(object_cells), p0);
+      continue;
+    }
+    for (std::uint32_t p = p0; p < p1; ++p) {
+      // A patch outside the frustum (behind the eye, say) would otherwise count as through the near
+      // plane, the biggest of all.
+      if (s.frustum.classify(ps.patches[p].box) == Containment::outside) continue;
+      const double cells = screen_cells(patch_box(index, s, p), s.grid);
+      if (cells >= min_cells) s.candidates.emplace_back(static_cast<float>(cells), p);
+    }
+  }
+  // Biggest first. A full sort of the candidates only (they are the patches above the size floor).
+  std::sort(s.candidates.begin(), s.candidates.end(),
+            [](const std::pair<float, std::uint32_t>& a, const std::pair<float, std::uint32_t>& b) {
+              return a.first > b.first || (a.first == b.first && a.second < b.second);
+            });
+  s.occluders.clear();
+  std::uint64_t budget = params.occluder_triangle_budget;
+  for (const auto& c : s.candidates) {
+    if (s.occluders.size() >= params.max_occluder_objects || budget == 0) break;
+    const std::uint32_t n = ps.patches[c.second].count;
+    if (n > budget) continue;
+    budget -= n;
+    s.occluders.emplace_back(0.0, c.second);
+  }
+}
+
+/// Clips the occluder triangle of welded corners c (`inside`: a bit per corner beyond the clipping
+/// level, neither none nor all of them) to its part beyond the clipping level, into `poly`. False when a
+/// clip point cannot be had. Each clip point is computed from its edge's endpoints ordered by welded
+/// id, so a neighbour clipped on the same edge gets the same point: the shared part still cancels.
+inline bool clip_occluder(const MeshIndex& index, const Scratch& s, const std::uint32_t* c, unsigned inside,
+                          ClippedPolygon& poly) {
+  poly.n = 0;
+  for (int k = 0; k < 3; ++k) {
+    const int l = k == 2 ? 0 : k + 1;
+    const bool in_k = (inside >> k) & 1u, in_l = (inside >> l) & 1u;
+    if (in_k) {
+      const Projected& p = s.projected[s.vertex_slot[c[k]]];
+      poly.x[poly.n] = p.x;
+      poly.y[poly.n] = p.y;
+      poly.w[poly.n] = p.w;
+      poly.edge[poly.n++] = k;  // on to corner l, or to the clip point of this edge
+    }
+    if (in_k == in_l) continue;
+    const glm::vec3& pa = index.positions[std::min(c[k], c[l])];
+    const glm::vec3& pb = index.positions[std::max(c[k], c[l])];
+    const double a[3] = {pa.x, pa.y, pa.z}, b[3] = {pb.x, pb.y, pb.z};
+    Projected q;
+    if (!s.view.clip_point(a, b, q)) return false;
+    poly.x[poly.n] = q.x;
+    poly.y[poly.n] = q.y;
+    poly.w[poly.n] = q.w;
+    // Leaving: on along the clipping line; entering: on along this edge to corner l.
+    poly.edge[poly.n++] = in_k ? -1 : k;
+  }
+  return true;
+}
+
+/// Projects the occluder patches' triangles and keeps those that can occlude: clearly front-facing,
+/// touching the grid, and with some corner beyond the clipping level (a triangle with a corner short
+/// of it is clipped to its part beyond). Fills `s.triangles` with (sort key as float bits, triangle),
+/// smallest key first, the key being the nearest corner's depth (the farthest corner's for a clipped
+/// polygon), and `s.clipped` with the clipped ones' polygons.
+inline void gather_triangles(const MeshIndex& index, Scratch& s) {
+  const int orient = s.view.orient;
+  const double gw = s.grid.width(), gh = s.grid.height();
+  s.triangles.clear();
+  const PatchSet& ps = index.patches;
+  for (const auto& o : s.occluders) {
+    const Patch& patch = ps.patches[o.second];
+    for (std::uint32_t k = patch.first; k < patch.first + patch.count; ++k) {
+      const std::uint32_t t = ps.triangles[k];
+      const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
+      // Objects may overlap: a triangle goes in once.
+      if (c[0] == none || s.triangle_stamp[t] == s.frame) continue;
+      double x[4], y[4], w[4];
+      int n = 3;
+      unsigned inside = 0;
+      for (int k = 0; k < 3; ++k) {
+        const Projected& p = project_vertex(index, s, c[k]);
+        inside |= p.inside ? 1u << k : 0u;
+        x[k] = p.x;
+        y[k] = p.y;
+        w[k] = p.w;
+      }
+      if (inside != 7u) {
+        // Wholly short of the clipping level: nothing of it occludes.
+        if (inside == 0u) continue;
+        ClippedPolygon poly;
+        if (!clip_occluder(index, s, c, inside, poly)) continue;
+        n = poly.n;
+        std::copy(poly.x, poly.x + n, x);
+        std::copy(poly.y, poly.y + n, y);
+        std::copy(poly.w, poly.w + n, w);
+        s.clip_stamp[t] = s.frame;
+        s.clip_slot[t] = static_cast<std::uint32_t>(s.clipped.size());
+        s.clipped.push_back(poly);
+      }
+      double xmin = x[0], xmax = x[0], ymin = y[0], ymax = y[0], wmin = w[0];
+      for (int k = 1; k < n; ++k) {
+        xmin = std::min(xmin, x[k]);
+        xmax = std::max(xmax, x[k]);
+        ymin = std::min(ymin, y[k]);
+        ymax = std::max(ymax, y[k]);
+        wmin = std::min(wmin, w[k]);
+      }
+      if (xmax < 0.0 || xmin > gw || ymax < 0.0 || ymin > gh) continue;
+      // Clearly front-facing: back-facing and edge-on triangles are left out (their neighbours'
+      // edges then stay on the outline, which only covers less). A clipped polygon lies in its
+      // triangle's plane: it faces the eye as the triangle does.
+      double area2 = 0.0;
+      for (int k = 1; k + 1 < n; ++k) area2 += (x[k] - x[0]) * (y[k + 1] - y[0]) - (x[k + 1] - x[0]) * (y[k] - y[0]);
+      const double extent = std::max(xmax - xmin, ymax - ymin);
+      if (!(area2 * orient > 1e-9 * extent * extent)) continue;
+      // A clipped polygon's nearest point is on the clipping line, nearer than anything else, and
+      // mostly off screen (a floor under the eye): sorted by its nearest depth it would freeze every
+      // cell it shares with nearer occluders (a wall standing on the floor) at its own far depth
+      // there. It goes in by its farthest depth instead, after what stands on it.
+      double wmax = w[0];
+      for (int k = 1; k < n; ++k) wmax = std::max(wmax, w[k]);
+      double key_w = inside != 7u ? wmax : wmin;
+      // A part of a cut triangle goes in only when every corner of the whole triangle is beyond the
+      // clipping level (then so is every part, unclipped), and sorts as the whole (by the whole's
+      // nearest corner): the parts then share a band and their inner edges cancel within it. Parts
+      // of a triangle that reaches the near plane are left out with it: inserted alone, their inner
+      // edges would be outline across cells that nearer occluders cover (measured: fzk_haus kept
+      // more).
+      if (!index.parts.whole.empty() && index.parts.whole[t] != none) {
+        const std::uint32_t* whole = &index.parts.whole_corners[3 * std::size_t(index.parts.whole[t])];
+        bool whole_inside = true;
+        for (int k = 0; k < 3 && whole_inside; ++k) {
+          const Projected& p = project_vertex(index, s, whole[k]);
+          whole_inside = p.inside;
+          key_w = std::min(key_w, p.w);
+        }
+        if (!whole_inside) continue;
+      }
+      const float key = static_cast<float>(key_w);
+      std::uint32_t bits;
+      std::memcpy(&bits, &key, sizeof bits);  // positive floats order as their bits
+      s.triangles.emplace_back(bits, t);
+      s.triangle_stamp[t] = s.frame;
+    }
+  }
+  radix_sort(s.triangles, s.sort_buffer);
+}
+
+/// Inserts a clipped occluder polygon as insert_triangles does a triangle: its depth and counts as a
+/// fan of triangles whose diagonals are left out of the counts (each would cancel its twin in the
+/// fan exactly), its edges along the triangle's edges shared with neighbours as the triangle's
+/// would be (`inner`, `twin_band`: per triangle edge, as insert_triangles finds them; the shared
+/// part is the same segment on both sides), and its edge along the clipping line as outline.
+inline void insert_clipped(CoverageGrid& grid, const ClippedPolygon& poly, int orient, unsigned inner,
+                           const std::uint32_t* twin_band, std::uint32_t my_band, PhaseProbe& probe) {
+  const int n = poly.n;
+  const auto skipped = [&](int k) { return poly.edge[k] >= 0 && ((inner >> poly.edge[k]) & 1u); };
+  probe.next(phase_bands);
+  for (int f = 1; f + 1 < n; ++f) {
+    const double x[3] = {poly.x[0], poly.x[f], poly.x[f + 1]}, y[3] = {poly.y[0], poly.y[f], poly.y[f + 1]};
+    const double w[3] = {poly.w[0], poly.w[f], poly.w[f + 1]};
+    grid.add_depth(x, y, w);
+  }
+  probe.next(phase_depth);
+  for (int f = 1; f + 1 < n; ++f) {
+    const double x[3] = {poly.x[0], poly.x[f], poly.x[f + 1]}, y[3] = {poly.y[0], poly.y[f], poly.y[f + 1]};
+    // Fan edge 0 -> f is the polygon's edge 0 only for the first triangle, f + 1 -> 0 its last edge
+    // only for the last one; otherwise they are diagonals.
+    unsigned skip = skipped(f) ? 2u : 0u;
+    skip |= f == 1 ? (skipped(0) ? 1u : 0u) : 1u;
+    skip |= f + 2 == n ? (skipped(n - 1) ? 4u : 0u) : 4u;
+    grid.add_count(x, y, orient, skip);
+  }
+  probe.next(phase_counts);
+  for (int k = 0; k < n; ++k) {
+    const int l = k + 1 == n ? 0 : k + 1;
+    const int e = poly.edge[k];
+    if (e < 0) {
+      grid.touch_edge(poly.x[k], poly.y[k], poly.x[l], poly.y[l], orient, 1);
+      continue;
+    }
+    if ((inner >> e) & 1u) continue;
+    if (twin_band[e] < my_band) grid.touch_edge(poly.x[l], poly.y[l], poly.x[k], poly.y[k], orient, -1);
+    else grid.touch_edge(poly.x[k], poly.y[k], poly.x[l], poly.y[l], orient, 1);
+  }
+  probe.next(phase_edges);
+}
+
+/// Inserts the gathered triangles nearest first, in bands of similar depth, so a cell freezes at
+/// the depth of the nearest layer that covers it. Within a band, an edge shared by two of its
+/// triangles is never touched: it cancels before the band ends. Returns the cells covered.
+inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+  CoverageGrid& grid = s.grid;
+  PhaseProbe probe;
+  const int orient = s.view.orient;
+  const float ratio = 1.0f + std::max(0.0f, params.depth_band_ratio);
+  // Bands: runs of the sorted triangles whose nearest depth is within `ratio` of the run's first.
+  std::uint32_t band = 0;
+  float band_start = 0.0f;
+  for (std::size_t i = 0; i < s.triangles.size(); ++i) {
+    float key;
+    std::memcpy(&key, &s.triangles[i].first, sizeof key);
+    if (i == 0 || !(key <= band_start * ratio)) {
+      band_start = key;
+      ++band;
+    }
+    s.triangle_band[s.triangles[i].second] = band;
+  }
+  std::size_t covered = 0;
+  const bool any_clipped = !s.clipped.empty();
+  // The triangle's corners, or its clipped polygon's; returns their number.
+  const auto corners_of = [&](std::uint32_t t, double* x, double* y, double* w) {
+    if (any_clipped && s.clip_stamp[t] == s.frame) {
+      const ClippedPolygon& poly = s.clipped[s.clip_slot[t]];
+      std::copy(poly.x, poly.x + poly.n, x);
+      std::copy(poly.y, poly.y + poly.n, y);
+      std::copy(poly.w, poly.w + poly.n, w);
+      return poly.n;
+    }
+    const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
+    for (int k = 0; k < 3; ++k) {
+      const Projected& p = s.projected[s.vertex_slot[c[k]]];
+      x[k] = p.x;
+      y[k] = p.y;
+      w[k] = p.w;
+    }
+    return 3;
+  };
+  for (std::size_t begin = 0, end = 0; begin < s.triangles.size(); begin = end) {
+    const std::uint32_t my_band = s.triangle_band[s.triangles[begin].second];
+    end = begin;
+    while (end < s.triangles.size() && s.triangle_band[s.triangles[end].second] == my_band) ++end;
+    // A triangle over cells that are all covered already can change nothing that matters: it is
+    // dropped, as if it were no occluder (decided for the whole band before any of its edges
+    // cancel against a neighbour's).
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t t = s.triangles[i].second;
+      double x[4], y[4], w[4];
+      const int n = corners_of(t, x, y, w);
+      if (grid.all_frozen(x, y, n)) s.triangle_stamp[t] = 0;
+    }
+    probe.next(phase_bands);
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t t = s.triangles[i].second;
+      if (s.triangle_stamp[t] != s.frame) continue;
+      ++s.stats.occluder_triangles;
+      std::uint32_t twin_band[3];
+      unsigned inner = 0;  // edges shared with a triangle of this band
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
+        const bool twin_here = twin != none && s.triangle_stamp[twin / 3] == s.frame;
+        twin_band[k] = twin_here ? s.triangle_band[twin / 3] : none;
+        if (twin_band[k] == my_band) inner |= 1u << k;
+      }
+      if (any_clipped && s.clip_stamp[t] == s.frame) {
+        insert_clipped(grid, s.clipped[s.clip_slot[t]], orient, inner, twin_band, my_band, probe);
+        continue;
+      }
+      double x[3], y[3], w[3];
+      corners_of(t, x, y, w);
+      probe.next(phase_bands);
+      grid.add_depth(x, y, w);
+      probe.next(phase_depth);
+      // An edge shared within the band adds crossings from both triangles that cancel bit for bit
+      // (the same endpoints, the same arithmetic, opposite signs): both leave them out.
+      grid.add_count(x, y, orient, inner);
+      probe.next(phase_counts);
+      for (int k = 0; k < 3; ++k) {
+        const int l = k == 2 ? 0 : k + 1;
+        if ((inner >> k) & 1u) continue;  // cancels within the band
+        // The twin in an earlier band: its edge (l -> k, as its triangle runs) leaves the
+        // outline, and this one never joins it.
+        if (twin_band[k] < my_band) grid.touch_edge(x[l], y[l], x[k], y[k], orient, -1);
+        else grid.touch_edge(x[k], y[k], x[l], y[l], orient, 1);
+      }
+      probe.next(phase_edges);
+    }
+    covered += grid.end_band();
+    probe.next(phase_end_band);
+  }
+  return covered;
+}
+
+}  // namespace mesh_occlusion
+}  // namespace detail
+}  // namespace cullkit
