@@ -136,8 +136,8 @@ std::vector<std::uint8_t> occluders_of(const support::Scene& scene, const Object
   for (const auto& o : s.occluders) {
     const dmo::Patch& patch = index.patches.patches[o.second];
     for (std::uint32_t k = patch.first; k < patch.first + patch.count; ++k) {
-      const std::uint32_t t = index.patches.triangles[k];
-      occluder[t] = s.triangle_stamp[t] == s.frame;  // inserted, not dropped
+      const std::uint32_t t = index.patches.triangles[k];  // a user triangle, or a part of one (T-junction cut)
+      if (s.triangle_stamp[t] == s.frame) occluder[index.parts.user_triangle(t, scene.triangle_count())] = 1;  // inserted
     }
   }
   for (const auto& c : s.box_candidates) {
