@@ -368,6 +368,7 @@ MeshOcclusionParams params_from_environment() {
   if (const char* v = std::getenv("PATCH")) params.patch_triangles = static_cast<std::uint32_t>(std::atol(v));
   if (const char* v = std::getenv("OBJTRI")) params.object_test_triangles = static_cast<std::uint32_t>(std::atol(v));
   if (const char* v = std::getenv("TJUNCTIONS")) params.cut_tjunctions = std::atoi(v) != 0;
+  if (const char* v = std::getenv("LAYERS")) params.patch_layers = std::atoi(v) != 0;
   return params;
 }
 

@@ -68,6 +68,12 @@ struct MeshOcclusionParams {
   /// triangle, so no answer can become less conservative. The cut triangles remain one triangle
   /// for everything but occlusion. Default true. false: triangles are used as given.
   bool cut_tjunctions = true;
+  /// Each frame, each occluder patch is also inserted alone into a grid of its own, and a cell it
+  /// covers by itself takes the patch's depth bound where that is nearer than the union's. The union
+  /// of all occluders fuses their seams but keeps, per cell, the farthest depth of every triangle that
+  /// touched the cell before it was covered (a floor's far part where a wall stands in front of it);
+  /// a patch alone gives its own. Default true. false: the union only, about half the insertion time.
+  bool patch_layers = true;
   /// Parameters of the frustum-culling tree over object bounds.
   AbtParams tree = {};
 };

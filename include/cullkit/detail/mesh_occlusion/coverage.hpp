@@ -61,6 +61,7 @@ class CoverageGrid {
       band_rows_.assign(static_cast<std::size_t>(height), 0);
       band_row_count_ = 0;
       dirty_ = CellRect{width, height, -1, -1};
+      fresh_ = dirty_;
       return;
     }
     clear_dirty();
@@ -223,7 +224,9 @@ class CoverageGrid {
         count_[c] += run;
       }
       grow(dirty_, CellRect{i0, j, i - 1, j});
-      covered += freeze(j, i0, i - 1);
+      const std::size_t fresh = freeze(j, i0, i - 1);
+      if (fresh != 0) grow(fresh_, CellRect{i0, j, i - 1, j});
+      covered += fresh;
     }
     band_row_count_ = 0;
     return covered;
@@ -268,6 +271,79 @@ class CoverageGrid {
 #endif
     for (; i <= b; ++i) one(i);
     return covered;
+  }
+
+  /// Starts a layer over the cells `r` of `main` (a grid of the same size): a cell that `main` covers
+  /// with an inverse depth of at least `nearest` (the layer's nearest point) can gain nothing from the
+  /// layer, so it starts frozen at `main`'s depth and the layer's depth and outline work skips it (as
+  /// it skips cells its own earlier bands covered). Returns false when every cell of `r` is such a cell.
+  bool seed_frozen(const CoverageGrid& main, const CellRect& r, float nearest) {
+    if (r.empty()) return false;
+    grow(dirty_, r);
+    fresh_ = CellRect{width_, height_, -1, -1};
+    bool open = false;
+    for (int j = r.y0; j <= r.y1; ++j) {
+      const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+      const float* from = main.depth_.data() + base;
+      float* to = depth_.data() + base;
+      std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+      const auto one = [&](int i) {
+        if (from[i] >= nearest) {
+          to[i] = from[i];
+          frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
+        } else {
+          open = true;
+        }
+      };
+      int i = r.x0;
+#if CULLKIT_HAS_SSE2
+      for (; i <= r.x1 && (i & 3) != 0; ++i) one(i);
+      const __m128 limit = _mm_set1_ps(nearest);
+      for (; i + 3 <= r.x1; i += 4) {
+        const __m128 d = _mm_loadu_ps(from + i);
+        const __m128 near = _mm_cmpge_ps(d, limit);
+        const int mask = _mm_movemask_ps(near);
+        _mm_storeu_ps(to + i, _mm_and_ps(near, d));  // the layer's cells start at 0 (uncovered)
+        frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+        open = open || mask != 15;
+      }
+#endif
+      for (; i <= r.x1; ++i) one(i);
+    }
+    return open;
+  }
+
+  /// Where `layer` (a grid of the same size, after its last band) has a cell covered with a nearer
+  /// bound than this grid's, takes it: either set of occluders bounds the depth of every ray through
+  /// the cell, so the nearer bound holds.
+  void take_nearer(const CoverageGrid& layer) {
+    const CellRect& r = layer.fresh_;  // the cells the layer's own bands covered
+    if (r.empty()) return;
+    grow(dirty_, r);
+    for (int j = r.y0; j <= r.y1; ++j) {
+      const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+      const float* from = layer.depth_.data() + base;
+      float* to = depth_.data() + base;
+      std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+      const auto one = [&](int i) {
+        if (!(from[i] > to[i])) return;
+        to[i] = from[i];
+        frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
+      };
+      int i = r.x0;
+#if CULLKIT_HAS_SSE2
+      for (; i <= r.x1 && (i & 3) != 0; ++i) one(i);
+      for (; i + 3 <= r.x1; i += 4) {
+        const __m128 a = _mm_loadu_ps(from + i), b = _mm_loadu_ps(to + i);
+        const __m128 nearer = _mm_cmpgt_ps(a, b);
+        const int mask = _mm_movemask_ps(nearer);
+        if (mask == 0) continue;
+        _mm_storeu_ps(to + i, _mm_or_ps(_mm_and_ps(nearer, a), _mm_andnot_ps(nearer, b)));
+        frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+      }
+#endif
+      for (; i <= r.x1; ++i) one(i);
+    }
   }
 
   /// After the last band: per-tile minimum of the frozen inverse depths (0 where uncovered).
@@ -489,6 +565,7 @@ class CoverageGrid {
 
   // Returns the touched part of the grid to the empty state.
   void clear_dirty() {
+    fresh_ = CellRect{width_, height_, -1, -1};
     if (dirty_.empty()) return;
     for (int j = dirty_.y0; j <= dirty_.y1; ++j) {
       const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
@@ -513,6 +590,7 @@ class CoverageGrid {
   std::vector<int> band_lo_, band_hi_, band_rows_;  // per row: cells changed in the current band
   int band_row_count_ = 0;                          // rows listed in band_rows_
   CellRect dirty_{0, 0, -1, -1};
+  CellRect fresh_{0, 0, -1, -1};  // since seed_frozen: the rows' ranges where end_band covered cells
 };
 
 }  // namespace mesh_occlusion

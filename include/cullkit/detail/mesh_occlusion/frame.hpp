@@ -61,6 +61,12 @@ struct Scratch {
   std::vector<Projected> projected;
   View view;
   CoverageGrid grid;
+  // Per-patch layers (refine_by_patches): the patch that gathered each triangle, a stamp for the
+  // members of the current layer, the gathered triangles grouped by patch, and the layer's grid.
+  std::vector<std::uint32_t> triangle_owner, layer_stamp, layer_first;
+  std::uint32_t layer_value = 0;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> layer_order;
+  CoverageGrid layer;
   std::vector<std::pair<float, std::uint32_t>> box_candidates;  // (screen cells, object)
   std::vector<Aabb> box_occluders;
   OcclusionTree box_tree{glm::vec3(0.0f)};  // the solid boxes' hidden region, when box_occluders is not empty
@@ -97,6 +103,9 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
     s.triangle_stamp.assign(index.corners.size() / 3, 0);
     s.triangle_band.assign(index.corners.size() / 3, 0);
     s.clip_stamp.assign(index.corners.size() / 3, 0);
+    s.triangle_owner.assign(index.corners.size() / 3, 0);
+    s.layer_stamp.assign(index.corners.size() / 3, 0);
+    s.layer_value = 0;
     s.clip_slot.assign(index.corners.size() / 3, 0);
     s.patch_stamp.assign(index.patches.patches.size(), 0);
     s.patch_boxes.resize(index.patches.patches.size());

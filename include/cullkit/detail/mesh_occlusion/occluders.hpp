@@ -103,8 +103,8 @@ inline void gather_triangles(const MeshIndex& index, Scratch& s) {
   const double gw = s.grid.width(), gh = s.grid.height();
   s.triangles.clear();
   const PatchSet& ps = index.patches;
-  for (const auto& o : s.occluders) {
-    const Patch& patch = ps.patches[o.second];
+  for (std::size_t q = 0; q < s.occluders.size(); ++q) {
+    const Patch& patch = ps.patches[s.occluders[q].second];
     for (std::uint32_t k = patch.first; k < patch.first + patch.count; ++k) {
       const std::uint32_t t = ps.triangles[k];
       const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
@@ -177,6 +177,7 @@ inline void gather_triangles(const MeshIndex& index, Scratch& s) {
       std::memcpy(&bits, &key, sizeof bits);  // positive floats order as their bits
       s.triangles.emplace_back(bits, t);
       s.triangle_stamp[t] = s.frame;
+      s.triangle_owner[t] = static_cast<std::uint32_t>(q);
     }
   }
   radix_sort(s.triangles, s.sort_buffer);
@@ -222,69 +223,87 @@ inline void insert_clipped(CoverageGrid& grid, const ClippedPolygon& poly, int o
   probe.next(phase_edges);
 }
 
-/// Inserts the gathered triangles nearest first, in bands of similar depth, so a cell freezes at
-/// the depth of the nearest layer that covers it. Within a band, an edge shared by two of its
-/// triangles is never touched: it cancels before the band ends. Returns the cells covered.
-inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
-  CoverageGrid& grid = s.grid;
+/// A gathered occluder triangle's projected corners, or its clipped polygon's (up to 4); returns
+/// their number.
+inline int occluder_corners(const MeshIndex& index, const Scratch& s, std::uint32_t t, double* x, double* y, double* w) {
+  if (!s.clipped.empty() && s.clip_stamp[t] == s.frame) {
+    const ClippedPolygon& poly = s.clipped[s.clip_slot[t]];
+    std::copy(poly.x, poly.x + poly.n, x);
+    std::copy(poly.y, poly.y + poly.n, y);
+    std::copy(poly.w, poly.w + poly.n, w);
+    return poly.n;
+  }
+  const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
+  for (int k = 0; k < 3; ++k) {
+    const Projected& p = s.projected[s.vertex_slot[c[k]]];
+    x[k] = p.x;
+    y[k] = p.y;
+    w[k] = p.w;
+  }
+  return 3;
+}
+
+/// Which triangles a run of insertions holds: those whose `stamp` entry equals `value`. An edge is
+/// shared within the run only when its twin is a member; a triangle dropped over covered cells
+/// stops being one.
+struct RunMembers {
+  std::vector<std::uint32_t>& stamp;
+  std::uint32_t value;
+  [[nodiscard]] bool has(std::uint32_t t) const { return stamp[t] == value; }
+};
+
+/// Inserts the sorted triangles [first, last) (each a member of `members`) into `grid` nearest
+/// first, in bands of similar depth, so a cell freezes at the depth of the nearest layer that covers
+/// it. Within a band, an edge shared by two of its triangles is never touched: it cancels before the
+/// band ends. Returns the cells covered; counts the inserted triangles into `inserted`.
+inline std::size_t insert_run(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, CoverageGrid& grid,
+                              const std::pair<std::uint32_t, std::uint32_t>* first,
+                              const std::pair<std::uint32_t, std::uint32_t>* last, RunMembers members,
+                              std::size_t& inserted) {
   PhaseProbe probe;
   const int orient = s.view.orient;
   const float ratio = 1.0f + std::max(0.0f, params.depth_band_ratio);
+  const std::size_t count = static_cast<std::size_t>(last - first);
   // Bands: runs of the sorted triangles whose nearest depth is within `ratio` of the run's first.
   std::uint32_t band = 0;
   float band_start = 0.0f;
-  for (std::size_t i = 0; i < s.triangles.size(); ++i) {
+  for (std::size_t i = 0; i < count; ++i) {
     float key;
-    std::memcpy(&key, &s.triangles[i].first, sizeof key);
+    std::memcpy(&key, &first[i].first, sizeof key);
     if (i == 0 || !(key <= band_start * ratio)) {
       band_start = key;
       ++band;
     }
-    s.triangle_band[s.triangles[i].second] = band;
+    s.triangle_band[first[i].second] = band;
   }
   std::size_t covered = 0;
   const bool any_clipped = !s.clipped.empty();
-  // The triangle's corners, or its clipped polygon's; returns their number.
   const auto corners_of = [&](std::uint32_t t, double* x, double* y, double* w) {
-    if (any_clipped && s.clip_stamp[t] == s.frame) {
-      const ClippedPolygon& poly = s.clipped[s.clip_slot[t]];
-      std::copy(poly.x, poly.x + poly.n, x);
-      std::copy(poly.y, poly.y + poly.n, y);
-      std::copy(poly.w, poly.w + poly.n, w);
-      return poly.n;
-    }
-    const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
-    for (int k = 0; k < 3; ++k) {
-      const Projected& p = s.projected[s.vertex_slot[c[k]]];
-      x[k] = p.x;
-      y[k] = p.y;
-      w[k] = p.w;
-    }
-    return 3;
+    return occluder_corners(index, s, t, x, y, w);
   };
-  for (std::size_t begin = 0, end = 0; begin < s.triangles.size(); begin = end) {
-    const std::uint32_t my_band = s.triangle_band[s.triangles[begin].second];
+  for (std::size_t begin = 0, end = 0; begin < count; begin = end) {
+    const std::uint32_t my_band = s.triangle_band[first[begin].second];
     end = begin;
-    while (end < s.triangles.size() && s.triangle_band[s.triangles[end].second] == my_band) ++end;
+    while (end < count && s.triangle_band[first[end].second] == my_band) ++end;
     // A triangle over cells that are all covered already can change nothing that matters: it is
     // dropped, as if it were no occluder (decided for the whole band before any of its edges
     // cancel against a neighbour's).
     for (std::size_t i = begin; i < end; ++i) {
-      const std::uint32_t t = s.triangles[i].second;
+      const std::uint32_t t = first[i].second;
       double x[4], y[4], w[4];
       const int n = corners_of(t, x, y, w);
-      if (grid.all_frozen(x, y, n)) s.triangle_stamp[t] = 0;
+      if (grid.all_frozen(x, y, n)) members.stamp[t] = 0;
     }
     probe.next(phase_bands);
     for (std::size_t i = begin; i < end; ++i) {
-      const std::uint32_t t = s.triangles[i].second;
-      if (s.triangle_stamp[t] != s.frame) continue;
-      ++s.stats.occluder_triangles;
+      const std::uint32_t t = first[i].second;
+      if (!members.has(t)) continue;
+      ++inserted;
       std::uint32_t twin_band[3];
       unsigned inner = 0;  // edges shared with a triangle of this band
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
-        const bool twin_here = twin != none && s.triangle_stamp[twin / 3] == s.frame;
+        const bool twin_here = twin != none && members.has(twin / 3);
         twin_band[k] = twin_here ? s.triangle_band[twin / 3] : none;
         if (twin_band[k] == my_band) inner |= 1u << k;
       }
@@ -315,6 +334,66 @@ inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionP
     probe.next(phase_end_band);
   }
   return covered;
+}
+
+/// Inserts every gathered triangle into the frame's grid (the union of all occluders: edges shared
+/// by two occluders cancel, whichever patch they came from). Returns the cells covered.
+inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+  std::size_t inserted = 0;
+  const std::size_t covered = insert_run(index, params, s, s.grid, s.triangles.data(), s.triangles.data() + s.triangles.size(),
+                                         RunMembers{s.triangle_stamp, s.frame}, inserted);
+  s.stats.occluder_triangles += inserted;
+  return covered;
+}
+
+/// Per-patch layers. The union's grid freezes a cell at the bound of every triangle that touched it
+/// before it was covered: a floor inserted early (its nearest corner is near) leaves its own far depth
+/// in the cells where a wall stands in front of it. Any set of occluders that covers a cell bounds the
+/// depth of every ray through it, so each occluder patch (a connected piece of surface) is also
+/// inserted alone into a grid of its own, and a cell it covers by itself takes the patch's bound
+/// where that is nearer than the union's.
+inline void refine_by_patches(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+  const std::size_t n = s.occluders.size();
+  if (n < 2 || s.triangles.empty()) return;  // one patch: the union is the patch
+  // The gathered triangles grouped by patch, each group still nearest first.
+  s.layer_first.assign(n + 1, 0);
+  for (const auto& tr : s.triangles) ++s.layer_first[s.triangle_owner[tr.second] + 1];
+  for (std::size_t q = 0; q < n; ++q) s.layer_first[q + 1] += s.layer_first[q];
+  s.layer_order.resize(s.triangles.size());
+  for (const auto& tr : s.triangles) s.layer_order[s.layer_first[s.triangle_owner[tr.second]]++] = tr;
+  for (std::size_t q = n; q > 0; --q) s.layer_first[q] = s.layer_first[q - 1];
+  s.layer_first[0] = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    const std::uint32_t b = s.layer_first[q], e = s.layer_first[q + 1];
+    if (b == e) continue;
+    if (++s.layer_value == 0) {
+      std::fill(s.layer_stamp.begin(), s.layer_stamp.end(), 0);
+      s.layer_value = 1;
+    }
+    // The patch's cells and its nearest point: where the union is already at least that near, the
+    // patch alone cannot do better.
+    double xmin = HUGE_VAL, ymin = HUGE_VAL, xmax = -HUGE_VAL, ymax = -HUGE_VAL, wmin = HUGE_VAL;
+    for (std::uint32_t i = b; i < e; ++i) {
+      const std::uint32_t t = s.layer_order[i].second;
+      s.layer_stamp[t] = s.layer_value;
+      double x[4], y[4], w[4];
+      const int m = occluder_corners(index, s, t, x, y, w);
+      for (int k = 0; k < m; ++k) {
+        xmin = std::min(xmin, x[k]);
+        xmax = std::max(xmax, x[k]);
+        ymin = std::min(ymin, y[k]);
+        ymax = std::max(ymax, y[k]);
+        wmin = std::min(wmin, w[k]);
+      }
+    }
+    s.layer.reset(s.grid.width(), s.grid.height());
+    const float nearest = static_cast<float>(1.0 / wmin);
+    if (!s.layer.seed_frozen(s.grid, s.grid.cells_of(xmin, ymin, xmax, ymax), nearest)) continue;
+    std::size_t inserted = 0;
+    insert_run(index, params, s, s.layer, s.layer_order.data() + b, s.layer_order.data() + e,
+               RunMembers{s.layer_stamp, s.layer_value}, inserted);
+    s.grid.take_nearer(s.layer);
+  }
 }
 
 }  // namespace mesh_occlusion
