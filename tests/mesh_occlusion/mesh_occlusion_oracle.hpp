@@ -3,6 +3,7 @@
 // test, front faces only, hits beyond the near plane only (the plane at `near` along `forward`).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -172,6 +173,50 @@ inline bool find_sighting(const TestScene& s, const NearSide& ns, const cullkit:
       return true;
   }
   return false;
+}
+
+/// The must-hide rule of the fusion tests: the object's screen rectangle, widened by three cells
+/// of a grid_w x grid_h grid, lies on screen, and 9 x 9 rays over it all meet one of the objects
+/// [first_occluder, first_occluder + occluders) beyond the near plane, at a depth along the view
+/// axis below `depth_ratio` times the object's nearest corner's (HUGE_VAL: any depth, for objects
+/// behind the occluders by construction).
+inline bool covered_in_front(const TestScene& s, const cullkit::Camera& cam, const NearSide& ns, std::uint32_t object,
+                             std::uint32_t first_occluder, std::uint32_t occluders, int grid_w, int grid_h,
+                             double depth_ratio) {
+  const glm::dmat4 m(cam.view_proj);
+  double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, w_near = HUGE_VAL;
+  const cullkit::MeshObject& r = s.objects[object];
+  for (std::uint32_t t = r.first_triangle; t < r.first_triangle + r.triangle_count; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const glm::dvec3 p(s.positions[s.indices[3 * t + std::uint32_t(k)]]);
+      const glm::dvec4 c = m * glm::dvec4(p, 1.0);
+      if (!(c.w > 0.0)) return false;
+      x0 = std::min(x0, c.x / c.w);
+      x1 = std::max(x1, c.x / c.w);
+      y0 = std::min(y0, c.y / c.w);
+      y1 = std::max(y1, c.y / c.w);
+      w_near = std::min(w_near, glm::dot(p - ns.eye, ns.forward));
+    }
+  const double mx = 3.0 * 2.0 / grid_w, my = 3.0 * 2.0 / grid_h;
+  x0 -= mx;
+  x1 += mx;
+  y0 -= my;
+  y1 += my;
+  if (x0 < -1 || x1 > 1 || y0 < -1 || y1 > 1) return false;
+  const cullkit::PixelRays rays(cam);
+  for (int j = 0; j <= 8; ++j)
+    for (int i = 0; i <= 8; ++i) {
+      const double u = x0 + (x1 - x0) * i / 8, v = y0 + (y1 - y0) * j / 8;
+      const cullkit::Ray ray = rays.ray_at((u + 1) * 0.5 * cam.width, (1 - v) * 0.5 * cam.height);
+      const glm::dvec3 d(ray.direction);
+      bool in_front = false;
+      for (std::uint32_t o = first_occluder; o < first_occluder + occluders && !in_front; ++o) {
+        const double t = nearest(s, ns, d, o, false, 1e-9);
+        in_front = t >= 0.0 && (depth_ratio == HUGE_VAL || glm::dot(d * t, ns.forward) < depth_ratio * w_near);
+      }
+      if (!in_front) return false;
+    }
+  return true;
 }
 
 }  // namespace mesh_oracle

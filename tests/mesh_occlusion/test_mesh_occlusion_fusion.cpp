@@ -104,41 +104,6 @@ struct Variant {
   bool tjunction = false;  // also run the control without T-junction cuts
 };
 
-// Must-hide rule: the cube's screen rectangle widened by three cells is on the wall everywhere
-// (sampled 9 x 9, every ray hits a wall triangle).
-bool on_wall(const TestScene& s, const cullkit::Camera& cam, const mesh_oracle::NearSide& ns, std::uint32_t cube,
-             std::uint32_t wall_objects, int grid_w, int grid_h) {
-  const glm::dmat4 m(cam.view_proj);
-  double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
-  const cullkit::MeshObject& r = s.objects[cube];
-  for (std::uint32_t t = r.first_triangle; t < r.first_triangle + r.triangle_count; ++t)
-    for (int k = 0; k < 3; ++k) {
-      const glm::dvec4 c = m * glm::dvec4(glm::dvec3(s.positions[s.indices[3 * t + std::uint32_t(k)]]), 1.0);
-      if (!(c.w > 0.0)) return false;
-      x0 = std::min(x0, c.x / c.w);
-      x1 = std::max(x1, c.x / c.w);
-      y0 = std::min(y0, c.y / c.w);
-      y1 = std::max(y1, c.y / c.w);
-    }
-  const double mx = 3.0 * 2.0 / grid_w, my = 3.0 * 2.0 / grid_h;
-  x0 -= mx;
-  x1 += mx;
-  y0 -= my;
-  y1 += my;
-  if (x0 < -1 || x1 > 1 || y0 < -1 || y1 > 1) return false;
-  const cullkit::PixelRays rays(cam);
-  for (int j = 0; j <= 8; ++j)
-    for (int i = 0; i <= 8; ++i) {
-      const double u = x0 + (x1 - x0) * i / 8, v = y0 + (y1 - y0) * j / 8;
-      const cullkit::Ray ray = rays.ray_at((u + 1) * 0.5 * cam.width, (1 - v) * 0.5 * cam.height);
-      bool any = false;
-      for (std::uint32_t w = 0; w < wall_objects && !any; ++w)
-        any = mesh_oracle::nearest(s, ns, glm::dvec3(ray.direction), w, false, 1e-9) >= 0.0;
-      if (!any) return false;
-    }
-  return true;
-}
-
 }  // namespace
 
 int main() {
@@ -213,7 +178,7 @@ int main() {
         } else if (peek) {
           ++peek_visible;
         }
-        if (!peek && on_wall(s, cam, ns, o, wall_objects, params.grid_width, params.grid_height)) {
+        if (!peek && mesh_oracle::covered_in_front(s, cam, ns, o, 0, wall_objects, params.grid_width, params.grid_height, HUGE_VAL)) {
           ++must;
           if (is_visible[o]) ++must_failed;
         }
@@ -236,7 +201,7 @@ int main() {
         std::vector<char> is_visible(s.objects.size(), 0);
         for (std::uint32_t o : visible) is_visible[o] = 1;
         for (std::uint32_t o = wall_objects; o < s.objects.size(); ++o)
-          if (is_visible[o] && on_wall(s, cam, ns, o, wall_objects, params.grid_width, params.grid_height))
+          if (is_visible[o] && mesh_oracle::covered_in_front(s, cam, ns, o, 0, wall_objects, params.grid_width, params.grid_height, HUGE_VAL))
             ++control_failed;
       }
       std::printf("%-22s without T-junction cuts: %zu of those cubes reported visible\n", "", control_failed);

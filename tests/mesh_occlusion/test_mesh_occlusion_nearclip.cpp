@@ -73,46 +73,6 @@ struct CameraKind {
   float far_plane;
 };
 
-// Must-hide rule: 9 x 9 rays over the cube's rectangle widened by three cells all meet an occluder
-// beyond the near plane, at a depth (along the view axis) below 0.9 of the cube's nearest corner.
-bool must_hide(const TestScene& s, const cullkit::Camera& cam, const mesh_oracle::NearSide& ns, std::uint32_t cube,
-               std::uint32_t occluder_objects, int grid_w, int grid_h) {
-  const glm::dmat4 m(cam.view_proj);
-  double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, w_near = HUGE_VAL;
-  const cullkit::MeshObject& r = s.objects[cube];
-  for (std::uint32_t t = r.first_triangle; t < r.first_triangle + r.triangle_count; ++t)
-    for (int k = 0; k < 3; ++k) {
-      const glm::dvec3 p(s.positions[s.indices[3 * t + std::uint32_t(k)]]);
-      const glm::dvec4 c = m * glm::dvec4(p, 1.0);
-      if (!(c.w > 0.0)) return false;
-      x0 = std::min(x0, c.x / c.w);
-      x1 = std::max(x1, c.x / c.w);
-      y0 = std::min(y0, c.y / c.w);
-      y1 = std::max(y1, c.y / c.w);
-      w_near = std::min(w_near, glm::dot(p - ns.eye, ns.forward));
-    }
-  const double mx = 3.0 * 2.0 / grid_w, my = 3.0 * 2.0 / grid_h;
-  x0 -= mx;
-  x1 += mx;
-  y0 -= my;
-  y1 += my;
-  if (x0 < -1 || x1 > 1 || y0 < -1 || y1 > 1) return false;
-  const cullkit::PixelRays rays(cam);
-  for (int j = 0; j <= 8; ++j)
-    for (int i = 0; i <= 8; ++i) {
-      const double u = x0 + (x1 - x0) * i / 8, v = y0 + (y1 - y0) * j / 8;
-      const cullkit::Ray ray = rays.ray_at((u + 1) * 0.5 * cam.width, (1 - v) * 0.5 * cam.height);
-      const glm::dvec3 d(ray.direction);
-      bool near_hit = false;
-      for (std::uint32_t o = 0; o < occluder_objects && !near_hit; ++o) {
-        const double t = mesh_oracle::nearest(s, ns, d, o, false, 1e-9);
-        near_hit = t >= 0.0 && glm::dot(d * t, ns.forward) < 0.9 * w_near;
-      }
-      if (!near_hit) return false;
-    }
-  return true;
-}
-
 struct Tally {
   std::size_t must = 0, must_failed = 0, hidden = 0, violations = 0, seen_front = 0;
 };
@@ -170,7 +130,7 @@ void run_variant(const char* name, bool at_wall, int n, int objects, float jitte
       } else if (o >= first_front) {
         tally.seen_front += mesh_oracle::find_sighting(s, ns, cam, o, 12, 40, rng);
       }
-      if (o < first_front && must_hide(s, cam, ns, o, occluder_objects, params.grid_width, params.grid_height)) {
+      if (o < first_front && mesh_oracle::covered_in_front(s, cam, ns, o, 0, occluder_objects, params.grid_width, params.grid_height, 0.9)) {
         ++tally.must;
         if (is_visible[o]) ++tally.must_failed;
       }

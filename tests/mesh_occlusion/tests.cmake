@@ -11,3 +11,5 @@ cullkit_add_test(test_mesh_occlusion_patches SOURCES ${CMAKE_CURRENT_LIST_DIR}/t
 cullkit_add_test(test_mesh_occlusion_nearclip SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_nearclip.cpp TIMEOUT 300)
 # The T-junction cuts' exact test and ear clipping on their own.
 cullkit_add_test(test_mesh_occlusion_tjunctions SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_tjunctions.cpp)
+# Per-patch layers: a wall standing on a floor that goes in before it; the control without them.
+cullkit_add_test(test_mesh_occlusion_layers SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_layers.cpp TIMEOUT 300)
