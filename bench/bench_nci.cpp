@@ -35,6 +35,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -46,6 +47,8 @@
 #include <embree_oracle.hpp>
 
 #include <cullkit/normal_class_index.hpp>
+#include <cullkit/detail/nci/frame_bvh.hpp>
+#include <cullkit/detail/nci/frame_cast.hpp>
 #include <cullkit_support/scene.hpp>
 
 #include "race.hpp"
@@ -409,11 +412,361 @@ int profile(const std::string& name, int view, int frames) {
   return 0;
 }
 
+
+// --frame-race SCENE [REPS]: one hierarchy over the whole scene and a tile packet cast through it
+// (nearest front-facing watertight hit per pixel, no edge bands), raced against Embree's single rays
+// and select_visible.
+struct FrameCaster {
+  const Scene& s;
+  detail::nci::FrameBvh bvh;
+  double build_seconds = 0;
+  int tile_w = 8, tile_h = 8;
+  explicit FrameCaster(const Scene& scene, unsigned threads) : s(scene) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<detail::nci::FrameBvhItem> items(s.triangle_count());
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      const glm::vec3& a = s.positions[s.indices[3 * i]];
+      const glm::vec3& b = s.positions[s.indices[3 * i + 1]];
+      const glm::vec3& c = s.positions[s.indices[3 * i + 2]];
+      for (int k = 0; k < 3; ++k) {
+        items[i].lo[k] = std::min({a[k], b[k], c[k]});
+        items[i].hi[k] = std::max({a[k], b[k], c[k]});
+      }
+    }
+    detail::nci::FrameBvhBuilder builder(items, threads);
+    if (const char* tc = std::getenv("FRAME_TRAV")) builder.traversal_cost = float(std::atof(tc));
+    bvh = builder.build();
+    build_seconds = seconds_since(t0);
+    // Leaf-ordered copies: vertex ids per slot, positions renumbered by first use along the slots.
+    std::vector<std::uint32_t> remap(s.positions.size(), 0xFFFFFFFFu);
+    lv.resize(3 * bvh.tris.size());
+    for (std::size_t q = 0; q < bvh.tris.size(); ++q)
+      for (int v = 0; v < 3; ++v) {
+        const std::uint32_t old = s.indices[3 * std::size_t{bvh.tris[q]} + std::size_t(v)];
+        if (remap[old] == 0xFFFFFFFFu) {
+          remap[old] = static_cast<std::uint32_t>(lpos.size());
+          lpos.push_back(s.positions[old]);
+        }
+        lv[3 * q + std::size_t(v)] = remap[old];
+      }
+    leaf_ordered = std::getenv("FRAME_LEAF_ORDER") != nullptr;
+  }
+  // Casts tile `t` of the camera; writes hits to tri/depth (may be null).
+  std::vector<std::uint32_t> lv;
+  std::vector<glm::vec3> lpos;
+  bool leaf_ordered = false;
+  mutable detail::nci::FrameCastStats stats;
+  mutable bool count = false;
+  long long cast_tile(const Camera& cam, const PixelRays& rays, int tx, int ty, std::uint32_t* tri_out,
+                      float* depth_out) const {
+    using detail::WatertightRay;
+    detail::nci::FramePacket p;
+    WatertightRay<float> w[64];
+    std::uint32_t hit[64];
+    const int x0 = tx * tile_w, y0 = ty * tile_h;
+    const int cw = std::min(tile_w, cam.width - x0), ch = std::min(tile_h, cam.height - y0);
+    std::uint64_t live = 0;
+    float dx[64], dy[64], dz[64];
+    for (int y = 0; y < ch; ++y) rays.directions(x0, y0 + y, cw, dx + y * tile_w, dy + y * tile_w, dz + y * tile_w);
+    for (int y = 0; y < ch; ++y)
+      for (int x = 0; x < cw; ++x) {
+        const int k = y * tile_w + x;
+        const glm::vec3 d(dx[k], dy[k], dz[k]);
+        w[k] = WatertightRay<float>::make(d);
+        p.ix[k] = 1.0f / (d.x != 0.0f ? d.x : 1e-30f);
+        p.iy[k] = 1.0f / (d.y != 0.0f ? d.y : 1e-30f);
+        p.iz[k] = 1.0f / (d.z != 0.0f ? d.z : 1e-30f);
+        p.t[k] = std::numeric_limits<float>::infinity();
+        hit[k] = 0xFFFFFFFFu;
+        live |= std::uint64_t{1} << k;
+      }
+    const float eye[3] = {cam.eye.x, cam.eye.y, cam.eye.z};
+    detail::nci::cast_frame_packet(bvh, eye, p, live, 1e-5f, [&](std::uint32_t first, std::uint32_t count, std::uint64_t mask) {
+      const glm::vec3* cp[8][3];
+      std::uint32_t ids[8];
+      if (leaf_ordered) {
+        for (std::uint32_t q = 0; q < count; ++q) {
+          ids[q] = first + q;
+          for (int v = 0; v < 3; ++v) cp[q][v] = &lpos[lv[3 * std::size_t{first + q} + std::size_t(v)]];
+        }
+      } else {
+        for (std::uint32_t q = 0; q < count; ++q) {
+          const std::uint32_t id = bvh.tris[first + q];
+          ids[q] = id;
+          for (int v = 0; v < 3; ++v) cp[q][v] = &s.positions[s.indices[3 * std::size_t{id} + std::size_t(v)]];
+        }
+      }
+      for (std::uint32_t q = 0; q < count; ++q) {
+        const std::uint32_t id = ids[q];
+        const glm::vec3& pa = *cp[q][0];
+        const glm::vec3& pb = *cp[q][1];
+        const glm::vec3& pc = *cp[q][2];
+        const float a[3] = {pa.x - eye[0], pa.y - eye[1], pa.z - eye[2]};
+        const float b[3] = {pb.x - eye[0], pb.y - eye[1], pb.z - eye[2]};
+        const float c[3] = {pc.x - eye[0], pc.y - eye[1], pc.z - eye[2]};
+        for (std::uint64_t m = mask; m; m &= m - 1) {
+          const int k = __builtin_ctzll(m);
+          float t = 0.0f;
+          if (detail::watertight_hit(w[k], a, b, c, t) && (t < p.t[k] || (t == p.t[k] && (hit[k] == 0xFFFFFFFFu || (leaf_ordered ? bvh.tris[id] < bvh.tris[hit[k]] : id < hit[k]))))) {
+            p.t[k] = t;
+            hit[k] = id;
+          }
+        }
+      }
+    }, count ? &stats : nullptr);
+    long long n = 0;
+    for (int y = 0; y < ch; ++y)
+      for (int x = 0; x < cw; ++x) {
+        const int k = y * tile_w + x;
+        n += hit[k] != 0xFFFFFFFFu;
+        if (tri_out) {
+          const std::size_t i = std::size_t(y0 + y) * std::size_t(cam.width) + std::size_t(x0 + x);
+          tri_out[i] = leaf_ordered && hit[k] != 0xFFFFFFFFu ? bvh.tris[hit[k]] : hit[k];
+          depth_out[i] = p.t[k];
+        }
+      }
+    return n;
+  }
+
+  // Several tiles in turn (FrameCursor), each step one node or leaf phase.
+  struct Slot {
+    detail::nci::FramePacket p;
+    detail::WatertightRay<float> w[64];
+    std::uint32_t hit[64];
+    detail::nci::FrameCursor cur;
+    int x0 = 0, y0 = 0, cw = 0, ch = 0;
+    bool busy = false;
+  };
+  long long render_interleaved(const Camera& cam, unsigned threads, int group, std::uint32_t* tri_out = nullptr,
+                               float* depth_out = nullptr) const {
+    const PixelRays rays(cam);
+    const int nx = (cam.width + tile_w - 1) / tile_w, ny = (cam.height + tile_h - 1) / tile_h;
+    std::atomic<int> next{0};
+    std::atomic<long long> hits{0};
+    const float eye[3] = {cam.eye.x, cam.eye.y, cam.eye.z};
+    auto work = [&](unsigned) {
+      long long n = 0;
+      std::vector<Slot> slots(static_cast<std::size_t>(group));
+      auto open = [&](Slot& sl) {
+        const int t = next++;
+        if (t >= nx * ny) return false;
+        sl.x0 = (t % nx) * tile_w;
+        sl.y0 = (t / nx) * tile_h;
+        sl.cw = std::min(tile_w, cam.width - sl.x0);
+        sl.ch = std::min(tile_h, cam.height - sl.y0);
+        float dx[64], dy[64], dz[64];
+        std::uint64_t live = 0;
+        for (int y = 0; y < sl.ch; ++y)
+          rays.directions(sl.x0, sl.y0 + y, sl.cw, dx + y * tile_w, dy + y * tile_w, dz + y * tile_w);
+        for (int y = 0; y < sl.ch; ++y)
+          for (int x = 0; x < sl.cw; ++x) {
+            const int k = y * tile_w + x;
+            const glm::vec3 d(dx[k], dy[k], dz[k]);
+            sl.w[k] = detail::WatertightRay<float>::make(d);
+            sl.p.ix[k] = 1.0f / (d.x != 0.0f ? d.x : 1e-30f);
+            sl.p.iy[k] = 1.0f / (d.y != 0.0f ? d.y : 1e-30f);
+            sl.p.iz[k] = 1.0f / (d.z != 0.0f ? d.z : 1e-30f);
+            sl.p.t[k] = std::numeric_limits<float>::infinity();
+            sl.hit[k] = 0xFFFFFFFFu;
+            live |= std::uint64_t{1} << k;
+          }
+        sl.cur.start(bvh, live);
+        sl.busy = true;
+        return true;
+      };
+      auto close = [&](Slot& sl) {
+        for (int y = 0; y < sl.ch; ++y)
+          for (int x = 0; x < sl.cw; ++x) {
+            const int k = y * tile_w + x;
+            n += sl.hit[k] != 0xFFFFFFFFu;
+            if (tri_out) {
+              const std::size_t i = std::size_t(sl.y0 + y) * std::size_t(cam.width) + std::size_t(sl.x0 + x);
+              tri_out[i] = sl.hit[k] != 0xFFFFFFFFu ? bvh.tris[sl.hit[k]] : sl.hit[k];
+              depth_out[i] = sl.p.t[k];
+            }
+          }
+        sl.busy = false;
+      };
+      struct LeafOps {
+        const FrameCaster& fc;
+        Slot* sl;
+        const float* eye;
+        void prefetch(std::uint32_t first, std::uint32_t count) const {
+          const char* a = reinterpret_cast<const char*>(fc.lv.data() + 3 * std::size_t{first});
+          __builtin_prefetch(a);
+          __builtin_prefetch(a + 12 * count - 1);
+        }
+        void prepare(std::uint32_t first, std::uint32_t count) const {
+          for (std::uint32_t q = 0; q < 3 * count; ++q) __builtin_prefetch(&fc.lpos[fc.lv[3 * std::size_t{first} + q]]);
+        }
+        void test(std::uint32_t first, std::uint32_t count, std::uint64_t mask) const {
+          for (std::uint32_t q = first; q < first + count; ++q) {
+            const glm::vec3& pa = fc.lpos[fc.lv[3 * std::size_t{q}]];
+            const glm::vec3& pb = fc.lpos[fc.lv[3 * std::size_t{q} + 1]];
+            const glm::vec3& pc = fc.lpos[fc.lv[3 * std::size_t{q} + 2]];
+            const float a[3] = {pa.x - eye[0], pa.y - eye[1], pa.z - eye[2]};
+            const float b[3] = {pb.x - eye[0], pb.y - eye[1], pb.z - eye[2]};
+            const float c[3] = {pc.x - eye[0], pc.y - eye[1], pc.z - eye[2]};
+            for (std::uint64_t m = mask; m; m &= m - 1) {
+              const int k = __builtin_ctzll(m);
+              float t = 0.0f;
+              if (detail::watertight_hit(sl->w[k], a, b, c, t) &&
+                  (t < sl->p.t[k] || (t == sl->p.t[k] && (sl->hit[k] == 0xFFFFFFFFu || fc.bvh.tris[q] < fc.bvh.tris[sl->hit[k]])))) {
+                sl->p.t[k] = t;
+                sl->hit[k] = q;
+              }
+            }
+          }
+        }
+      };
+      int active = 0;
+      for (auto& sl : slots) active += open(sl);
+      while (active > 0) {
+        for (auto& sl : slots) {
+          if (!sl.busy) continue;
+          LeafOps ops{*this, &sl, eye};
+          detail::nci::frame_cursor_step(bvh, eye, sl.p, sl.cur, 1e-5f, ops, count ? &stats : nullptr);
+          if (sl.cur.done()) {
+            close(sl);
+            if (!open(sl)) --active;
+          }
+        }
+      }
+      hits += n;
+    };
+    Embree::run_threads(threads, work);
+    return hits.load();
+  }
+  int group = 0;  // > 0: render_interleaved with this many tiles in turn
+  long long render(const Camera& cam, unsigned threads, std::uint32_t* tri = nullptr, float* depth = nullptr) const {
+    if (group > 0) return render_interleaved(cam, threads, group, tri, depth);
+    const PixelRays rays(cam);
+    const int nx = (cam.width + tile_w - 1) / tile_w, ny = (cam.height + tile_h - 1) / tile_h;
+    std::atomic<int> next{0};
+    std::atomic<long long> hits{0};
+    auto work = [&](unsigned) {
+      long long n = 0;
+      for (int t = next++; t < nx * ny; t = next++) n += cast_tile(cam, rays, t % nx, t / nx, tri, depth);
+      hits += n;
+    };
+    Embree::run_threads(threads, work);
+    return hits.load();
+  }
+};
+
+int frame_race(const std::string& name, int reps) {
+  std::optional<Scene> s;
+  if (name == "city") s = support::make_city(7, 20);
+  else if (name == "bigcity") s = support::make_city(8, 284);
+  else s = support::load_obj(support::scenes_dir() + "/" + name);
+  if (!s) return 1;
+  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  const Embree embree(*s, hw);
+  std::printf("frame_build,%s,triangles=%zu,embree_s=%.3f,embree_bytes_per_tri=%.1f\n", name.c_str(), s->triangle_count(),
+              embree.build_seconds, double(embree.bytes) / double(s->triangle_count()));
+  FrameCaster fc(*s, hw);
+  if (const char* tw = std::getenv("FRAME_TILE_W")) fc.tile_w = std::atoi(tw);
+  if (const char* th = std::getenv("FRAME_TILE_H")) fc.tile_h = std::atoi(th);
+  if (const char* g = std::getenv("FRAME_GROUP")) fc.group = std::atoi(g);
+  std::printf("frame_build,%s,frame_bvh_s=%.3f,nodes=%zu,bytes_per_tri=%.2f,tile=%dx%d\n", name.c_str(), fc.build_seconds,
+              fc.bvh.nodes.size(), double(fc.bvh.memory_bytes()) / double(s->triangle_count()), fc.tile_w, fc.tile_h);
+  // validation (temporary)
+  {
+    std::vector<int> seen(s->triangle_count(), 0);
+    std::size_t bad = 0;
+    std::function<void(std::uint32_t, const float*, const float*)> visit = [&](std::uint32_t code, const float* lo, const float* hi) {
+      using N = detail::nci::FrameBvhNode;
+      if (N::is_leaf(code)) {
+        for (std::uint32_t q = N::leaf_first(code); q < N::leaf_first(code) + N::leaf_count(code); ++q) {
+          const std::uint32_t id = fc.bvh.tris[q];
+          seen[id]++;
+          for (int v = 0; v < 3; ++v) {
+            const glm::vec3& P = s->positions[s->indices[3 * id + v]];
+            for (int a = 0; a < 3; ++a) if (P[a] < lo[a] || P[a] > hi[a]) ++bad;
+          }
+        }
+        return;
+      }
+      const N& n = fc.bvh.nodes[code];
+      for (int j = 0; j < 4; ++j) {
+        if (n.child[j] == N::empty) continue;
+        float l[3], h[3];
+        for (int a = 0; a < 3; ++a) { l[a] = n.lo[a][j]; h[a] = n.hi[a][j]; }
+        visit(n.child[j], l, h);
+      }
+    };
+    visit(fc.bvh.root, fc.bvh.root_lo, fc.bvh.root_hi);
+    std::size_t once = 0;
+    for (int v : seen) once += v == 1;
+    std::printf("validate: bad=%zu once=%zu of %zu\n", bad, once, seen.size());
+  }
+  std::fflush(stdout);
+  const int views_wanted = std::getenv("FRAME_VIEWS") ? std::atoi(std::getenv("FRAME_VIEWS")) : 1;
+  for (const unsigned threads : g_threads) {
+    NciParams p;
+    p.threads = threads;
+    p.build_threads = hw;
+    const NormalClassIndex<glm::vec3> index(s->mesh(), p);
+    std::printf("nci_build,%s,bytes_per_tri=%.2f\n", name.c_str(), double(index.memory_bytes()) / double(s->triangle_count()));
+    for (auto [w, h] : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}}) {
+      const auto cams = views(*s, w, h);
+      for (int ci = 0; ci < views_wanted; ++ci) {
+        const Camera cam = cams[static_cast<std::size_t>(ci)];
+        NciContext ctx;
+        VisibleSet out;
+        if (threads == g_threads.front()) {  // agreement with the index's per-pixel first hits
+          NciPixels px;
+          index.select_visible(cam, ctx, out, &px);
+          std::vector<std::uint32_t> tri(std::size_t(w) * std::size_t(h));
+          std::vector<float> depth(tri.size());
+          fc.render(cam, threads, tri.data(), depth.data());
+          std::size_t differ = 0, we_miss = 0, they_miss = 0, other_tri = 0;
+          for (std::size_t i = 0; i < tri.size(); ++i) {
+            differ += tri[i] != px.triangle[i] || (tri[i] != NciPixels::miss && depth[i] != px.depth[i]);
+            we_miss += tri[i] == NciPixels::miss && px.triangle[i] != NciPixels::miss;
+            they_miss += tri[i] != NciPixels::miss && px.triangle[i] == NciPixels::miss;
+            other_tri += tri[i] != NciPixels::miss && px.triangle[i] != NciPixels::miss && tri[i] != px.triangle[i];
+          }
+          fc.count = true;
+          fc.stats = {};
+          fc.render(cam, 1);
+          fc.count = false;
+          std::printf("frame_stats,%dx%d,nodes=%llu,ray_boxes=%llu,leaves=%llu,leaf_ray_tris=%llu\n", w, h,
+                      (unsigned long long)fc.stats.nodes, (unsigned long long)fc.stats.ray_boxes,
+                      (unsigned long long)fc.stats.leaves, (unsigned long long)fc.stats.leaf_rays);
+          std::printf("frame_agree,%s,%dx%d,view%d,pixels_differing=%zu,frame_misses=%zu,nci_misses=%zu,other_triangle=%zu\n",
+                      name.c_str(), w, h, ci, differ, we_miss, they_miss, other_tri);
+        }
+        if (const char* only = std::getenv("FRAME_ONLY")) {
+          for (int k = 0; k < std::atoi(only); ++k) cullkit_bench::keep(fc.render(cam, threads));
+          continue;
+        }
+        const std::string race = name + "/" + std::to_string(w) + "x" + std::to_string(h) + "/view" +
+                                 std::to_string(ci) + "/threads" + std::to_string(threads);
+        std::vector<cullkit_bench::Contestant> field = {
+            {"embree_rtcIntersect1", [&] { cullkit_bench::keep(embree.render1(cam, threads)); }},
+            {"frame_packet", [&] { cullkit_bench::keep(fc.render(cam, threads)); }},
+            {"nci_select_visible", [&] {
+               index.select_visible(cam, ctx, out, nullptr);
+               cullkit_bench::keep(out.triangles.size());
+             }}};
+        cullkit_bench::race(race, field, reps);
+      }
+    }
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc >= 4 && !std::strcmp(argv[1], "--profile"))
     return profile(argv[2], std::atoi(argv[3]), argc >= 5 ? std::max(1, std::atoi(argv[4])) : 1);
+  if (argc >= 3 && !std::strcmp(argv[1], "--frame-race")) {
+    for (int i = 4; i + 1 < argc; ++i)
+      if (!std::strcmp(argv[i], "--threads") && !parse_threads(argv[i + 1], g_threads)) return 2;
+    return frame_race(argv[2], argc >= 4 ? std::max(1, std::atoi(argv[3])) : 5);
+  }
   const bool smoke = cullkit_bench::smoke();
   bool big = !smoke, small = true, precision = true, timing = true, hash = false, no_precision = false;
   if (std::getenv("CULLKIT_NCI_PATH")) {  // the environment's path, unless --path says otherwise
