@@ -35,7 +35,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -214,6 +213,23 @@ void path_from_env(NciParams& p) {
   else p.crowded_path = NciCrowdedPath::automatic;
 }
 
+// Triangles per pixel of the scene box's screen rectangle (the whole screen when a corner is behind
+// the eye): how crowded a view is.
+double triangles_per_pixel(const Scene& s, const Camera& cam) {
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (int k = 0; k < 8; ++k) {
+    const glm::dvec4 p = glm::dmat4(cam.view_proj) *
+                         glm::dvec4((k & 1) ? s.bounds.max.x : s.bounds.min.x, (k & 2) ? s.bounds.max.y : s.bounds.min.y,
+                                    (k & 4) ? s.bounds.max.z : s.bounds.min.z, 1.0);
+    if (!(p.w > 0.0)) return double(s.triangle_count()) / (double(cam.width) * cam.height);
+    const double px = (p.x / p.w + 1.0) * 0.5 * cam.width, py = (1.0 - p.y / p.w) * 0.5 * cam.height;
+    x0 = std::min(x0, px), x1 = std::max(x1, px), y0 = std::min(y0, py), y1 = std::max(y1, py);
+  }
+  const double w = std::max(1.0, std::min<double>(cam.width, x1) - std::max(0.0, x0));
+  const double h = std::max(1.0, std::min<double>(cam.height, y1) - std::max(0.0, y0));
+  return double(s.triangle_count()) / (w * h);
+}
+
 bool g_quick = false;  // --quick: precision at the default parameters only, timing at 640x480 only
 
 struct PathChoice {
@@ -329,6 +345,7 @@ void speed(const std::string& name, const Scene& s, unsigned build_threads, bool
                            }});
         }
         const auto result = cullkit_bench::race(race, field, smoke ? 2 : 9);
+        std::printf("nci_crowding,%s,triangles_per_box_pixel=%.3f\n", race.c_str(), triangles_per_pixel(s, cam));
         for (std::size_t k = 0; k < g_paths.size(); ++k) {
           index[k]->select_visible(cam, ctx[k], out, nullptr);  // the stats of one frame
           const NciSelectStats& st = ctx[k].stats;
@@ -413,122 +430,47 @@ int profile(const std::string& name, int view, int frames) {
 }
 
 
-// --frame-race SCENE [REPS]: one hierarchy over the whole scene and a tile packet cast through it
-// (nearest front-facing watertight hit per pixel, no edge bands), raced against Embree's single rays
-// and select_visible.
+// --frame-race SCENE [REPS]: the frame hierarchy's cast alone (nearest front-facing watertight hit
+// per pixel, no edge bands, no screen rectangles: the floor of the crowded path), raced against
+// Embree's single rays and select_visible on each path of --path. Its own hierarchy is built over
+// the mesh with the index's builder; its leaves hold vertex ids in leaf order and positions
+// renumbered by first use along the leaves. One line per race of pixels differing from the index's
+// per-pixel answer (frame_agree) and of the cast's work (frame_stats).
 struct FrameCaster {
   const Scene& s;
   detail::nci::FrameBvh bvh;
+  std::vector<std::uint32_t> lv;  // 3 vertex ids per leaf slot
+  std::vector<glm::vec3> lpos;    // positions in first use along the slots
   double build_seconds = 0;
-  int tile_w = 8, tile_h = 8;
-  explicit FrameCaster(const Scene& scene, unsigned threads) : s(scene) {
+  mutable detail::nci::FrameCastStats stats;
+
+  FrameCaster(const Scene& scene, unsigned threads) : s(scene) {
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<detail::nci::FrameBvhItem> items(s.triangle_count());
-    for (std::size_t i = 0; i < items.size(); ++i) {
-      const glm::vec3& a = s.positions[s.indices[3 * i]];
-      const glm::vec3& b = s.positions[s.indices[3 * i + 1]];
-      const glm::vec3& c = s.positions[s.indices[3 * i + 2]];
+    for (std::size_t i = 0; i < items.size(); ++i)
       for (int k = 0; k < 3; ++k) {
-        items[i].lo[k] = std::min({a[k], b[k], c[k]});
-        items[i].hi[k] = std::max({a[k], b[k], c[k]});
+        const float a = s.positions[s.indices[3 * i]][k], b = s.positions[s.indices[3 * i + 1]][k],
+                    c = s.positions[s.indices[3 * i + 2]][k];
+        items[i].lo[k] = std::min({a, b, c});
+        items[i].hi[k] = std::max({a, b, c});
       }
-    }
     detail::nci::FrameBvhBuilder builder(items, threads);
-    if (const char* tc = std::getenv("FRAME_TRAV")) builder.traversal_cost = float(std::atof(tc));
+    builder.traversal_cost = detail::nci::frame_traversal_cost;
     bvh = builder.build();
     build_seconds = seconds_since(t0);
-    // Leaf-ordered copies: vertex ids per slot, positions renumbered by first use along the slots.
     std::vector<std::uint32_t> remap(s.positions.size(), 0xFFFFFFFFu);
     lv.resize(3 * bvh.tris.size());
     for (std::size_t q = 0; q < bvh.tris.size(); ++q)
-      for (int v = 0; v < 3; ++v) {
-        const std::uint32_t old = s.indices[3 * std::size_t{bvh.tris[q]} + std::size_t(v)];
+      for (std::size_t v = 0; v < 3; ++v) {
+        const std::uint32_t old = s.indices[3 * std::size_t{bvh.tris[q]} + v];
         if (remap[old] == 0xFFFFFFFFu) {
           remap[old] = static_cast<std::uint32_t>(lpos.size());
           lpos.push_back(s.positions[old]);
         }
-        lv[3 * q + std::size_t(v)] = remap[old];
+        lv[3 * q + v] = remap[old];
       }
-    leaf_ordered = std::getenv("FRAME_LEAF_ORDER") != nullptr;
-  }
-  // Casts tile `t` of the camera; writes hits to tri/depth (may be null).
-  std::vector<std::uint32_t> lv;
-  std::vector<glm::vec3> lpos;
-  bool leaf_ordered = false;
-  mutable detail::nci::FrameCastStats stats;
-  mutable bool count = false;
-  long long cast_tile(const Camera& cam, const PixelRays& rays, int tx, int ty, std::uint32_t* tri_out,
-                      float* depth_out) const {
-    using detail::WatertightRay;
-    detail::nci::FramePacket p;
-    WatertightRay<float> w[64];
-    std::uint32_t hit[64];
-    const int x0 = tx * tile_w, y0 = ty * tile_h;
-    const int cw = std::min(tile_w, cam.width - x0), ch = std::min(tile_h, cam.height - y0);
-    std::uint64_t live = 0;
-    float dx[64], dy[64], dz[64];
-    for (int y = 0; y < ch; ++y) rays.directions(x0, y0 + y, cw, dx + y * tile_w, dy + y * tile_w, dz + y * tile_w);
-    for (int y = 0; y < ch; ++y)
-      for (int x = 0; x < cw; ++x) {
-        const int k = y * tile_w + x;
-        const glm::vec3 d(dx[k], dy[k], dz[k]);
-        w[k] = WatertightRay<float>::make(d);
-        p.ix[k] = 1.0f / (d.x != 0.0f ? d.x : 1e-30f);
-        p.iy[k] = 1.0f / (d.y != 0.0f ? d.y : 1e-30f);
-        p.iz[k] = 1.0f / (d.z != 0.0f ? d.z : 1e-30f);
-        p.t[k] = std::numeric_limits<float>::infinity();
-        hit[k] = 0xFFFFFFFFu;
-        live |= std::uint64_t{1} << k;
-      }
-    const float eye[3] = {cam.eye.x, cam.eye.y, cam.eye.z};
-    detail::nci::cast_frame_packet(bvh, eye, p, live, 1e-5f, [&](std::uint32_t first, std::uint32_t count, std::uint64_t mask) {
-      const glm::vec3* cp[8][3];
-      std::uint32_t ids[8];
-      if (leaf_ordered) {
-        for (std::uint32_t q = 0; q < count; ++q) {
-          ids[q] = first + q;
-          for (int v = 0; v < 3; ++v) cp[q][v] = &lpos[lv[3 * std::size_t{first + q} + std::size_t(v)]];
-        }
-      } else {
-        for (std::uint32_t q = 0; q < count; ++q) {
-          const std::uint32_t id = bvh.tris[first + q];
-          ids[q] = id;
-          for (int v = 0; v < 3; ++v) cp[q][v] = &s.positions[s.indices[3 * std::size_t{id} + std::size_t(v)]];
-        }
-      }
-      for (std::uint32_t q = 0; q < count; ++q) {
-        const std::uint32_t id = ids[q];
-        const glm::vec3& pa = *cp[q][0];
-        const glm::vec3& pb = *cp[q][1];
-        const glm::vec3& pc = *cp[q][2];
-        const float a[3] = {pa.x - eye[0], pa.y - eye[1], pa.z - eye[2]};
-        const float b[3] = {pb.x - eye[0], pb.y - eye[1], pb.z - eye[2]};
-        const float c[3] = {pc.x - eye[0], pc.y - eye[1], pc.z - eye[2]};
-        for (std::uint64_t m = mask; m; m &= m - 1) {
-          const int k = __builtin_ctzll(m);
-          float t = 0.0f;
-          if (detail::watertight_hit(w[k], a, b, c, t) && (t < p.t[k] || (t == p.t[k] && (hit[k] == 0xFFFFFFFFu || (leaf_ordered ? bvh.tris[id] < bvh.tris[hit[k]] : id < hit[k]))))) {
-            p.t[k] = t;
-            hit[k] = id;
-          }
-        }
-      }
-    }, count ? &stats : nullptr);
-    long long n = 0;
-    for (int y = 0; y < ch; ++y)
-      for (int x = 0; x < cw; ++x) {
-        const int k = y * tile_w + x;
-        n += hit[k] != 0xFFFFFFFFu;
-        if (tri_out) {
-          const std::size_t i = std::size_t(y0 + y) * std::size_t(cam.width) + std::size_t(x0 + x);
-          tri_out[i] = leaf_ordered && hit[k] != 0xFFFFFFFFu ? bvh.tris[hit[k]] : hit[k];
-          depth_out[i] = p.t[k];
-        }
-      }
-    return n;
   }
 
-  // Several tiles in turn (FrameCursor), each step one node or leaf phase.
   struct Slot {
     detail::nci::FramePacket p;
     detail::WatertightRay<float> w[64];
@@ -537,35 +479,69 @@ struct FrameCaster {
     int x0 = 0, y0 = 0, cw = 0, ch = 0;
     bool busy = false;
   };
-  long long render_interleaved(const Camera& cam, unsigned threads, int group, std::uint32_t* tri_out = nullptr,
-                               float* depth_out = nullptr) const {
+  struct LeafOps {
+    static constexpr std::uint32_t phases = 1;
+    const FrameCaster& fc;
+    Slot& sl;
+    const float* eye;
+    void prefetch(std::uint32_t first, std::uint32_t count) const {
+      const char* a = reinterpret_cast<const char*>(fc.lv.data() + 3 * std::size_t{first});
+      __builtin_prefetch(a);
+      __builtin_prefetch(a + 12 * count - 1);
+    }
+    void prepare(std::uint32_t first, std::uint32_t count, std::uint32_t) const {
+      for (std::uint32_t q = 0; q < 3 * count; ++q) __builtin_prefetch(&fc.lpos[fc.lv[3 * std::size_t{first} + q]]);
+    }
+    void test(std::uint32_t first, std::uint32_t count, std::uint64_t mask) const {
+      for (std::uint32_t q = first; q < first + count; ++q) {
+        const glm::vec3& pa = fc.lpos[fc.lv[3 * std::size_t{q}]];
+        const glm::vec3& pb = fc.lpos[fc.lv[3 * std::size_t{q} + 1]];
+        const glm::vec3& pc = fc.lpos[fc.lv[3 * std::size_t{q} + 2]];
+        const float a[3] = {pa.x - eye[0], pa.y - eye[1], pa.z - eye[2]};
+        const float b[3] = {pb.x - eye[0], pb.y - eye[1], pb.z - eye[2]};
+        const float c[3] = {pc.x - eye[0], pc.y - eye[1], pc.z - eye[2]};
+        for (std::uint64_t m = mask; m; m &= m - 1) {
+          const int k = __builtin_ctzll(m);
+          float t = 0.0f;
+          if (detail::watertight_hit(sl.w[k], a, b, c, t) &&
+              (t < sl.p.t[k] ||
+               (t == sl.p.t[k] && (sl.hit[k] == 0xFFFFFFFFu || fc.bvh.tris[q] < fc.bvh.tris[sl.hit[k]])))) {
+            sl.p.t[k] = t;
+            sl.hit[k] = q;
+          }
+        }
+      }
+    }
+  };
+
+  // Tiles of 8x8 pixels, frame_turns of them taking turns per thread.
+  long long render(const Camera& cam, unsigned threads, std::uint32_t* tri_out = nullptr, float* depth_out = nullptr) const {
     const PixelRays rays(cam);
-    const int nx = (cam.width + tile_w - 1) / tile_w, ny = (cam.height + tile_h - 1) / tile_h;
+    const int nx = (cam.width + 7) / 8, ny = (cam.height + 7) / 8;
     std::atomic<int> next{0};
     std::atomic<long long> hits{0};
     const float eye[3] = {cam.eye.x, cam.eye.y, cam.eye.z};
     auto work = [&](unsigned) {
       long long n = 0;
-      std::vector<Slot> slots(static_cast<std::size_t>(group));
+      detail::nci::FrameCastStats local;
+      std::vector<Slot> slots(detail::nci::frame_turns);
       auto open = [&](Slot& sl) {
         const int t = next++;
         if (t >= nx * ny) return false;
-        sl.x0 = (t % nx) * tile_w;
-        sl.y0 = (t / nx) * tile_h;
-        sl.cw = std::min(tile_w, cam.width - sl.x0);
-        sl.ch = std::min(tile_h, cam.height - sl.y0);
+        sl.x0 = (t % nx) * 8;
+        sl.y0 = (t / nx) * 8;
+        sl.cw = std::min(8, cam.width - sl.x0);
+        sl.ch = std::min(8, cam.height - sl.y0);
         float dx[64], dy[64], dz[64];
         std::uint64_t live = 0;
-        for (int y = 0; y < sl.ch; ++y)
-          rays.directions(sl.x0, sl.y0 + y, sl.cw, dx + y * tile_w, dy + y * tile_w, dz + y * tile_w);
+        for (int y = 0; y < sl.ch; ++y) rays.directions(sl.x0, sl.y0 + y, sl.cw, dx + y * 8, dy + y * 8, dz + y * 8);
         for (int y = 0; y < sl.ch; ++y)
           for (int x = 0; x < sl.cw; ++x) {
-            const int k = y * tile_w + x;
-            const glm::vec3 d(dx[k], dy[k], dz[k]);
-            sl.w[k] = detail::WatertightRay<float>::make(d);
-            sl.p.ix[k] = 1.0f / (d.x != 0.0f ? d.x : 1e-30f);
-            sl.p.iy[k] = 1.0f / (d.y != 0.0f ? d.y : 1e-30f);
-            sl.p.iz[k] = 1.0f / (d.z != 0.0f ? d.z : 1e-30f);
+            const int k = y * 8 + x;
+            sl.w[k] = detail::WatertightRay<float>::make(glm::vec3(dx[k], dy[k], dz[k]));
+            sl.p.ix[k] = detail::nci::frame_inverse(dx[k]);
+            sl.p.iy[k] = detail::nci::frame_inverse(dy[k]);
+            sl.p.iz[k] = detail::nci::frame_inverse(dz[k]);
             sl.p.t[k] = std::numeric_limits<float>::infinity();
             sl.hit[k] = 0xFFFFFFFFu;
             live |= std::uint64_t{1} << k;
@@ -577,7 +553,7 @@ struct FrameCaster {
       auto close = [&](Slot& sl) {
         for (int y = 0; y < sl.ch; ++y)
           for (int x = 0; x < sl.cw; ++x) {
-            const int k = y * tile_w + x;
+            const int k = y * 8 + x;
             n += sl.hit[k] != 0xFFFFFFFFu;
             if (tri_out) {
               const std::size_t i = std::size_t(sl.y0 + y) * std::size_t(cam.width) + std::size_t(sl.x0 + x);
@@ -587,45 +563,13 @@ struct FrameCaster {
           }
         sl.busy = false;
       };
-      struct LeafOps {
-        const FrameCaster& fc;
-        Slot* sl;
-        const float* eye;
-        void prefetch(std::uint32_t first, std::uint32_t count) const {
-          const char* a = reinterpret_cast<const char*>(fc.lv.data() + 3 * std::size_t{first});
-          __builtin_prefetch(a);
-          __builtin_prefetch(a + 12 * count - 1);
-        }
-        void prepare(std::uint32_t first, std::uint32_t count) const {
-          for (std::uint32_t q = 0; q < 3 * count; ++q) __builtin_prefetch(&fc.lpos[fc.lv[3 * std::size_t{first} + q]]);
-        }
-        void test(std::uint32_t first, std::uint32_t count, std::uint64_t mask) const {
-          for (std::uint32_t q = first; q < first + count; ++q) {
-            const glm::vec3& pa = fc.lpos[fc.lv[3 * std::size_t{q}]];
-            const glm::vec3& pb = fc.lpos[fc.lv[3 * std::size_t{q} + 1]];
-            const glm::vec3& pc = fc.lpos[fc.lv[3 * std::size_t{q} + 2]];
-            const float a[3] = {pa.x - eye[0], pa.y - eye[1], pa.z - eye[2]};
-            const float b[3] = {pb.x - eye[0], pb.y - eye[1], pb.z - eye[2]};
-            const float c[3] = {pc.x - eye[0], pc.y - eye[1], pc.z - eye[2]};
-            for (std::uint64_t m = mask; m; m &= m - 1) {
-              const int k = __builtin_ctzll(m);
-              float t = 0.0f;
-              if (detail::watertight_hit(sl->w[k], a, b, c, t) &&
-                  (t < sl->p.t[k] || (t == sl->p.t[k] && (sl->hit[k] == 0xFFFFFFFFu || fc.bvh.tris[q] < fc.bvh.tris[sl->hit[k]])))) {
-                sl->p.t[k] = t;
-                sl->hit[k] = q;
-              }
-            }
-          }
-        }
-      };
       int active = 0;
       for (auto& sl : slots) active += open(sl);
       while (active > 0) {
         for (auto& sl : slots) {
           if (!sl.busy) continue;
-          LeafOps ops{*this, &sl, eye};
-          detail::nci::frame_cursor_step(bvh, eye, sl.p, sl.cur, 1e-5f, ops, count ? &stats : nullptr);
+          LeafOps ops{*this, sl, eye};
+          detail::nci::frame_cursor_step(bvh, eye, sl.p, sl.cur, ops, local);
           if (sl.cur.done()) {
             close(sl);
             if (!open(sl)) --active;
@@ -633,21 +577,7 @@ struct FrameCaster {
         }
       }
       hits += n;
-    };
-    Embree::run_threads(threads, work);
-    return hits.load();
-  }
-  int group = 0;  // > 0: render_interleaved with this many tiles in turn
-  long long render(const Camera& cam, unsigned threads, std::uint32_t* tri = nullptr, float* depth = nullptr) const {
-    if (group > 0) return render_interleaved(cam, threads, group, tri, depth);
-    const PixelRays rays(cam);
-    const int nx = (cam.width + tile_w - 1) / tile_w, ny = (cam.height + tile_h - 1) / tile_h;
-    std::atomic<int> next{0};
-    std::atomic<long long> hits{0};
-    auto work = [&](unsigned) {
-      long long n = 0;
-      for (int t = next++; t < nx * ny; t = next++) n += cast_tile(cam, rays, t % nx, t / nx, tri, depth);
-      hits += n;
+      if (tri_out) stats = local;
     };
     Embree::run_threads(threads, work);
     return hits.load();
@@ -664,93 +594,61 @@ int frame_race(const std::string& name, int reps) {
   const Embree embree(*s, hw);
   std::printf("frame_build,%s,triangles=%zu,embree_s=%.3f,embree_bytes_per_tri=%.1f\n", name.c_str(), s->triangle_count(),
               embree.build_seconds, double(embree.bytes) / double(s->triangle_count()));
-  FrameCaster fc(*s, hw);
-  if (const char* tw = std::getenv("FRAME_TILE_W")) fc.tile_w = std::atoi(tw);
-  if (const char* th = std::getenv("FRAME_TILE_H")) fc.tile_h = std::atoi(th);
-  if (const char* g = std::getenv("FRAME_GROUP")) fc.group = std::atoi(g);
-  std::printf("frame_build,%s,frame_bvh_s=%.3f,nodes=%zu,bytes_per_tri=%.2f,tile=%dx%d\n", name.c_str(), fc.build_seconds,
-              fc.bvh.nodes.size(), double(fc.bvh.memory_bytes()) / double(s->triangle_count()), fc.tile_w, fc.tile_h);
-  // validation (temporary)
-  {
-    std::vector<int> seen(s->triangle_count(), 0);
-    std::size_t bad = 0;
-    std::function<void(std::uint32_t, const float*, const float*)> visit = [&](std::uint32_t code, const float* lo, const float* hi) {
-      using N = detail::nci::FrameBvhNode;
-      if (N::is_leaf(code)) {
-        for (std::uint32_t q = N::leaf_first(code); q < N::leaf_first(code) + N::leaf_count(code); ++q) {
-          const std::uint32_t id = fc.bvh.tris[q];
-          seen[id]++;
-          for (int v = 0; v < 3; ++v) {
-            const glm::vec3& P = s->positions[s->indices[3 * id + v]];
-            for (int a = 0; a < 3; ++a) if (P[a] < lo[a] || P[a] > hi[a]) ++bad;
-          }
-        }
-        return;
-      }
-      const N& n = fc.bvh.nodes[code];
-      for (int j = 0; j < 4; ++j) {
-        if (n.child[j] == N::empty) continue;
-        float l[3], h[3];
-        for (int a = 0; a < 3; ++a) { l[a] = n.lo[a][j]; h[a] = n.hi[a][j]; }
-        visit(n.child[j], l, h);
-      }
-    };
-    visit(fc.bvh.root, fc.bvh.root_lo, fc.bvh.root_hi);
-    std::size_t once = 0;
-    for (int v : seen) once += v == 1;
-    std::printf("validate: bad=%zu once=%zu of %zu\n", bad, once, seen.size());
-  }
+  const FrameCaster fc(*s, hw);
+  std::printf("frame_build,%s,frame_bvh_s=%.3f,nodes=%zu,bytes_per_tri=%.2f\n", name.c_str(), fc.build_seconds,
+              fc.bvh.nodes.size(), double(fc.bvh.memory_bytes()) / double(s->triangle_count()));
   std::fflush(stdout);
-  const int views_wanted = std::getenv("FRAME_VIEWS") ? std::atoi(std::getenv("FRAME_VIEWS")) : 1;
+  const int views_wanted = std::getenv("FRAME_VIEWS") ? std::atoi(std::getenv("FRAME_VIEWS")) : 2;
   for (const unsigned threads : g_threads) {
-    NciParams p;
-    p.threads = threads;
-    p.build_threads = hw;
-    const NormalClassIndex<glm::vec3> index(s->mesh(), p);
-    std::printf("nci_build,%s,bytes_per_tri=%.2f\n", name.c_str(), double(index.memory_bytes()) / double(s->triangle_count()));
+    std::vector<std::unique_ptr<NormalClassIndex<glm::vec3>>> index;
+    for (const PathChoice& path : g_paths) {
+      NciParams p;
+      p.threads = threads;
+      p.build_threads = hw;
+      p.crowded_path = path.path;
+      index.push_back(std::make_unique<NormalClassIndex<glm::vec3>>(s->mesh(), p));
+      std::printf("nci_build,%s,%s,build_s=%.3f,bytes_per_tri=%.2f\n", name.c_str(), path.name,
+                  index.back()->stats().build_seconds,
+                  double(index.back()->memory_bytes()) / double(s->triangle_count()));
+    }
     for (auto [w, h] : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}}) {
       const auto cams = views(*s, w, h);
       for (int ci = 0; ci < views_wanted; ++ci) {
         const Camera cam = cams[static_cast<std::size_t>(ci)];
-        NciContext ctx;
+        std::vector<NciContext> ctx(g_paths.size());
         VisibleSet out;
-        if (threads == g_threads.front()) {  // agreement with the index's per-pixel first hits
-          NciPixels px;
-          index.select_visible(cam, ctx, out, &px);
-          std::vector<std::uint32_t> tri(std::size_t(w) * std::size_t(h));
-          std::vector<float> depth(tri.size());
-          fc.render(cam, threads, tri.data(), depth.data());
-          std::size_t differ = 0, we_miss = 0, they_miss = 0, other_tri = 0;
-          for (std::size_t i = 0; i < tri.size(); ++i) {
-            differ += tri[i] != px.triangle[i] || (tri[i] != NciPixels::miss && depth[i] != px.depth[i]);
-            we_miss += tri[i] == NciPixels::miss && px.triangle[i] != NciPixels::miss;
-            they_miss += tri[i] != NciPixels::miss && px.triangle[i] == NciPixels::miss;
-            other_tri += tri[i] != NciPixels::miss && px.triangle[i] != NciPixels::miss && tri[i] != px.triangle[i];
-          }
-          fc.count = true;
-          fc.stats = {};
-          fc.render(cam, 1);
-          fc.count = false;
-          std::printf("frame_stats,%dx%d,nodes=%llu,ray_boxes=%llu,leaves=%llu,leaf_ray_tris=%llu\n", w, h,
-                      (unsigned long long)fc.stats.nodes, (unsigned long long)fc.stats.ray_boxes,
-                      (unsigned long long)fc.stats.leaves, (unsigned long long)fc.stats.leaf_rays);
-          std::printf("frame_agree,%s,%dx%d,view%d,pixels_differing=%zu,frame_misses=%zu,nci_misses=%zu,other_triangle=%zu\n",
-                      name.c_str(), w, h, ci, differ, we_miss, they_miss, other_tri);
-        }
-        if (const char* only = std::getenv("FRAME_ONLY")) {
-          for (int k = 0; k < std::atoi(only); ++k) cullkit_bench::keep(fc.render(cam, threads));
-          continue;
-        }
         const std::string race = name + "/" + std::to_string(w) + "x" + std::to_string(h) + "/view" +
                                  std::to_string(ci) + "/threads" + std::to_string(threads);
+        if (threads == g_threads.front()) {  // agreement with the index's per-pixel first hits
+          NciPixels px;
+          index.front()->select_visible(cam, ctx.front(), out, &px);
+          std::vector<std::uint32_t> tri(std::size_t(w) * std::size_t(h));
+          std::vector<float> depth(tri.size());
+          fc.render(cam, 1, tri.data(), depth.data());
+          std::size_t differ = 0;
+          for (std::size_t i = 0; i < tri.size(); ++i)
+            differ += tri[i] != px.triangle[i] || (tri[i] != NciPixels::miss && depth[i] != px.depth[i]);
+          std::printf("frame_agree,%s,pixels_differing=%zu\n", race.c_str(), differ);
+          std::printf("frame_stats,%s,nodes=%llu,ray_boxes=%llu,leaves=%llu\n", race.c_str(),
+                      static_cast<unsigned long long>(fc.stats.nodes), static_cast<unsigned long long>(fc.stats.ray_boxes),
+                      static_cast<unsigned long long>(fc.stats.leaves));
+        }
         std::vector<cullkit_bench::Contestant> field = {
             {"embree_rtcIntersect1", [&] { cullkit_bench::keep(embree.render1(cam, threads)); }},
-            {"frame_packet", [&] { cullkit_bench::keep(fc.render(cam, threads)); }},
-            {"nci_select_visible", [&] {
-               index.select_visible(cam, ctx, out, nullptr);
-               cullkit_bench::keep(out.triangles.size());
-             }}};
+            {"frame_cast_nearest", [&] { cullkit_bench::keep(fc.render(cam, threads)); }}};
+        for (std::size_t k = 0; k < g_paths.size(); ++k)
+          field.push_back({std::string("nci_select_visible_") + g_paths[k].name, [&, k] {
+                             index[k]->select_visible(cam, ctx[k], out, nullptr);
+                             cullkit_bench::keep(out.triangles.size());
+                           }});
         cullkit_bench::race(race, field, reps);
+        for (std::size_t k = 0; k < g_paths.size(); ++k) {
+          index[k]->select_visible(cam, ctx[k], out, nullptr);
+          const NciSelectStats& st = ctx[k].stats;
+          std::printf("nci_cells,%s,%s,%zu,%zu,%zu,%zu,%zu\n", race.c_str(), g_paths[k].name, st.cells_walked,
+                      st.tiles_ray_cast, out.triangles_tested, st.triangles_met, st.triangles_no_pixel);
+        }
+        std::fflush(stdout);
       }
     }
   }
@@ -763,8 +661,10 @@ int main(int argc, char** argv) {
   if (argc >= 4 && !std::strcmp(argv[1], "--profile"))
     return profile(argv[2], std::atoi(argv[3]), argc >= 5 ? std::max(1, std::atoi(argv[4])) : 1);
   if (argc >= 3 && !std::strcmp(argv[1], "--frame-race")) {
-    for (int i = 4; i + 1 < argc; ++i)
+    for (int i = 4; i + 1 < argc; ++i) {
       if (!std::strcmp(argv[i], "--threads") && !parse_threads(argv[i + 1], g_threads)) return 2;
+      if (!std::strcmp(argv[i], "--path") && !parse_paths(argv[i + 1], g_paths)) return 2;
+    }
     return frame_race(argv[2], argc >= 4 ? std::max(1, std::atoi(argv[3])) : 5);
   }
   const bool smoke = cullkit_bench::smoke();

@@ -16,6 +16,7 @@
 #include <glm/vec3.hpp>
 
 #include "cell_bvh.hpp"
+#include "frame_bvh.hpp"
 #include "kmeans.hpp"
 #include "overlap.hpp"
 #include "../parallel.hpp"
@@ -513,6 +514,24 @@ inline void make_cell_hierarchies(IndexData& data, const std::vector<std::uint32
 // Narrow forms: 16-bit vertex ids when there are at most 65536 vertices; cell entry ranges
 // in 16 bits relative to their class when every class has at most 65535 entries (one extra
 // end per class: class k's cells c read ranges at c + k and c + k + 1).
+// The frame hierarchy over every kept triangle (internal ids), its subtrees built on the worker pool.
+inline void make_frame_hierarchy(IndexData& data) {
+  const std::size_t n = data.triangle_count();
+  std::vector<FrameBvhItem> items(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t tri = static_cast<std::uint32_t>(i);
+    const glm::vec3 &a = data.corner(tri, 0), &b = data.corner(tri, 1), &c = data.corner(tri, 2);
+    for (int k = 0; k < 3; ++k) {
+      items[i].lo[k] = std::min({a[k], b[k], c[k]});
+      items[i].hi[k] = std::max({a[k], b[k], c[k]});
+    }
+  }
+  FrameBvhBuilder builder(items, detail::resolve_threads(data.params.build_threads, 16));
+  builder.traversal_cost = frame_traversal_cost;
+  data.frame = builder.build();
+  data.frame.nodes.shrink_to_fit();
+}
+
 inline void narrow_forms(IndexData& data) {
   const std::size_t classes = data.class_axis.size(), total_cells = data.stats.cells;
   if (data.vertices.size() <= 65536) {
@@ -562,6 +581,8 @@ CULLKIT_CORE_FN void build(IndexData& data, std::vector<glm::vec3>& normals) {
   make_chunk_boxes(data, class_entry_end);
   make_cell_hierarchies(data, class_entry_end);
   narrow_forms(data);
+  report(data, 0.7f);
+  make_frame_hierarchy(data);
   data.vertices.shrink_to_fit();
   data.tri_vertices.shrink_to_fit();
   data.tri_original.shrink_to_fit();

@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "frame_cast.hpp"
 #include "tile_state.hpp"
 #include "types.hpp"
 
@@ -80,6 +81,8 @@ struct Worker {
   std::vector<CastItem> cast_queue;  // the packet path's nodes to visit, nearest first (a heap)
   std::vector<std::uint16_t> active_classes;
   std::vector<TileState> tile_rays;  // empty or one: the worker's tile scratch
+  std::vector<FrameSlot> frame_slots;  // the packets of a tile cast through the frame hierarchy
+  std::vector<std::uint8_t> class_on;  // per class: active in the tile being cast (frame_tile.hpp)
   NciSelectStats stats;
 };
 

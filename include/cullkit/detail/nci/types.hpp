@@ -122,6 +122,7 @@ struct NciSelectStats {
   std::size_t triangles_no_pixel = 0;
   std::size_t cells_walked = 0;    ///< (tile, cell) pairs served by the near-to-far walk
   std::size_t cells_ray_cast = 0;  ///< (tile, cell) pairs served by casting the tile's rays through the cell's hierarchy
+  std::size_t tiles_ray_cast = 0;  ///< tiles whose rays were cast through the frame hierarchy instead of walking the grid
   int axis = 0;                    ///< grid axis walked
   /// Moving objects whose transform could not be used (singular, NaN or infinite, or projective;
   /// see NciMovingObject): each was reported whole and hid nothing.
