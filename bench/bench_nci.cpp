@@ -350,7 +350,7 @@ void speed(const std::string& name, const Scene& s, unsigned build_threads, bool
           index[k]->select_visible(cam, ctx[k], out, nullptr);  // the stats of one frame
           const NciSelectStats& st = ctx[k].stats;
           std::printf("nci_cells,%s,%s,%zu,%zu,%zu,%zu,%zu\n", race.c_str(), g_paths[k].name, st.cells_walked,
-                      st.cells_ray_cast, out.triangles_tested, st.triangles_met, st.triangles_no_pixel);
+                      st.tiles_ray_cast, out.triangles_tested, st.triangles_met, st.triangles_no_pixel);
           if (k > 0)
             std::printf("nci_path_ratio,%s,%s_over_%s,%.3f\n", race.c_str(), g_paths[k].name, g_paths[0].name,
                         result[2 + k].median_ns / result[2].median_ns);
@@ -422,9 +422,9 @@ int profile(const std::string& name, int view, int frames) {
   const double ms = frames > 0 ? seconds_since(t0) * 1e3 / frames : 0.0;
   const NciSelectStats& st = ctx.stats;
   std::printf("profile,%s,view%d,grid=%d,frames=%d,ms_per_frame=%.2f,selected=%zu,tested=%zu,ray_tests=%zu,cells=%zu,"
-              "triangles_met=%zu,triangles_no_pixel=%zu,cells_walked=%zu,cells_ray_cast=%zu,bytes_per_triangle=%.1f\n",
+              "triangles_met=%zu,triangles_no_pixel=%zu,cells_walked=%zu,tiles_ray_cast=%zu,bytes_per_triangle=%.1f\n",
               name.c_str(), view, index.params().grid, frames, ms, out.triangles.size(), out.triangles_tested,
-              st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel, st.cells_walked, st.cells_ray_cast,
+              st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel, st.cells_walked, st.tiles_ray_cast,
               double(index.memory_bytes()) / double(std::max<std::size_t>(1, s->triangle_count())));
   return 0;
 }
@@ -709,7 +709,7 @@ int main(int argc, char** argv) {
     for (unsigned t : g_threads) std::printf(" %u", t);
     std::printf(" threads (build and precision at %u); paths", threads);
     for (const PathChoice& p : g_paths) std::printf(" %s", p.name);
-    std::printf("\n# nci_cells,race,path,cells_walked,cells_ray_cast,tested,triangles_met,triangles_no_pixel\n"
+    std::printf("\n# nci_cells,race,path,cells_walked,tiles_ray_cast,tested,triangles_met,triangles_no_pixel\n"
                 "# nci_path_ratio,race,path_over_first_path,median_ratio\n");
   }
   for (const auto& [name, s] : scenes) {

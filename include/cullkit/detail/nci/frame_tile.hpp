@@ -117,14 +117,17 @@ struct FrameLeaf {
       const float grow = std::max({mag[0], mag[1], mag[2]}) * frame_box_growth;
       const float glo[3] = {qlo[0] - grow, qlo[1] - grow, qlo[2] - grow};
       const float ghi[3] = {qhi[0] + grow, qhi[1] + grow, qhi[2] + grow};
-      bool any = false;
+      bool reached = false, any = false;
       for (std::uint64_t m = mask; m; m &= m - 1) {
         const int k = __builtin_ctzll(m);
         const int i = (slot.by + k / 8) * stride + slot.bx + k % 8;
-        if (ray_behind(r, i, qlo, qhi) || !frame_ray_meets(p, k, glo, ghi)) continue;
+        if (!frame_ray_meets(p, k, glo, ghi)) continue;
+        reached = true;
+        if (ray_behind(r, i, qlo, qhi)) continue;
         any = true;
         test_ray(data, r, worker, i, tri, ta, tb, tc, mag);
       }
+      if (!reached) ++worker.stats.triangles_no_pixel;  // between the packet's pixel centres
       if (!any) continue;
       worker.tested_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
       ++worker.tested_count;  // (triangle, packet) pairs: a triangle is met once per packet

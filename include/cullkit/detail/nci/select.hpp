@@ -141,26 +141,27 @@ inline void merge_workers(const IndexData& data, NciContext& context, Scratch& s
     context.stats.triangles_met += worker.stats.triangles_met;
     context.stats.triangles_no_pixel += worker.stats.triangles_no_pixel;
     context.stats.cells_walked += worker.stats.cells_walked;
-    context.stats.cells_ray_cast += worker.stats.cells_ray_cast;
     context.stats.tiles_ray_cast += worker.stats.tiles_ray_cast;
     for (const auto& e : worker.extra) scratch.extras.push_back(Extra{data.original(e.tri), e.t, e.pixel});
   }
   {
     // Every worker's lists grow to what any worker needed (the extras to this call's total), so
     // a later frame that spreads the same tiles over the workers differently does not allocate.
-    std::size_t cand = 0, unsure = 0, queue = 0;
+    std::size_t cand = 0, unsure = 0;
+    bool frames = false;  // some worker cast a tile through the frame hierarchy: all get its packets
     for (unsigned i = 0; i < count; ++i) {
       cand = std::max(cand, scratch.workers[i].candidates.capacity());
       unsure = std::max(unsure, scratch.workers[i].edge_hits.capacity());
-      queue = std::max(queue, scratch.workers[i].cast_queue.capacity());
+      frames = frames || !scratch.workers[i].frame_slots.empty();
     }
     for (unsigned i = 0; i < count; ++i) {
       auto& worker = scratch.workers[i];
       worker.candidates.reserve(cand);
-      worker.cast_queue.reserve(queue);
       worker.edge_hits.reserve(unsure);
       worker.extra.reserve(scratch.extras.size());
       worker.active_classes.reserve(data.class_axis.size());
+      worker.class_on.reserve(data.class_axis.size());
+      if (worker.frame_slots.empty() && frames) worker.frame_slots.resize(frame_turns);
     }
   }
   auto& mesh_bits = scratch.shown_mesh;

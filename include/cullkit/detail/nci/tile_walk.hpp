@@ -1,6 +1,7 @@
 // cullkit/detail/nci/tile_walk.hpp: what one walk of a screen tile shares between its steps
-// (slice_walk.hpp) and the crowded-cell path (packet_cast.hpp): the TileWalk state, and
-// test_triangle, the ray test of an admitted triangle against the tile's live rays.
+// (slice_walk.hpp): the TileWalk state; test_triangle, the ray test of an admitted triangle against
+// the tile's live rays; and test_ray, the per-ray step it shares with the frame hierarchy's leaves
+// (frame_tile.hpp).
 #pragma once
 
 #include <algorithm>
@@ -108,7 +109,7 @@ inline bool test_triangle(const IndexData& data, const ViewSetup& f, int x0, int
 }
 
 // One walk of a tile through the slices of its grid, from the eye's slice in one direction: what
-// the walk's steps (slice_walk.hpp) and the crowded-cell path (packet_cast.hpp) share.
+// the walk's steps (slice_walk.hpp) share.
 struct TileWalk {
   const IndexData& data;
   const ViewSetup& f;
