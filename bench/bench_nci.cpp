@@ -489,10 +489,11 @@ struct FrameCaster {
       __builtin_prefetch(a);
       __builtin_prefetch(a + 12 * count - 1);
     }
-    void prepare(std::uint32_t first, std::uint32_t count, std::uint32_t) const {
+    std::uint32_t prepare(std::uint32_t first, std::uint32_t count, std::uint32_t, std::uint32_t) const {
       for (std::uint32_t q = 0; q < 3 * count; ++q) __builtin_prefetch(&fc.lpos[fc.lv[3 * std::size_t{first} + q]]);
+      return 0;
     }
-    void test(std::uint32_t first, std::uint32_t count, std::uint64_t mask) const {
+    void test(std::uint32_t first, std::uint32_t count, std::uint64_t mask, std::uint32_t) const {
       for (std::uint32_t q = first; q < first + count; ++q) {
         const glm::vec3& pa = fc.lpos[fc.lv[3 * std::size_t{q}]];
         const glm::vec3& pb = fc.lpos[fc.lv[3 * std::size_t{q} + 1]];

@@ -66,6 +66,7 @@ struct FrameCursor {
     std::uint32_t phase;  // leaves: the preparation steps done (Leaf::phases before its test)
     std::uint64_t mask;
     float near;  // the smallest entry distance of its rays into its box (a lower bound)
+    std::uint32_t carry;  // leaves: what the last preparation step hands to the next one
   };
   // Depth of the tree is at most FrameBvhBuilder::depth_limit plus a balanced tail (below 64);
   // each level leaves at most three siblings on the stack.
@@ -73,7 +74,7 @@ struct FrameCursor {
   int top = 0;
   void start(const FrameBvh& bvh, std::uint64_t live) noexcept {
     top = 0;
-    if (bvh.root != FrameBvhNode::empty && live) stack[top++] = Entry{bvh.root, 0u, live, 0.0f};
+    if (bvh.root != FrameBvhNode::empty && live) stack[top++] = Entry{bvh.root, 0u, live, 0.0f, 0u};
   }
   [[nodiscard]] bool done() const noexcept { return top == 0; }
 };
@@ -118,14 +119,13 @@ CULLKIT_FORCEINLINE void frame_node_test(const FrameBvhNode& node, const float e
     const __m128 tf = _mm_min_ps(_mm_min_ps(_mm_max_ps(ax, bx), _mm_max_ps(ay, by)),
                                  _mm_min_ps(_mm_max_ps(az, bz), _mm_set1_ps(p.t[k])));
     const __m128 hit = _mm_cmple_ps(_mm_mul_ps(tn, los), _mm_mul_ps(tf, his));
-    int bits = _mm_movemask_ps(hit);
+    const std::uint64_t bits = static_cast<std::uint64_t>(_mm_movemask_ps(hit));
     nearest = _mm_min_ps(nearest, _mm_or_ps(_mm_and_ps(hit, tn), _mm_andnot_ps(hit, inf)));
-    const std::uint64_t rb = std::uint64_t{1} << k;
-    while (bits) {
-      const int j = __builtin_ctz(static_cast<unsigned>(bits));
-      bits &= bits - 1;
-      cm[j] |= rb;
-    }
+    const std::uint64_t rb = std::uint64_t{1} << k;  // branch-free: which children a ray reaches is noise
+    cm[0] |= rb & (0 - (bits & 1u));
+    cm[1] |= rb & (0 - ((bits >> 1) & 1u));
+    cm[2] |= rb & (0 - ((bits >> 2) & 1u));
+    cm[3] |= rb & (0 - ((bits >> 3) & 1u));
   }
   _mm_storeu_ps(nv, nearest);
 #else
@@ -176,10 +176,11 @@ CULLKIT_FORCEINLINE void frame_node_test(const FrameBvhNode& node, const float e
 }
 
 // One step of cursor `c` over packet `p`: pops an entry, drops the rays whose solid hit now lies
-// before its box; a leaf is prepared (`leaf.prepare(first, count, phase)`, Leaf::phases times: load
-// what the previous phase prefetched, prefetch what it names) and then tested
-// (`leaf.test(first, count, mask)`, which lowers p.t); a node pushes the children its rays reach,
-// nearest last (popped first), prefetching them (`leaf.prefetch(first, count)` for leaves).
+// before its box; a leaf is prepared (`carry = leaf.prepare(first, count, phase, carry)`,
+// Leaf::phases times: load what the previous phase prefetched, prefetch what it names) and then
+// tested (`leaf.test(first, count, mask, carry)`, which lowers p.t); a node pushes the children its
+// rays reach, nearest last (popped first), prefetching them (`leaf.prefetch(first, count)` for
+// leaves).
 template <class Leaf>
 CULLKIT_FORCEINLINE void frame_cursor_step(const FrameBvh& bvh, const float eye[3], FramePacket& p, FrameCursor& c,
                                            Leaf& leaf, FrameCastStats& stats) {
@@ -193,12 +194,12 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const FrameBvh& bvh, const float eye[
   if (FrameBvhNode::is_leaf(e.code)) {
     const std::uint32_t first = FrameBvhNode::leaf_first(e.code), count = FrameBvhNode::leaf_count(e.code);
     if (e.phase < Leaf::phases) {
-      leaf.prepare(first, count, e.phase);
-      c.stack[c.top++] = FrameCursor::Entry{e.code, e.phase + 1u, mask, e.near};
+      const std::uint32_t carry = leaf.prepare(first, count, e.phase, e.carry);
+      c.stack[c.top++] = FrameCursor::Entry{e.code, e.phase + 1u, mask, e.near, carry};
       return;
     }
     ++stats.leaves;
-    leaf.test(first, count, mask);
+    leaf.test(first, count, mask, e.carry);
     return;
   }
   const FrameBvhNode& node = bvh.nodes[e.code];
@@ -225,7 +226,7 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const FrameBvh& bvh, const float eye[
       __builtin_prefetch(reinterpret_cast<const char*>(bvh.nodes.data() + code));
       __builtin_prefetch(reinterpret_cast<const char*>(bvh.nodes.data() + code) + 64);
     }
-    c.stack[c.top++] = FrameCursor::Entry{code, 0u, cm[order[q]], nv[order[q]] * (1.0f - frame_t_slack)};
+    c.stack[c.top++] = FrameCursor::Entry{code, 0u, cm[order[q]], nv[order[q]] * (1.0f - frame_t_slack), 0u};
   }
 }
 

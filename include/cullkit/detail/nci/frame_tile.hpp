@@ -50,29 +50,41 @@ struct FrameLeaf {
   const std::uint8_t* class_on;  // per class: it may face some live ray of the tile (select_classes)
   std::size_t& met;
 
-  // Whether internal triangle tri's class may face a ray of the tile (classes are runs of ids).
+  // Whether internal triangle tri's class may face a ray of the tile: classes are runs of ids, found
+  // by a branch-free binary search of class_tri_begin.
   [[nodiscard]] bool active(std::uint32_t tri) const {
-    const auto& b = data.class_tri_begin;
-    return class_on[std::upper_bound(b.begin(), b.end(), tri) - b.begin() - 1] != 0;
+    const std::uint32_t* b = data.class_tri_begin.data();
+    std::size_t lo = 0, n = data.class_tri_begin.size() - 1;  // the class lies in [lo, lo + n)
+    while (n > 1) {
+      const std::size_t half = n / 2;
+      lo = b[lo + half] <= tri ? lo + half : lo;
+      n -= half;
+    }
+    return class_on[lo] != 0;
   }
 
   void prefetch(std::uint32_t first, std::uint32_t) const { __builtin_prefetch(data.frame.tris.data() + first); }
 
-  void prepare(std::uint32_t first, std::uint32_t count, std::uint32_t phase) const {
-    for (std::uint32_t q = first; q < first + count; ++q) {
-      const std::uint32_t tri = data.frame.tris[q];
+  // Phase 0 finds the triangles of active classes (bit q of the carry: triangle first + q) and
+  // prefetches their vertex ids; phase 1 prefetches their corners.
+  std::uint32_t prepare(std::uint32_t first, std::uint32_t count, std::uint32_t phase, std::uint32_t carry) const {
+    if (phase == 0) carry = 0;
+    for (std::uint32_t q = 0; q < count; ++q) {
+      const std::uint32_t tri = data.frame.tris[first + q];
       const std::size_t v = 3 * std::size_t{tri};
-      if (!active(tri)) continue;
       if (phase == 0) {
+        if (!active(tri)) continue;
+        carry |= 1u << q;
         if (data.tri_vertices.empty()) __builtin_prefetch(&data.tri_vertices16[v]);
         else __builtin_prefetch(&data.tri_vertices[v]);
-      } else {
+      } else if (carry >> q & 1u) {
         for (int k = 0; k < 3; ++k) __builtin_prefetch(&data.corner(tri, k));
       }
     }
+    return carry;
   }
 
-  void test(std::uint32_t first, std::uint32_t count, std::uint64_t mask) {
+  void test(std::uint32_t first, std::uint32_t count, std::uint64_t mask, std::uint32_t carry) {
     FramePacket& p = slot.p;
     const int stride = r.stride;
     // The leaf's triangles nearest first along the packet's mean ray (as the walk sorts its
@@ -81,8 +93,8 @@ struct FrameLeaf {
     float key[FrameBvhNode::leaf_max];
     std::uint32_t kept = 0;
     for (std::uint32_t q = 0; q < count; ++q) {
+      if (!(carry >> q & 1u)) continue;  // a back face for every ray of the tile
       const std::uint32_t tri = data.frame.tris[first + q];
-      if (!active(tri)) continue;  // a back face for every ray of the tile
       float k = std::numeric_limits<float>::infinity();
       for (int c = 0; c < 3; ++c) {
         const glm::vec3 d = data.corner(tri, c) - f.eye_f;
