@@ -57,7 +57,7 @@ inline constexpr float frame_t_slack = 0x1p-20f;
 inline constexpr std::size_t frame_turns = 4;
 
 struct FrameCastStats {
-  std::uint64_t nodes = 0, ray_boxes = 0, leaves = 0;
+  std::uint64_t nodes = 0, leaves = 0;
 };
 
 struct FrameCursor {
@@ -204,7 +204,6 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const FrameBvh& bvh, const float eye[
   }
   const FrameBvhNode& node = bvh.nodes[e.code];
   ++stats.nodes;
-  stats.ray_boxes += static_cast<std::uint64_t>(__builtin_popcountll(mask));
   std::uint64_t cm[4] = {0, 0, 0, 0};
   float nv[4];
   frame_node_test(node, eye, p, mask, cm, nv);
