@@ -9,9 +9,10 @@
 //     packets (rtcIntersect16), at 640x480 and 1024x768, 1 and 2 threads (both sides on the same
 //     count), on real scenes and a generated one of >= 10M triangles (full runs only; `--no-big`
 //     skips it). The racing peer is a plain Embree scene (default flags: not robust, two-sided): the
-//     fast configuration a user would pick. After each race, one `nci_cells` line per crowded-cell
-//     path: the (tile, cell) pairs it walked and cast, and its tested count; with two or more paths,
-//     one `nci_path_ratio` line per path: its median over the first path's.
+//     fast configuration a user would pick. After each race, one `nci_cells` line per crowded path:
+//     the (tile, cell) pairs it walked and the tiles it cast through the frame hierarchy, and its
+//     tested count; with two or more paths, one `nci_path_ratio` line per path: its median over the
+//     first path's; and one `nci_crowding` line: triangles per pixel of the scene box's rectangle.
 // Flags: --no-big, --only-big, --no-precision, --quick (precision at the default parameters only,
 // timing at 640x480 only), --hash (only a hash of the per-pixel triangle and depth of both views at
 // 640x480 and 1024x768 per scene, to check that a change keeps every answer; env CULLKIT_NCI_TILE sets
@@ -19,6 +20,8 @@
 // auto; default auto): `--path walk,auto` races the walk alone against the automatic choice in the
 // same run; with --hash, the first path of the list answers (every path must print the same hashes).
 // --threads LIST: thread counts of the races (default 1,2). CSV on stdout.
+// --frame-race SCENE [REPS] [--threads LIST] [--path LIST]: see frame_race below (env FRAME_VIEWS=1:
+// the outside view only).
 // --profile SCENE VIEW [FRAMES]: for callgrind (instructions per frame: a run of 3 frames minus a run of 1,
 // halved; or `--collect-atstart=no --toggle-collect='*process_tile*'` for the tiles alone):
 // one thread, select_visible only, at 640x480, FRAMES frames (default 1) of view VIEW (0: outside,
