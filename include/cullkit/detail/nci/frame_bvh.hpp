@@ -235,9 +235,29 @@ class FrameBvhBuilder {
       });
       mid = static_cast<std::size_t>(m - ids_);
     }
-    if (mid == r.b || mid == r.e) mid = r.b + n / 2;
-    left = bounds_of(r.b, mid);
-    right = bounds_of(mid, r.e);
+    // The sides' boxes are the unions of their bins' (each triangle lies in one bin of the axis),
+    // unless the partition disagreed with the binning (then measured again).
+    std::size_t left_count = 0;
+    left = Range{r.b, mid, {0, 0, 0}, {0, 0, 0}};
+    right = Range{mid, r.e, {0, 0, 0}, {0, 0, 0}};
+    for (int j = 0; j < 3; ++j) {
+      left.lo[j] = right.lo[j] = std::numeric_limits<float>::infinity();
+      left.hi[j] = right.hi[j] = -std::numeric_limits<float>::infinity();
+    }
+    for (int k = 0; k < bins; ++k) {
+      const Bin& bb = bin[best_axis][k];
+      Range& side = k < best_plane ? left : right;
+      if (k < best_plane) left_count += bb.n;
+      for (int j = 0; j < 3; ++j) {
+        side.lo[j] = std::min(side.lo[j], bb.lo[j]);
+        side.hi[j] = std::max(side.hi[j], bb.hi[j]);
+      }
+    }
+    if (mid - r.b != left_count || mid == r.b || mid == r.e) {
+      if (mid == r.b || mid == r.e) mid = r.b + n / 2;
+      left = bounds_of(r.b, mid);
+      right = bounds_of(mid, r.e);
+    }
     return true;
   }
 
