@@ -76,7 +76,7 @@ struct IndexData {
   bool wide_ids = false;
   // NciCrowdedPath::automatic casts a frame through `frame` when the eye is outside the scene box
   // and the index holds at least this many triangles per pixel of the box's screen rectangle.
-  // Measured (docs/nci.md, "Crowded views"): the cast took 0.15-0.24 of the walk's time at 13-33
+  // Measured (docs/nci.md, "Crowded views"): the cast took 0.15-0.24 of the walk's time at 24-63
   // triangles per pixel and 0.76 at 2.1; 1.06 at 1.7, 0.96 at 0.83, 1.06-2.6 below.
   static constexpr double cast_crowding = 2.0;
   // One hierarchy over every kept triangle (frame_bvh.hpp): the tiles of a crowded frame cast their
