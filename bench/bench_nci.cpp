@@ -9,9 +9,10 @@
 //     packets (rtcIntersect16), at 640x480 and 1024x768, 1 and 2 threads (both sides on the same
 //     count), on real scenes and a generated one of >= 10M triangles (full runs only; `--no-big`
 //     skips it). The racing peer is a plain Embree scene (default flags: not robust, two-sided): the
-//     fast configuration a user would pick. After each race, one `nci_cells` line per crowded-cell
-//     path: the (tile, cell) pairs it walked and cast, and its tested count; with two or more paths,
-//     one `nci_path_ratio` line per path: its median over the first path's.
+//     fast configuration a user would pick. After each race, one `nci_cells` line per crowded path:
+//     the (tile, cell) pairs it walked and the tiles it cast through the frame hierarchy, and its
+//     tested count; with two or more paths, one `nci_path_ratio` line per path: its median over the
+//     first path's; and one `nci_crowding` line: triangles per pixel of the scene box's rectangle.
 // Flags: --no-big, --only-big, --no-precision, --quick (precision at the default parameters only,
 // timing at 640x480 only), --hash (only a hash of the per-pixel triangle and depth of both views at
 // 640x480 and 1024x768 per scene, to check that a change keeps every answer; env CULLKIT_NCI_TILE sets
@@ -19,6 +20,8 @@
 // auto; default auto): `--path walk,auto` races the walk alone against the automatic choice in the
 // same run; with --hash, the first path of the list answers (every path must print the same hashes).
 // --threads LIST: thread counts of the races (default 1,2). CSV on stdout.
+// --frame-race SCENE [REPS] [--threads LIST] [--path LIST]: see frame_race below (env FRAME_VIEWS=1:
+// the outside view only).
 // --profile SCENE VIEW [FRAMES]: for callgrind (instructions per frame: a run of 3 frames minus a run of 1,
 // halved; or `--collect-atstart=no --toggle-collect='*process_tile*'` for the tiles alone):
 // one thread, select_visible only, at 640x480, FRAMES frames (default 1) of view VIEW (0: outside,
@@ -46,6 +49,8 @@
 #include <embree_oracle.hpp>
 
 #include <cullkit/normal_class_index.hpp>
+#include <cullkit/detail/nci/frame_bvh.hpp>
+#include <cullkit/detail/nci/frame_cast.hpp>
 #include <cullkit_support/scene.hpp>
 
 #include "race.hpp"
@@ -211,6 +216,23 @@ void path_from_env(NciParams& p) {
   else p.crowded_path = NciCrowdedPath::automatic;
 }
 
+// Triangles per pixel of the scene box's screen rectangle (the whole screen when a corner is behind
+// the eye): how crowded a view is.
+double triangles_per_pixel(const Scene& s, const Camera& cam) {
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (int k = 0; k < 8; ++k) {
+    const glm::dvec4 p = glm::dmat4(cam.view_proj) *
+                         glm::dvec4((k & 1) ? s.bounds.max.x : s.bounds.min.x, (k & 2) ? s.bounds.max.y : s.bounds.min.y,
+                                    (k & 4) ? s.bounds.max.z : s.bounds.min.z, 1.0);
+    if (!(p.w > 0.0)) return double(s.triangle_count()) / (double(cam.width) * cam.height);
+    const double px = (p.x / p.w + 1.0) * 0.5 * cam.width, py = (1.0 - p.y / p.w) * 0.5 * cam.height;
+    x0 = std::min(x0, px), x1 = std::max(x1, px), y0 = std::min(y0, py), y1 = std::max(y1, py);
+  }
+  const double w = std::max(1.0, std::min<double>(cam.width, x1) - std::max(0.0, x0));
+  const double h = std::max(1.0, std::min<double>(cam.height, y1) - std::max(0.0, y0));
+  return double(s.triangle_count()) / (w * h);
+}
+
 bool g_quick = false;  // --quick: precision at the default parameters only, timing at 640x480 only
 
 struct PathChoice {
@@ -326,11 +348,12 @@ void speed(const std::string& name, const Scene& s, unsigned build_threads, bool
                            }});
         }
         const auto result = cullkit_bench::race(race, field, smoke ? 2 : 9);
+        std::printf("nci_crowding,%s,triangles_per_box_pixel=%.3f\n", race.c_str(), triangles_per_pixel(s, cam));
         for (std::size_t k = 0; k < g_paths.size(); ++k) {
           index[k]->select_visible(cam, ctx[k], out, nullptr);  // the stats of one frame
           const NciSelectStats& st = ctx[k].stats;
           std::printf("nci_cells,%s,%s,%zu,%zu,%zu,%zu,%zu\n", race.c_str(), g_paths[k].name, st.cells_walked,
-                      st.cells_ray_cast, out.triangles_tested, st.triangles_met, st.triangles_no_pixel);
+                      st.tiles_ray_cast, out.triangles_tested, st.triangles_met, st.triangles_no_pixel);
           if (k > 0)
             std::printf("nci_path_ratio,%s,%s_over_%s,%.3f\n", race.c_str(), g_paths[k].name, g_paths[0].name,
                         result[2 + k].median_ns / result[2].median_ns);
@@ -402,10 +425,236 @@ int profile(const std::string& name, int view, int frames) {
   const double ms = frames > 0 ? seconds_since(t0) * 1e3 / frames : 0.0;
   const NciSelectStats& st = ctx.stats;
   std::printf("profile,%s,view%d,grid=%d,frames=%d,ms_per_frame=%.2f,selected=%zu,tested=%zu,ray_tests=%zu,cells=%zu,"
-              "triangles_met=%zu,triangles_no_pixel=%zu,cells_walked=%zu,cells_ray_cast=%zu,bytes_per_triangle=%.1f\n",
+              "triangles_met=%zu,triangles_no_pixel=%zu,cells_walked=%zu,tiles_ray_cast=%zu,bytes_per_triangle=%.1f\n",
               name.c_str(), view, index.params().grid, frames, ms, out.triangles.size(), out.triangles_tested,
-              st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel, st.cells_walked, st.cells_ray_cast,
+              st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel, st.cells_walked, st.tiles_ray_cast,
               double(index.memory_bytes()) / double(std::max<std::size_t>(1, s->triangle_count())));
+  return 0;
+}
+
+
+// --frame-race SCENE [REPS]: the frame hierarchy's cast alone (nearest front-facing watertight hit
+// per pixel, no edge bands, no screen rectangles: the floor of the crowded path), raced against
+// Embree's single rays and select_visible on each path of --path. Its own hierarchy is built over
+// the mesh with the index's builder; its leaves hold vertex ids in leaf order and positions
+// renumbered by first use along the leaves. One line per race of pixels differing from the index's
+// per-pixel answer (frame_agree) and of the cast's work (frame_stats).
+struct FrameCaster {
+  const Scene& s;
+  detail::nci::FrameBvh bvh;
+  std::vector<std::uint32_t> lv;  // 3 vertex ids per leaf slot
+  std::vector<glm::vec3> lpos;    // positions in first use along the slots
+  double build_seconds = 0;
+  mutable detail::nci::FrameCastStats stats;
+
+  FrameCaster(const Scene& scene, unsigned threads) : s(scene) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<detail::nci::FrameBvhItem> items(s.triangle_count());
+    for (std::size_t i = 0; i < items.size(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        const float a = s.positions[s.indices[3 * i]][k], b = s.positions[s.indices[3 * i + 1]][k],
+                    c = s.positions[s.indices[3 * i + 2]][k];
+        items[i].lo[k] = std::min({a, b, c});
+        items[i].hi[k] = std::max({a, b, c});
+      }
+    detail::nci::FrameBvhBuilder builder(items, threads);
+    builder.traversal_cost = detail::nci::frame_traversal_cost;
+    bvh = builder.build();
+    build_seconds = seconds_since(t0);
+    std::vector<std::uint32_t> remap(s.positions.size(), 0xFFFFFFFFu);
+    lv.resize(3 * bvh.tris.size());
+    for (std::size_t q = 0; q < bvh.tris.size(); ++q)
+      for (std::size_t v = 0; v < 3; ++v) {
+        const std::uint32_t old = s.indices[3 * std::size_t{bvh.tris[q]} + v];
+        if (remap[old] == 0xFFFFFFFFu) {
+          remap[old] = static_cast<std::uint32_t>(lpos.size());
+          lpos.push_back(s.positions[old]);
+        }
+        lv[3 * q + v] = remap[old];
+      }
+  }
+
+  struct Slot {
+    detail::nci::FramePacket p;
+    detail::WatertightRay<float> w[64];
+    std::uint32_t hit[64];
+    detail::nci::FrameCursor cur;
+    int x0 = 0, y0 = 0, cw = 0, ch = 0;
+    bool busy = false;
+  };
+  struct LeafOps {
+    static constexpr std::uint32_t phases = 1;
+    const FrameCaster& fc;
+    Slot& sl;
+    const float* eye;
+    void prefetch(std::uint32_t first, std::uint32_t count) const {
+      const char* a = reinterpret_cast<const char*>(fc.lv.data() + 3 * std::size_t{first});
+      __builtin_prefetch(a);
+      __builtin_prefetch(a + 12 * count - 1);
+    }
+    std::uint32_t prepare(std::uint32_t first, std::uint32_t count, std::uint32_t, std::uint32_t) const {
+      for (std::uint32_t q = 0; q < 3 * count; ++q) __builtin_prefetch(&fc.lpos[fc.lv[3 * std::size_t{first} + q]]);
+      return 0;
+    }
+    void test(std::uint32_t first, std::uint32_t count, std::uint64_t mask, std::uint32_t) const {
+      for (std::uint32_t q = first; q < first + count; ++q) {
+        const glm::vec3& pa = fc.lpos[fc.lv[3 * std::size_t{q}]];
+        const glm::vec3& pb = fc.lpos[fc.lv[3 * std::size_t{q} + 1]];
+        const glm::vec3& pc = fc.lpos[fc.lv[3 * std::size_t{q} + 2]];
+        const float a[3] = {pa.x - eye[0], pa.y - eye[1], pa.z - eye[2]};
+        const float b[3] = {pb.x - eye[0], pb.y - eye[1], pb.z - eye[2]};
+        const float c[3] = {pc.x - eye[0], pc.y - eye[1], pc.z - eye[2]};
+        for (std::uint64_t m = mask; m; m &= m - 1) {
+          const int k = __builtin_ctzll(m);
+          float t = 0.0f;
+          if (detail::watertight_hit(sl.w[k], a, b, c, t) &&
+              (t < sl.p.t[k] ||
+               (t == sl.p.t[k] && (sl.hit[k] == 0xFFFFFFFFu || fc.bvh.tris[q] < fc.bvh.tris[sl.hit[k]])))) {
+            sl.p.t[k] = t;
+            sl.hit[k] = q;
+          }
+        }
+      }
+    }
+  };
+
+  // Tiles of 8x8 pixels, frame_turns of them taking turns per thread.
+  long long render(const Camera& cam, unsigned threads, std::uint32_t* tri_out = nullptr, float* depth_out = nullptr) const {
+    const PixelRays rays(cam);
+    const int nx = (cam.width + 7) / 8, ny = (cam.height + 7) / 8;
+    std::atomic<int> next{0};
+    std::atomic<long long> hits{0};
+    const float eye[3] = {cam.eye.x, cam.eye.y, cam.eye.z};
+    auto work = [&](unsigned) {
+      long long n = 0;
+      detail::nci::FrameCastStats local;
+      std::vector<Slot> slots(detail::nci::frame_turns);
+      auto open = [&](Slot& sl) {
+        const int t = next++;
+        if (t >= nx * ny) return false;
+        sl.x0 = (t % nx) * 8;
+        sl.y0 = (t / nx) * 8;
+        sl.cw = std::min(8, cam.width - sl.x0);
+        sl.ch = std::min(8, cam.height - sl.y0);
+        float dx[64], dy[64], dz[64];
+        std::uint64_t live = 0;
+        for (int y = 0; y < sl.ch; ++y) rays.directions(sl.x0, sl.y0 + y, sl.cw, dx + y * 8, dy + y * 8, dz + y * 8);
+        for (int y = 0; y < sl.ch; ++y)
+          for (int x = 0; x < sl.cw; ++x) {
+            const int k = y * 8 + x;
+            sl.w[k] = detail::WatertightRay<float>::make(glm::vec3(dx[k], dy[k], dz[k]));
+            sl.p.ix[k] = detail::nci::frame_inverse(dx[k]);
+            sl.p.iy[k] = detail::nci::frame_inverse(dy[k]);
+            sl.p.iz[k] = detail::nci::frame_inverse(dz[k]);
+            sl.p.t[k] = std::numeric_limits<float>::infinity();
+            sl.hit[k] = 0xFFFFFFFFu;
+            live |= std::uint64_t{1} << k;
+          }
+        sl.cur.start(bvh, live);
+        sl.busy = true;
+        return true;
+      };
+      auto close = [&](Slot& sl) {
+        for (int y = 0; y < sl.ch; ++y)
+          for (int x = 0; x < sl.cw; ++x) {
+            const int k = y * 8 + x;
+            n += sl.hit[k] != 0xFFFFFFFFu;
+            if (tri_out) {
+              const std::size_t i = std::size_t(sl.y0 + y) * std::size_t(cam.width) + std::size_t(sl.x0 + x);
+              tri_out[i] = sl.hit[k] != 0xFFFFFFFFu ? bvh.tris[sl.hit[k]] : sl.hit[k];
+              depth_out[i] = sl.p.t[k];
+            }
+          }
+        sl.busy = false;
+      };
+      int active = 0;
+      for (auto& sl : slots) active += open(sl);
+      while (active > 0) {
+        for (auto& sl : slots) {
+          if (!sl.busy) continue;
+          LeafOps ops{*this, sl, eye};
+          detail::nci::frame_cursor_step(bvh, eye, sl.p, sl.cur, ops, local);
+          if (sl.cur.done()) {
+            close(sl);
+            if (!open(sl)) --active;
+          }
+        }
+      }
+      hits += n;
+      if (tri_out) stats = local;
+    };
+    Embree::run_threads(threads, work);
+    return hits.load();
+  }
+};
+
+int frame_race(const std::string& name, int reps) {
+  std::optional<Scene> s;
+  if (name == "city") s = support::make_city(7, 20);
+  else if (name == "bigcity") s = support::make_city(8, 284);
+  else s = support::load_obj(support::scenes_dir() + "/" + name);
+  if (!s) return 1;
+  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  const Embree embree(*s, hw);
+  std::printf("frame_build,%s,triangles=%zu,embree_s=%.3f,embree_bytes_per_tri=%.1f\n", name.c_str(), s->triangle_count(),
+              embree.build_seconds, double(embree.bytes) / double(s->triangle_count()));
+  const FrameCaster fc(*s, hw);
+  std::printf("frame_build,%s,frame_bvh_s=%.3f,nodes=%zu,bytes_per_tri=%.2f\n", name.c_str(), fc.build_seconds,
+              fc.bvh.nodes.size(), double(fc.bvh.memory_bytes()) / double(s->triangle_count()));
+  std::fflush(stdout);
+  const int views_wanted = std::getenv("FRAME_VIEWS") ? std::atoi(std::getenv("FRAME_VIEWS")) : 2;
+  for (const unsigned threads : g_threads) {
+    std::vector<std::unique_ptr<NormalClassIndex<glm::vec3>>> index;
+    for (const PathChoice& path : g_paths) {
+      NciParams p;
+      p.threads = threads;
+      p.build_threads = hw;
+      p.crowded_path = path.path;
+      index.push_back(std::make_unique<NormalClassIndex<glm::vec3>>(s->mesh(), p));
+      std::printf("nci_build,%s,%s,build_s=%.3f,bytes_per_tri=%.2f\n", name.c_str(), path.name,
+                  index.back()->stats().build_seconds,
+                  double(index.back()->memory_bytes()) / double(s->triangle_count()));
+    }
+    for (auto [w, h] : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}}) {
+      const auto cams = views(*s, w, h);
+      for (int ci = 0; ci < views_wanted; ++ci) {
+        const Camera cam = cams[static_cast<std::size_t>(ci)];
+        std::vector<NciContext> ctx(g_paths.size());
+        VisibleSet out;
+        const std::string race = name + "/" + std::to_string(w) + "x" + std::to_string(h) + "/view" +
+                                 std::to_string(ci) + "/threads" + std::to_string(threads);
+        if (threads == g_threads.front()) {  // agreement with the index's per-pixel first hits
+          NciPixels px;
+          index.front()->select_visible(cam, ctx.front(), out, &px);
+          std::vector<std::uint32_t> tri(std::size_t(w) * std::size_t(h));
+          std::vector<float> depth(tri.size());
+          fc.render(cam, 1, tri.data(), depth.data());
+          std::size_t differ = 0;
+          for (std::size_t i = 0; i < tri.size(); ++i)
+            differ += tri[i] != px.triangle[i] || (tri[i] != NciPixels::miss && depth[i] != px.depth[i]);
+          std::printf("frame_agree,%s,pixels_differing=%zu\n", race.c_str(), differ);
+          std::printf("frame_stats,%s,nodes=%llu,leaves=%llu\n", race.c_str(),
+                      static_cast<unsigned long long>(fc.stats.nodes), static_cast<unsigned long long>(fc.stats.leaves));
+        }
+        std::vector<cullkit_bench::Contestant> field = {
+            {"embree_rtcIntersect1", [&] { cullkit_bench::keep(embree.render1(cam, threads)); }},
+            {"frame_cast_nearest", [&] { cullkit_bench::keep(fc.render(cam, threads)); }}};
+        for (std::size_t k = 0; k < g_paths.size(); ++k)
+          field.push_back({std::string("nci_select_visible_") + g_paths[k].name, [&, k] {
+                             index[k]->select_visible(cam, ctx[k], out, nullptr);
+                             cullkit_bench::keep(out.triangles.size());
+                           }});
+        cullkit_bench::race(race, field, reps);
+        for (std::size_t k = 0; k < g_paths.size(); ++k) {
+          index[k]->select_visible(cam, ctx[k], out, nullptr);
+          const NciSelectStats& st = ctx[k].stats;
+          std::printf("nci_cells,%s,%s,%zu,%zu,%zu,%zu,%zu\n", race.c_str(), g_paths[k].name, st.cells_walked,
+                      st.tiles_ray_cast, out.triangles_tested, st.triangles_met, st.triangles_no_pixel);
+        }
+        std::fflush(stdout);
+      }
+    }
+  }
   return 0;
 }
 
@@ -414,6 +663,13 @@ int profile(const std::string& name, int view, int frames) {
 int main(int argc, char** argv) {
   if (argc >= 4 && !std::strcmp(argv[1], "--profile"))
     return profile(argv[2], std::atoi(argv[3]), argc >= 5 ? std::max(1, std::atoi(argv[4])) : 1);
+  if (argc >= 3 && !std::strcmp(argv[1], "--frame-race")) {
+    for (int i = 4; i + 1 < argc; ++i) {
+      if (!std::strcmp(argv[i], "--threads") && !parse_threads(argv[i + 1], g_threads)) return 2;
+      if (!std::strcmp(argv[i], "--path") && !parse_paths(argv[i + 1], g_paths)) return 2;
+    }
+    return frame_race(argv[2], argc >= 4 ? std::max(1, std::atoi(argv[3])) : 5);
+  }
   const bool smoke = cullkit_bench::smoke();
   bool big = !smoke, small = true, precision = true, timing = true, hash = false, no_precision = false;
   if (std::getenv("CULLKIT_NCI_PATH")) {  // the environment's path, unless --path says otherwise
@@ -456,7 +712,7 @@ int main(int argc, char** argv) {
     for (unsigned t : g_threads) std::printf(" %u", t);
     std::printf(" threads (build and precision at %u); paths", threads);
     for (const PathChoice& p : g_paths) std::printf(" %s", p.name);
-    std::printf("\n# nci_cells,race,path,cells_walked,cells_ray_cast,tested,triangles_met,triangles_no_pixel\n"
+    std::printf("\n# nci_cells,race,path,cells_walked,tiles_ray_cast,tested,triangles_met,triangles_no_pixel\n"
                 "# nci_path_ratio,race,path_over_first_path,median_ratio\n");
   }
   for (const auto& [name, s] : scenes) {

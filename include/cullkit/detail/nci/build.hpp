@@ -15,7 +15,7 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
-#include "cell_bvh.hpp"
+#include "frame_bvh.hpp"
 #include "kmeans.hpp"
 #include "overlap.hpp"
 #include "../parallel.hpp"
@@ -425,94 +425,27 @@ inline void make_chunk_boxes(IndexData& data, const std::vector<std::uint32_t>& 
   }
 }
 
-// One class's hierarchies, node positions relative to the part (merge_hierarchies shifts them).
-struct HierarchyPart {
-  std::vector<CellBvhNode> nodes;
-  std::vector<std::uint32_t> cells, roots;
-};
-
-// The hierarchies of class c's cells first_cell..last_cell - 1 that hold at least
-// data.crowded_min entries (runs before narrow_forms: reads cell_tri_begin).
-inline void build_class_hierarchies(const IndexData& data, std::uint32_t c, std::uint32_t first_cell,
-                                    std::uint32_t last_cell, HierarchyPart& out) {
-  std::vector<CellBvhItem> items;
-  for (std::uint32_t cell = first_cell; cell < last_cell; ++cell) {
-    const std::uint32_t e0 = data.cell_tri_begin[cell], e1 = data.cell_tri_begin[cell + 1];
-    if (e1 - e0 < data.crowded_min || e1 >= CellBvhNode::first_limit) continue;
-    items.clear();
-    for (std::uint32_t e = e0; e < e1; ++e) {
-      const std::uint32_t tri = data.entry_triangle(e, c);
-      CellBvhItem it;
-      for (int a = 0; a < 3; ++a) {
-        it.lo[a] = std::numeric_limits<float>::infinity();
-        it.hi[a] = -it.lo[a];
-      }
-      for (int k = 0; k < 3; ++k) {
-        const glm::vec3& p = data.corner(tri, k);
-        for (int a = 0; a < 3; ++a) {
-          it.lo[a] = std::min(it.lo[a], p[a]);
-          it.hi[a] = std::max(it.hi[a], p[a]);
-        }
-      }
-      items.push_back(it);
-    }
-    CellBvhBuilder builder(out.nodes, items.data(), e0);
-    out.cells.push_back(cell);
-    out.roots.push_back(builder.build(items.size()));
-  }
-}
-
-// Appends the classes' parts to the index, node positions shifted to the whole array (in class
-// order, so the index does not depend on the thread count).
-inline void merge_hierarchies(IndexData& data, std::vector<HierarchyPart>& parts) {
-  std::size_t nodes = 0;
-  for (const auto& p : parts) nodes += p.nodes.size();
-  if (nodes == 0) return;
-  data.cell_bvh.assign(data.stats.cells, IndexData::no_bvh);
-  data.bvh_nodes.reserve(nodes);
-  for (HierarchyPart& p : parts) {
-    const std::uint32_t node_base = static_cast<std::uint32_t>(data.bvh_nodes.size());
-    const auto shift = [&](std::uint32_t code) {
-      return code == CellBvhNode::empty || CellBvhNode::is_leaf(code) ? code : code + node_base;
-    };
-    for (CellBvhNode& n : p.nodes) {
-      for (auto& ch : n.child) ch = shift(ch);
-      data.bvh_nodes.push_back(n);
-    }
-    for (std::size_t i = 0; i < p.cells.size(); ++i) data.cell_bvh[p.cells[i]] = shift(p.roots[i]);
-    p = HierarchyPart{};
-  }
-}
-
-// Hierarchies over the crowded lists (see packet_cast.hpp), classes on the worker pool.
-inline void make_cell_hierarchies(IndexData& data, const std::vector<std::uint32_t>& class_entry_end) {
-  const std::size_t classes = data.class_axis.size();
-  const std::uint32_t cells = static_cast<std::uint32_t>(data.stats.cells);
-  // Class c's cells are first_cell[c]..first_cell[c + 1] - 1 (cells are numbered class by class,
-  // and their entries are in the same order).
-  std::vector<std::uint32_t> first_cell(classes + 1, cells);
-  first_cell[0] = 0;
-  std::size_t c = 0;
-  for (std::uint32_t cell = 0; cell < cells; ++cell)
-    while (c < classes && data.cell_tri_begin[cell] >= class_entry_end[c]) first_cell[++c] = cell;
-  std::vector<HierarchyPart> parts(classes);
-  std::atomic<std::size_t> next{0};
-  const unsigned build_threads = detail::resolve_threads(data.params.build_threads, std::min<std::size_t>(classes, 64));
-  auto work = [&]() {
-    for (;;) {
-      const std::size_t k = next.fetch_add(1, std::memory_order_relaxed);
-      if (k >= classes) break;
-      build_class_hierarchies(data, static_cast<std::uint32_t>(k), first_cell[k], first_cell[k + 1], parts[k]);
-    }
-  };
-  using Work = decltype(work);
-  detail::run_on_pool(build_threads, [](void* job, std::size_t) { (*static_cast<Work*>(job))(); }, &work);
-  merge_hierarchies(data, parts);
-}
-
 // Narrow forms: 16-bit vertex ids when there are at most 65536 vertices; cell entry ranges
 // in 16 bits relative to their class when every class has at most 65535 entries (one extra
 // end per class: class k's cells c read ranges at c + k and c + k + 1).
+// The frame hierarchy over every kept triangle (internal ids), its subtrees built on the worker pool.
+inline void make_frame_hierarchy(IndexData& data) {
+  const std::size_t n = data.triangle_count();
+  std::vector<FrameBvhItem> items(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t tri = static_cast<std::uint32_t>(i);
+    const glm::vec3 &a = data.corner(tri, 0), &b = data.corner(tri, 1), &c = data.corner(tri, 2);
+    for (int k = 0; k < 3; ++k) {
+      items[i].lo[k] = std::min({a[k], b[k], c[k]});
+      items[i].hi[k] = std::max({a[k], b[k], c[k]});
+    }
+  }
+  FrameBvhBuilder builder(items, detail::resolve_threads(data.params.build_threads, 16));
+  builder.traversal_cost = frame_traversal_cost;
+  data.frame = builder.build();
+  data.frame.nodes.shrink_to_fit();
+}
+
 inline void narrow_forms(IndexData& data) {
   const std::size_t classes = data.class_axis.size(), total_cells = data.stats.cells;
   if (data.vertices.size() <= 65536) {
@@ -560,13 +493,13 @@ CULLKIT_CORE_FN void build(IndexData& data, std::vector<glm::vec3>& normals) {
   renumber(data, class_of, class_begin, by_class, parts);
   const std::vector<std::uint32_t> class_entry_end = flatten(data, parts);
   make_chunk_boxes(data, class_entry_end);
-  make_cell_hierarchies(data, class_entry_end);
   narrow_forms(data);
+  report(data, 0.9f);
+  make_frame_hierarchy(data);
   data.vertices.shrink_to_fit();
   data.tri_vertices.shrink_to_fit();
   data.tri_original.shrink_to_fit();
   data.class_of.shrink_to_fit();
-  data.bvh_nodes.shrink_to_fit();
   report(data, 1.0f);
 }
 #endif

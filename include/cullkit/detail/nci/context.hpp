@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "frame_cast.hpp"
 #include "tile_state.hpp"
 #include "types.hpp"
 
@@ -43,14 +44,6 @@ struct Candidate {
   std::int8_t rx0, ry0, rx1, ry1;  // the tile pixels under its rectangle
 };
 
-// A node or leaf of a crowded cell's hierarchy waiting in the packet path's queue (packet_cast.hpp):
-// its box's nearest depth along the tile's mean ray, its code, and the cell's class.
-struct CastItem {
-  float key;
-  std::uint32_t code;
-  std::uint16_t k;
-};
-
 // One worker's scratch: what a task of select_visible reads and writes besides the index.
 struct Worker {
   // Per triangle, one 16-byte record (one cache line touch per triangle met by a tile): the
@@ -77,9 +70,10 @@ struct Worker {
   std::vector<EdgeBandHit> edge_hits;
   std::vector<Extra> extra;  // selected beside the pixels' first hits (edge hits, solid)
   std::vector<Candidate> candidates;
-  std::vector<CastItem> cast_queue;  // the packet path's nodes to visit, nearest first (a heap)
   std::vector<std::uint16_t> active_classes;
   std::vector<TileState> tile_rays;  // empty or one: the worker's tile scratch
+  std::vector<FrameSlot> frame_slots;  // the packets of a tile cast through the frame hierarchy
+  std::vector<std::uint8_t> class_on;  // per class: active in the tile being cast (frame_tile.hpp)
   NciSelectStats stats;
 };
 
@@ -147,7 +141,6 @@ struct MovingScratch {
     std::uint32_t pixel;
   };
   std::vector<Candidate> candidates;
-  std::vector<CastItem> cast_queue;  // the packet path's nodes to visit, nearest first (a heap)
 };
 
 }  // namespace cullkit::detail::nci

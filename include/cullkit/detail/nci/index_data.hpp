@@ -18,7 +18,7 @@
 #include <glm/vec3.hpp>
 
 #include "../../geometry/aabb.hpp"
-#include "cell_bvh.hpp"
+#include "frame_bvh.hpp"
 #include "watertight.hpp"
 #include "types.hpp"
 
@@ -74,17 +74,14 @@ struct IndexData {
   std::vector<std::uint32_t> class_cell_base;  // per class: its first cell (0 when wide_ids)
   std::vector<std::uint32_t> grid_shift;  // (class, axis): X: cell = position - shift; else id at position - shift
   bool wide_ids = false;
-  // Hierarchies over the crowded (class, cell) lists (cell_bvh.hpp, packet_cast.hpp): per cell its
-  // root node, or no_bvh; empty when no list has crowded_min entries. Leaves are runs of entries.
-  static constexpr std::size_t crowded_min = 48;
-  static constexpr std::uint32_t no_bvh = 0xFFFFFFFFu;
-  // NciCrowdedPath::automatic casts a tile's rays through a cell's hierarchy when the cell holds
-  // more than cast_ratio entries per live pixel under it. Swept at 1, 8 and 64 on a 2.5M-triangle
-  // city seen whole (docs/nci_internals.md): the packet path never beat the walk, so the rule only
-  // takes it for cells far more crowded than any measured.
-  static constexpr double cast_ratio = 256.0;
-  std::vector<std::uint32_t> cell_bvh;
-  std::vector<CellBvhNode> bvh_nodes;
+  // NciCrowdedPath::automatic casts a frame through `frame` when the eye is outside the scene box
+  // and the index holds at least this many triangles per pixel of the box's screen rectangle.
+  // Measured (docs/nci.md, "Crowded views"): the cast took 0.15-0.24 of the walk's time at 24-63
+  // triangles per pixel and 0.76 at 2.1; 1.06 at 1.7, 0.96 at 0.83, 1.06-2.6 below.
+  static constexpr double cast_crowding = 2.0;
+  // One hierarchy over every kept triangle (frame_bvh.hpp): the tiles of a crowded frame cast their
+  // rays through it (frame_tile.hpp) instead of walking the grid. Leaves name internal ids.
+  FrameBvh frame;
   // Width of the ray test's edge band (detail::watertight_hit_band) in units of the coordinates.
   float band = edge_band_units * 0x1p-24f;
 
@@ -113,7 +110,7 @@ struct IndexData {
            bytes(cell_tri_begin) + bytes(cell_tris) + bytes(cell_tris16) + bytes(chunk_box) + bytes(class_tri_begin) +
            bytes(grid_base) + bytes(slice_rows) + bytes(row_coord) + bytes(row_begin) + bytes(cell_col) +
            bytes(cell_id) + bytes(cell_id16) + bytes(grid_shift) + bytes(class_cell_base) + bytes(class_of) +
-           bytes(cell_bvh) + bytes(bvh_nodes);
+           frame.memory_bytes();
   }
 
  private:

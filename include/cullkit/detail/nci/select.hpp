@@ -14,6 +14,7 @@
 #include "context.hpp"
 #include "core.hpp"
 #include "index_data.hpp"
+#include "frame_tile.hpp"
 #include "slice_walk.hpp"
 #include "view.hpp"
 
@@ -73,6 +74,26 @@ inline void prepare_workers(const IndexData& data, Scratch& scratch, unsigned co
   }
 }
 
+// Whether the frame's tiles are cast through the frame hierarchy (frame_tile.hpp) rather than
+// walked: never under walk_only, always under rays_only, and under automatic when the view is
+// crowded: the eye outside the scene box (grown by the grid's inflation) and at least
+// `IndexData::cast_crowding` triangles per pixel of the box's screen rectangle (f.box_rect).
+[[nodiscard]] inline bool cast_frame(const IndexData& data, const ViewSetup& f) noexcept {
+  if (data.frame.root == FrameBvhNode::empty) return false;
+  switch (data.params.crowded_path) {
+    case NciCrowdedPath::walk_only: return false;
+    case NciCrowdedPath::rays_only: return true;
+    case NciCrowdedPath::automatic: break;
+  }
+  const glm::dvec3 lo = glm::dvec3(data.box.min) - data.delta, hi = glm::dvec3(data.box.max) + data.delta;
+  const bool outside = f.eye.x < lo.x || f.eye.y < lo.y || f.eye.z < lo.z || f.eye.x > hi.x || f.eye.y > hi.y || f.eye.z > hi.z;
+  const Rect& b = f.box_rect;
+  if (!outside || b.x0 > b.x1) return false;
+  const double pixels = b.x0 == Rect::full ? double(f.width) * double(f.height)
+                                           : double(b.x1 - b.x0 + 1) * double(b.y1 - b.y0 + 1);
+  return double(data.triangle_count()) >= IndexData::cast_crowding * pixels;
+}
+
 // Every tile of the frame, on `count` tasks (the caller's TaskRunner or the library's pool): task
 // i uses worker slot i and takes tiles from a shared counter until none is left.
 inline void run_tiles(const IndexData& data, const ViewSetup& frame, NciContext& context, Scratch& scratch, unsigned count,
@@ -94,8 +115,12 @@ inline void run_tiles(const IndexData& data, const ViewSetup& frame, NciContext&
       const int tx = static_cast<int>(t % static_cast<std::size_t>(tiles_x));
       const int ty = static_cast<int>(t / static_cast<std::size_t>(tiles_x));
       const std::uint32_t before = worker.tested_count;
-      process_tile(data, frame, tx * tile, ty * tile, std::min(width, (tx + 1) * tile), std::min(height, (ty + 1) * tile),
-                   rays, worker, scratch);
+      if (frame.cast_frame)
+        process_tile_frame(data, frame, tx * tile, ty * tile, std::min(width, (tx + 1) * tile),
+                           std::min(height, (ty + 1) * tile), rays, worker, scratch);
+      else
+        process_tile(data, frame, tx * tile, ty * tile, std::min(width, (tx + 1) * tile), std::min(height, (ty + 1) * tile),
+                     rays, worker, scratch);
       context.tile_tested[t] = worker.tested_count - before;
     }
   };
@@ -116,25 +141,27 @@ inline void merge_workers(const IndexData& data, NciContext& context, Scratch& s
     context.stats.triangles_met += worker.stats.triangles_met;
     context.stats.triangles_no_pixel += worker.stats.triangles_no_pixel;
     context.stats.cells_walked += worker.stats.cells_walked;
-    context.stats.cells_ray_cast += worker.stats.cells_ray_cast;
+    context.stats.tiles_ray_cast += worker.stats.tiles_ray_cast;
     for (const auto& e : worker.extra) scratch.extras.push_back(Extra{data.original(e.tri), e.t, e.pixel});
   }
   {
     // Every worker's lists grow to what any worker needed (the extras to this call's total), so
     // a later frame that spreads the same tiles over the workers differently does not allocate.
-    std::size_t cand = 0, unsure = 0, queue = 0;
+    std::size_t cand = 0, unsure = 0;
+    bool frames = false;  // some worker cast a tile through the frame hierarchy: all get its packets
     for (unsigned i = 0; i < count; ++i) {
       cand = std::max(cand, scratch.workers[i].candidates.capacity());
       unsure = std::max(unsure, scratch.workers[i].edge_hits.capacity());
-      queue = std::max(queue, scratch.workers[i].cast_queue.capacity());
+      frames = frames || !scratch.workers[i].frame_slots.empty();
     }
     for (unsigned i = 0; i < count; ++i) {
       auto& worker = scratch.workers[i];
       worker.candidates.reserve(cand);
-      worker.cast_queue.reserve(queue);
       worker.edge_hits.reserve(unsure);
       worker.extra.reserve(scratch.extras.size());
       worker.active_classes.reserve(data.class_axis.size());
+      worker.class_on.reserve(data.class_axis.size());
+      if (worker.frame_slots.empty() && frames) worker.frame_slots.resize(frame_turns);
     }
   }
   auto& mesh_bits = scratch.shown_mesh;
@@ -202,6 +229,7 @@ CULLKIT_CORE_FN void select_frame(const IndexData& data, const Camera& camera, N
     frame.box_rect = scene_box_rect(data, frame);
     frame.initial_depth = initial_depth;
     frame.initial_solid = initial_solid;
+    frame.cast_frame = cast_frame(data, frame);
     const int tile = frame.tile = tile_edge(data, width, height);
     context.stats.axis = frame.axis;
     const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;

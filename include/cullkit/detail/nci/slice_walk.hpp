@@ -17,7 +17,6 @@
 #include "beam.hpp"
 #include "context.hpp"
 #include "index_data.hpp"
-#include "packet_cast.hpp"
 #include "rejection.hpp"
 #include "tile_walk.hpp"
 #include "tolerances.hpp"
@@ -114,7 +113,6 @@ struct TileMasks {
 CULLKIT_FORCEINLINE glm::dvec3 setup_rays(const IndexData& data, const ViewSetup& f, int x0, int y0, int tw, int th,
                                           TileState& r, TileMasks& m) {
   r.any_dirty = true;
-  r.inverse_ready = false;
   r.beam = false;
   r.beam_eps = 0.0f;
   for (int k = 0; k < 4; ++k) r.beam_box[k] = -1;
@@ -380,14 +378,8 @@ CULLKIT_FORCEINLINE void visit_slice(TileWalk& w, const std::vector<std::uint16_
           e = data.class_entry_base[k] + data.cell_begin16[cell + k];
           e_end = data.class_entry_base[k] + data.cell_begin16[cell + k + 1];
         }
-        const std::uint32_t root = data.cell_bvh.empty() ? IndexData::no_bvh : data.cell_bvh[cell];
-        if (root != IndexData::no_bvh && cast_pays(w, root, e_end - e)) {
-          ++w.worker.stats.cells_ray_cast;
-          queue_cell(w, k, root);
-        } else {
-          ++w.worker.stats.cells_walked;
-          visit_cell(w, k, e, e_end);
-        }
+        ++w.worker.stats.cells_walked;
+        visit_cell(w, k, e, e_end);
       }
     }
   }
@@ -465,7 +457,6 @@ CULLKIT_FORCEINLINE void walk_slices(TileWalk& w, const std::vector<std::uint16_
       beam_cells(w, s0, s1, rlo, rhi, clo, chi);
       if (rlo <= rhi && clo <= chi) {
         visit_slice(w, active, s, rlo, rhi, clo, chi);
-        cast_queued(w);
         test_candidates(w);
       }
     }

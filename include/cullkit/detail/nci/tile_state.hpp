@@ -63,10 +63,6 @@ struct TileState {
   double lo_a = 0.0;  // the grid's origin on the walk axis
   double inv_h = 1.0; // 1 / cell edge (finish_slice's first estimate only)
   bool flat[slots];
-  // 1 / direction by component (a zero component as 1e-30), for the packet path's line tests:
-  // made on the tile's first crowded cell (inverse_ready), not for tiles that never need them.
-  float ix[slots], iy[slots], iz[slots];
-  bool inverse_ready = false;
   // The tile's beam: four planes through the eye (unit normals, inside positive) holding every
   // live ray of the tile up to `beam_eps` (the largest measured violation plus rounding).
   float beam_n[4][3];

@@ -1,6 +1,7 @@
 // cullkit/detail/nci/tile_walk.hpp: what one walk of a screen tile shares between its steps
-// (slice_walk.hpp) and the crowded-cell path (packet_cast.hpp): the TileWalk state, and
-// test_triangle, the ray test of an admitted triangle against the tile's live rays.
+// (slice_walk.hpp): the TileWalk state; test_triangle, the ray test of an admitted triangle against
+// the tile's live rays; and test_ray, the per-ray step it shares with the frame hierarchy's leaves
+// (frame_tile.hpp).
 #pragma once
 
 #include <algorithm>
@@ -18,6 +19,47 @@
 #include "view.hpp"
 
 namespace cullkit::detail::nci {
+
+// The ray test of triangle `tri` (corners a, b, c relative to the eye, `mag` their largest
+// coordinates) on the tile's ray i, and what it changes: the ray's first hit (ties to the lower
+// mesh index), its solid hit, and an edge-band record. Both paths (the walk's test_triangle and
+// the frame hierarchy's leaves, frame_tile.hpp) test through it.
+CULLKIT_FORCEINLINE void test_ray(const IndexData& data, TileState& r, Worker& worker, int i, std::uint32_t tri,
+                                  const float a[3], const float b[3], const float c[3], const float mag[3]) {
+  ++worker.stats.ray_tests;
+  float t = 0.0f;
+  bool near = false;
+  const bool hit = detail::watertight_hit_band(r.wray[i], a, b, c, mag, data.band, t, near);
+  // Ties go to the lower mesh index (the internal numbering is not the mesh's).
+  if (hit && (t < r.best_t[i] ||
+              (t == r.best_t[i] && (r.best[i] == no_triangle || data.tri_original[tri] < data.tri_original[r.best[i]])))) {
+    r.best_t[i] = t;
+    r.best[i] = tri;
+  }
+  if (near) {
+    if (t <= r.solid_t[i]) worker.edge_hits.push_back(EdgeBandHit{tri, t, static_cast<std::uint16_t>(i)});
+  } else if (hit && (t < r.solid_t[i] || (t == r.solid_t[i] && (r.solid[i] == no_triangle ||
+                                                                data.tri_original[tri] < data.tri_original[r.solid[i]])))) {
+    if (t < r.solid_t[i]) {
+      r.dirty[i] = true;
+      r.any_dirty = true;
+    }
+    r.solid_t[i] = t;
+    r.solid[i] = tri;
+  }
+}
+
+// The depth reject of behind_hits for ray i alone (its own scale sz on its own dominant axis, the
+// same bound and margin): true when the ray already holds a solid hit strictly nearer than any t
+// the watertight test could return for a triangle whose corners (relative to the eye) lie in the
+// box qlo..qhi. Skipping such a ray changes no answer.
+CULLKIT_FORCEINLINE bool ray_behind(const TileState& r, int i, const float qlo[3], const float qhi[3]) {
+  if (!(r.solid_t[i] < std::numeric_limits<float>::infinity())) return false;
+  const detail::WatertightRay<float>& w = r.wray[i];
+  const double sz = w.sz;
+  double bound = std::min(sz * double(qlo[w.kz]), sz * double(qhi[w.kz])) * (1.0 - tolerance::float_relative);
+  return bound > 1e-30 && std::isfinite(bound) && double(r.solid_t[i]) < bound;
+}
 
 // Tests an admitted triangle against the unfinished rays under its rectangle; false when no ray
 // was tested (all of them already hold nearer hits, or the triangle passes beside them).
@@ -58,44 +100,16 @@ inline bool test_triangle(const IndexData& data, const ViewSetup& f, int x0, int
       const int x = TileState::low_bit(bits);
       bits &= bits - 1;
       const int i = y * stride + x;
-      // The depth reject of behind_hits for this ray alone (its own scale sz on its own dominant
-      // axis, the same bound and margin): a ray that already holds a solid hit strictly nearer
-      // than any t the test could return is not tested. Skipping it changes no answer.
-      if (r.solid_t[i] < std::numeric_limits<float>::infinity()) {
-        const detail::WatertightRay<float>& w = r.wray[i];
-        const double sz = w.sz;
-        double bound = std::min(sz * double(qlo[w.kz]), sz * double(qhi[w.kz])) * (1.0 - tolerance::float_relative);
-        if (bound > 1e-30 && std::isfinite(bound) && double(r.solid_t[i]) < bound) continue;
-      }
-      ++worker.stats.ray_tests;
+      if (ray_behind(r, i, qlo, qhi)) continue;
       any = true;
-      float t = 0.0f;
-      bool near = false;
-      const bool hit = detail::watertight_hit_band(r.wray[i], a, b, c, mag, data.band, t, near);
-      // Ties go to the lower mesh index (the internal numbering is not the mesh's).
-      if (hit && (t < r.best_t[i] ||
-                  (t == r.best_t[i] && (r.best[i] == no_triangle || data.tri_original[tri] < data.tri_original[r.best[i]])))) {
-        r.best_t[i] = t;
-        r.best[i] = tri;
-      }
-      if (near) {
-        if (t <= r.solid_t[i]) worker.edge_hits.push_back(EdgeBandHit{tri, t, static_cast<std::uint16_t>(i)});
-      } else if (hit && (t < r.solid_t[i] || (t == r.solid_t[i] && (r.solid[i] == no_triangle ||
-                                                                    data.tri_original[tri] < data.tri_original[r.solid[i]])))) {
-        if (t < r.solid_t[i]) {
-          r.dirty[i] = true;
-          r.any_dirty = true;
-        }
-        r.solid_t[i] = t;
-        r.solid[i] = tri;
-      }
+      test_ray(data, r, worker, i, tri, a, b, c, mag);
     }
   }
   return any;
 }
 
 // One walk of a tile through the slices of its grid, from the eye's slice in one direction: what
-// the walk's steps (slice_walk.hpp) and the crowded-cell path (packet_cast.hpp) share.
+// the walk's steps (slice_walk.hpp) share.
 struct TileWalk {
   const IndexData& data;
   const ViewSetup& f;

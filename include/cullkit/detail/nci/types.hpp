@@ -12,12 +12,14 @@
 
 namespace cullkit {
 
-/// Which path serves a (screen tile, grid cell) pair in select_visible (`NciParams::crowded_path`).
-/// Both give the same per-pixel answer; they differ in cost.
+/// Which path serves the screen tiles of a select_visible call (`NciParams::crowded_path`): the
+/// near-to-far walk of the grid, or casting the tiles' rays through the index's one hierarchy over
+/// all its triangles. Both give the same per-pixel answer and set; they differ in cost (and in
+/// `VisibleSet::triangles_tested`).
 enum class NciCrowdedPath : std::uint8_t {
-  automatic,  ///< chosen per frame and per pair from the cell's triangle count and the tile's live pixels
-  walk_only,  ///< always the near-to-far walk of the cell's triangles
-  rays_only,  ///< always the tile's live rays through the cell's hierarchy, where the cell has one
+  automatic,  ///< per frame: the hierarchy for crowded views seen from outside the scene box, else the walk
+  walk_only,  ///< always the walk
+  rays_only,  ///< always the hierarchy
 };
 
 /// Configuration of a NormalClassIndex. Every field has a usable default.
@@ -65,11 +67,10 @@ struct NciParams {
   void (*progress)(float fraction, void* user) = nullptr;
   /// Passed to `progress` unchanged.
   void* progress_user = nullptr;
-  /// How crowded cells are served (see NciCrowdedPath). Never changes the answer. The build keeps a
-  /// 4-wide hierarchy over every (class, cell) list of at least 48 triangles whatever this says
-  /// (about 6 bytes per triangle on the 10.1M-triangle generated city). Measured so far the walk is
-  /// the faster path on every view, so `automatic` takes the hierarchy only for cells with more
-  /// than 256 triangles per live pixel under them (see docs/nci_internals.md).
+  /// Which path serves a frame's tiles (see NciCrowdedPath). Never changes the answer. The build
+  /// keeps the hierarchy whatever this says (about 16 bytes per triangle). `automatic` casts a frame
+  /// when the eye is outside the scene box and the index holds at least two triangles per pixel of
+  /// the box's screen rectangle, where it measured faster than the walk (see docs/nci.md).
   NciCrowdedPath crowded_path = NciCrowdedPath::automatic;
 };
 
@@ -121,7 +122,7 @@ struct NciSelectStats {
   /// through a BVH does less work.
   std::size_t triangles_no_pixel = 0;
   std::size_t cells_walked = 0;    ///< (tile, cell) pairs served by the near-to-far walk
-  std::size_t cells_ray_cast = 0;  ///< (tile, cell) pairs served by casting the tile's rays through the cell's hierarchy
+  std::size_t tiles_ray_cast = 0;  ///< tiles whose rays were cast through the frame hierarchy instead of walking the grid
   int axis = 0;                    ///< grid axis walked
   /// Moving objects whose transform could not be used (singular, NaN or infinite, or projective;
   /// see NciMovingObject): each was reported whole and hid nothing.

@@ -55,6 +55,7 @@ struct ViewSetup {
   // holds every triangle's rectangle. A tile wholly outside it has no ray to set up.
   Rect box_rect{Rect::full, 0, 0, 0};
   int tile = 32;  // the tile edge of this call
+  bool cast_frame = false;  // tiles are cast through the frame hierarchy (frame_tile.hpp), not walked
 };
 
 // Whether a corner lies (nearly) at the eye: its offsets from the eye, as the float ray test takes

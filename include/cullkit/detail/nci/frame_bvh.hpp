@@ -1,0 +1,427 @@
+// cullkit/detail/nci/frame_bvh.hpp: one 4-wide bounding-volume hierarchy over every triangle of
+// the index (binned surface-area heuristic), for the crowded-frame path: a screen tile's rays are
+// cast through it together (frame_cast.hpp) where the walk would meet many triangles per pixel.
+//
+// Nodes hold four child boxes by axis over the lanes (the layout a 4-wide box test loads). Leaves
+// are runs of FrameBvh::tris, the triangles in the tree's own order.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "../parallel.hpp"
+
+namespace cullkit::detail::nci {
+
+struct alignas(16) FrameBvhNode {
+  float lo[3][4];
+  float hi[3][4];
+  std::uint32_t child[4];
+
+  static constexpr std::uint32_t empty = 0xFFFFFFFFu;
+  static constexpr std::uint32_t leaf_bit = 0x80000000u;
+  // A leaf's code is leaf_bit | first << 3 | (count - 1), `first` its first entry in tris.
+  static constexpr int leaf_max = 8;
+  [[nodiscard]] static bool is_leaf(std::uint32_t code) noexcept { return (code & leaf_bit) != 0; }
+  [[nodiscard]] static std::uint32_t leaf_first(std::uint32_t code) noexcept { return (code & ~leaf_bit) >> 3; }
+  [[nodiscard]] static std::uint32_t leaf_count(std::uint32_t code) noexcept { return (code & 7u) + 1u; }
+  [[nodiscard]] static std::uint32_t leaf(std::uint32_t first, std::uint32_t count) noexcept {
+    return leaf_bit | first << 3 | (count - 1u);
+  }
+};
+
+struct FrameBvh {
+  std::vector<FrameBvhNode> nodes;
+  std::vector<std::uint32_t> tris;  // the triangles, leaf after leaf
+  std::uint32_t root = FrameBvhNode::empty;
+  float root_lo[3] = {0, 0, 0}, root_hi[3] = {0, 0, 0};
+  [[nodiscard]] std::size_t memory_bytes() const noexcept {
+    return nodes.capacity() * sizeof(FrameBvhNode) + tris.capacity() * sizeof(std::uint32_t);
+  }
+};
+
+// The build's cost of a traversal step against one triangle test (FrameBvhBuilder::traversal_cost)
+// for the index's hierarchy. On the 10.1M city seen whole (nearest hits only, one thread) 1, 2 and 3
+// cast within 3 % of each other; 2 and 3 take half the nodes of 1 (18.0 and 17.2 bytes per
+// triangle against 29.6, with 128-byte nodes).
+inline constexpr float frame_traversal_cost = 3.0f;
+
+// A triangle's box, handed to the builder by triangle id.
+struct FrameBvhItem {
+  float lo[3], hi[3];
+};
+
+// Binned SAH build (16 bins on each axis) of a 4-wide tree: each node splits its largest child
+// until it has four or none can be split. Leaves hold at most leaf_max triangles and are cut where
+// the heuristic says a leaf costs less than a split. The two top levels' subtrees are built on
+// `threads` threads and spliced in subtree order, so the tree does not depend on the thread count.
+class FrameBvhBuilder {
+ public:
+  FrameBvhBuilder(const std::vector<FrameBvhItem>& items, unsigned threads) : items_(items), threads_(threads) {}
+
+  // The cost of a traversal step against one triangle test, for the leaf / split choice.
+  float traversal_cost = 1.0f;
+
+  FrameBvh build() {
+    FrameBvh out;
+    const std::size_t n = items_.size();
+    out.tris.resize(n);
+    for (std::size_t i = 0; i < n; ++i) out.tris[i] = static_cast<std::uint32_t>(i);
+    ids_ = out.tris.data();
+    if (n == 0) return out;
+    const Range all = bounds_of(0, n);
+    for (int a = 0; a < 3; ++a) {
+      out.root_lo[a] = all.lo[a];
+      out.root_hi[a] = all.hi[a];
+    }
+    // The top: split the whole set down to at most 16 ranges, serially; then each range's subtree
+    // on its own thread, spliced below the top in range order.
+    std::vector<Range> tops;
+    split_into(all, 16, tops);
+    std::vector<std::vector<FrameBvhNode>> sub(tops.size());
+    std::vector<std::uint32_t> sub_root(tops.size());
+    struct Job {
+      FrameBvhBuilder* self;
+      std::vector<Range>* tops;
+      std::vector<std::vector<FrameBvhNode>>* sub;
+      std::vector<std::uint32_t>* sub_root;
+      std::size_t workers;
+    } job{this, &tops, &sub, &sub_root, std::max<std::size_t>(1, std::min<std::size_t>(threads_, tops.size()))};
+    detail::run_on_pool(job.workers, [](void* j, std::size_t k) {
+      Job& b = *static_cast<Job*>(j);
+      for (std::size_t t = k; t < b.tops->size(); t += b.workers) (*b.sub_root)[t] = b.self->make((*b.tops)[t], (*b.sub)[t]);
+    }, &job);
+    // Top nodes: the whole set cut into `tops` by the same rule, rebuilt over the ranges' roots.
+    std::vector<FrameBvhNode>& nodes = out.nodes;
+    std::size_t next = 0;
+    out.root = make_top(all, tops, sub, sub_root, nodes, next);
+    return out;
+  }
+
+ private:
+  struct Range {
+    std::size_t b, e;
+    float lo[3], hi[3];
+  };
+  static constexpr int bins = 16;
+  const std::vector<FrameBvhItem>& items_;
+  unsigned threads_;
+  std::uint32_t* ids_ = nullptr;
+
+  static float area(const float lo[3], const float hi[3]) noexcept {
+    const float x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2];
+    return x < 0.0f ? 0.0f : x * y + y * z + z * x;
+  }
+
+  Range bounds_of(std::size_t b, std::size_t e) const noexcept {
+    Range r{b, e, {0, 0, 0}, {0, 0, 0}};
+    for (int a = 0; a < 3; ++a) {
+      r.lo[a] = std::numeric_limits<float>::infinity();
+      r.hi[a] = -std::numeric_limits<float>::infinity();
+    }
+    for (std::size_t i = b; i < e; ++i) {
+      const FrameBvhItem& it = items_[ids_[i]];
+      for (int a = 0; a < 3; ++a) {
+        r.lo[a] = std::min(r.lo[a], it.lo[a]);
+        r.hi[a] = std::max(r.hi[a], it.hi[a]);
+      }
+    }
+    return r;
+  }
+
+  // Splits r in two by the binned heuristic (the median of the widest centroid axis when the
+  // centroids coincide or every plane leaves a side empty); false when r is a leaf.
+  bool split(const Range& r, Range& left, Range& right, bool median = false) const {
+    const std::size_t n = r.e - r.b;
+    if (n <= 1) return false;
+    if (median && n > static_cast<std::size_t>(FrameBvhNode::leaf_max)) return median_split(r, left, right);
+    float cl[3], ch[3];
+    for (int a = 0; a < 3; ++a) {
+      cl[a] = std::numeric_limits<float>::infinity();
+      ch[a] = -cl[a];
+    }
+    for (std::size_t i = r.b; i < r.e; ++i) {
+      const FrameBvhItem& it = items_[ids_[i]];
+      for (int a = 0; a < 3; ++a) {
+        const float c = it.lo[a] + it.hi[a];
+        cl[a] = std::min(cl[a], c);
+        ch[a] = std::max(ch[a], c);
+      }
+    }
+    struct Bin {
+      float lo[3], hi[3];
+      std::size_t n;
+    };
+    Bin bin[3][bins];
+    float scale[3];
+    for (int a = 0; a < 3; ++a) {
+      scale[a] = ch[a] > cl[a] ? float(bins) * 0.99999f / (ch[a] - cl[a]) : 0.0f;
+      for (int k = 0; k < bins; ++k) {
+        for (int j = 0; j < 3; ++j) {
+          bin[a][k].lo[j] = std::numeric_limits<float>::infinity();
+          bin[a][k].hi[j] = -std::numeric_limits<float>::infinity();
+        }
+        bin[a][k].n = 0;
+      }
+    }
+    for (std::size_t i = r.b; i < r.e; ++i) {
+      const FrameBvhItem& it = items_[ids_[i]];
+      for (int a = 0; a < 3; ++a) {
+        const int k = std::min(bins - 1, static_cast<int>((it.lo[a] + it.hi[a] - cl[a]) * scale[a]));
+        Bin& bb = bin[a][k];
+        for (int j = 0; j < 3; ++j) {
+          bb.lo[j] = std::min(bb.lo[j], it.lo[j]);
+          bb.hi[j] = std::max(bb.hi[j], it.hi[j]);
+        }
+        ++bb.n;
+      }
+    }
+    float best = std::numeric_limits<float>::infinity();
+    int best_axis = -1, best_plane = 0;
+    for (int a = 0; a < 3; ++a) {
+      if (scale[a] == 0.0f) continue;
+      float rarea[bins];
+      std::size_t rn[bins];
+      float lo[3] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+                     std::numeric_limits<float>::infinity()};
+      float hi[3] = {-lo[0], -lo[1], -lo[2]};
+      std::size_t cnt = 0;
+      for (int k = bins - 1; k > 0; --k) {
+        for (int j = 0; j < 3; ++j) {
+          lo[j] = std::min(lo[j], bin[a][k].lo[j]);
+          hi[j] = std::max(hi[j], bin[a][k].hi[j]);
+        }
+        cnt += bin[a][k].n;
+        rarea[k] = area(lo, hi);
+        rn[k] = cnt;
+      }
+      for (int j = 0; j < 3; ++j) {
+        lo[j] = std::numeric_limits<float>::infinity();
+        hi[j] = -std::numeric_limits<float>::infinity();
+      }
+      cnt = 0;
+      for (int k = 0; k + 1 < bins; ++k) {
+        for (int j = 0; j < 3; ++j) {
+          lo[j] = std::min(lo[j], bin[a][k].lo[j]);
+          hi[j] = std::max(hi[j], bin[a][k].hi[j]);
+        }
+        cnt += bin[a][k].n;
+        if (cnt == 0 || rn[k + 1] == 0) continue;
+        const float cost = area(lo, hi) * float(cnt) + rarea[k + 1] * float(rn[k + 1]);
+        if (cost < best) {
+          best = cost;
+          best_axis = a;
+          best_plane = k + 1;
+        }
+      }
+    }
+    if (n <= static_cast<std::size_t>(FrameBvhNode::leaf_max) && best_axis >= 0 &&
+        best + area(r.lo, r.hi) * traversal_cost >= area(r.lo, r.hi) * float(n))
+      return false;  // a leaf is cheaper than a split
+    if (best_axis < 0) {
+      if (n <= static_cast<std::size_t>(FrameBvhNode::leaf_max)) return false;
+      return median_split(r, left, right);
+    }
+    std::size_t mid;
+    {
+      const int a = best_axis;
+      const float c0 = cl[a], s = scale[a];
+      std::uint32_t* m = std::partition(ids_ + r.b, ids_ + r.e, [&](std::uint32_t id) {
+        const FrameBvhItem& it = items_[id];
+        return std::min(bins - 1, static_cast<int>((it.lo[a] + it.hi[a] - c0) * s)) < best_plane;
+      });
+      mid = static_cast<std::size_t>(m - ids_);
+    }
+    // The sides' boxes are the unions of their bins' (each triangle lies in one bin of the axis),
+    // unless the partition disagreed with the binning (then measured again).
+    std::size_t left_count = 0;
+    left = Range{r.b, mid, {0, 0, 0}, {0, 0, 0}};
+    right = Range{mid, r.e, {0, 0, 0}, {0, 0, 0}};
+    for (int j = 0; j < 3; ++j) {
+      left.lo[j] = right.lo[j] = std::numeric_limits<float>::infinity();
+      left.hi[j] = right.hi[j] = -std::numeric_limits<float>::infinity();
+    }
+    for (int k = 0; k < bins; ++k) {
+      const Bin& bb = bin[best_axis][k];
+      Range& side = k < best_plane ? left : right;
+      if (k < best_plane) left_count += bb.n;
+      for (int j = 0; j < 3; ++j) {
+        side.lo[j] = std::min(side.lo[j], bb.lo[j]);
+        side.hi[j] = std::max(side.hi[j], bb.hi[j]);
+      }
+    }
+    if (mid - r.b != left_count || mid == r.b || mid == r.e) {
+      if (mid == r.b || mid == r.e) mid = r.b + n / 2;
+      left = bounds_of(r.b, mid);
+      right = bounds_of(mid, r.e);
+    }
+    return true;
+  }
+
+  // Cuts r in two halves at the median of its centroids along their widest axis (ties by id).
+  bool median_split(const Range& r, Range& left, Range& right) const {
+    float cl[3], ch[3];
+    for (int a = 0; a < 3; ++a) {
+      cl[a] = std::numeric_limits<float>::infinity();
+      ch[a] = -cl[a];
+    }
+    for (std::size_t i = r.b; i < r.e; ++i)
+      for (int a = 0; a < 3; ++a) {
+        const float c = items_[ids_[i]].lo[a] + items_[ids_[i]].hi[a];
+        cl[a] = std::min(cl[a], c);
+        ch[a] = std::max(ch[a], c);
+      }
+    int a = 0;
+    for (int j = 1; j < 3; ++j)
+      if (ch[j] - cl[j] > ch[a] - cl[a]) a = j;
+    const std::size_t mid = r.b + (r.e - r.b) / 2;
+    std::nth_element(ids_ + r.b, ids_ + mid, ids_ + r.e, [&](std::uint32_t x, std::uint32_t y) {
+      const float cx = items_[x].lo[a] + items_[x].hi[a], cy = items_[y].lo[a] + items_[y].hi[a];
+      return cx < cy || (cx == cy && x < y);
+    });
+    left = bounds_of(r.b, mid);
+    right = bounds_of(mid, r.e);
+    return true;
+  }
+
+  // Cuts r into at most `most` ranges, splitting the largest-area splittable range first.
+  void split_into(const Range& r, std::size_t most, std::vector<Range>& out, bool median = false) const {
+    out.assign(1, r);
+    std::vector<bool> done(1, false);
+    while (out.size() < most) {
+      int pick = -1;
+      float big = -1.0f;
+      for (std::size_t k = 0; k < out.size(); ++k)
+        if (!done[k] && out[k].e - out[k].b > static_cast<std::size_t>(FrameBvhNode::leaf_max) &&
+            area(out[k].lo, out[k].hi) > big) {
+          big = area(out[k].lo, out[k].hi);
+          pick = static_cast<int>(k);
+        }
+      if (pick < 0) {  // small ranges: split them too unless the heuristic keeps them whole
+        for (std::size_t k = 0; k < out.size() && pick < 0; ++k)
+          if (!done[k] && out[k].e - out[k].b > 1) pick = static_cast<int>(k);
+        if (pick < 0) break;
+      }
+      Range a, b;
+      if (!split(out[static_cast<std::size_t>(pick)], a, b, median)) {
+        done[static_cast<std::size_t>(pick)] = true;
+        continue;
+      }
+      out[static_cast<std::size_t>(pick)] = a;
+      done[static_cast<std::size_t>(pick)] = false;
+      out.insert(out.begin() + pick + 1, b);
+      done.insert(done.begin() + pick + 1, false);
+    }
+    std::sort(out.begin(), out.end(), [](const Range& x, const Range& y) { return x.b < y.b; });
+  }
+
+  std::uint32_t leaf_or_node(const Range& r, std::vector<FrameBvhNode>& nodes, int depth) {
+    const std::size_t n = r.e - r.b;
+    if (n <= static_cast<std::size_t>(FrameBvhNode::leaf_max)) {
+      Range a, b;
+      if (!split(r, a, b)) return FrameBvhNode::leaf(static_cast<std::uint32_t>(r.b), static_cast<std::uint32_t>(n));
+    }
+    return make(r, nodes, depth);
+  }
+
+  // A subtree over r (more than a leaf), its nodes appended to `nodes`; returns its root index.
+  // Below depth_limit nodes split at medians (a balanced bound on the depth, which the cast's
+  // stack relies on).
+  static constexpr int depth_limit = 48;
+  std::uint32_t make(const Range& r, std::vector<FrameBvhNode>& nodes, int depth = 2) {
+    std::vector<Range> kids;
+    split_into(r, 4, kids, depth >= depth_limit);
+    if (kids.size() == 1) {  // cannot be split: one leaf per leaf_max run
+      kids.clear();
+      const std::size_t n = r.e - r.b, step = std::max<std::size_t>((n + 3) / 4, 1);
+      for (std::size_t b = r.b; b < r.e; b += step) kids.push_back(bounds_of(b, std::min(r.e, b + step)));
+    }
+    const std::size_t index = nodes.size();
+    nodes.emplace_back();
+    for (int j = 0; j < 4; ++j) {
+      std::uint32_t code = FrameBvhNode::empty;
+      float lo[3] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+                     std::numeric_limits<float>::infinity()};
+      float hi[3] = {-lo[0], -lo[1], -lo[2]};
+      if (static_cast<std::size_t>(j) < kids.size()) {
+        const Range& k = kids[static_cast<std::size_t>(j)];
+        code = leaf_or_node(k, nodes, depth + 1);
+        for (int a = 0; a < 3; ++a) {
+          lo[a] = k.lo[a];
+          hi[a] = k.hi[a];
+        }
+      }
+      FrameBvhNode& node = nodes[index];
+      for (int a = 0; a < 3; ++a) {
+        node.lo[a][j] = lo[a];
+        node.hi[a][j] = hi[a];
+      }
+      node.child[j] = code;
+    }
+    return static_cast<std::uint32_t>(index);
+  }
+
+  // The top of the tree over the ranges `tops` (in order), whose subtrees are built: the same cut
+  // of r into four as make() does, down to the ranges.
+  std::uint32_t make_top(const Range& r, const std::vector<Range>& tops, std::vector<std::vector<FrameBvhNode>>& sub,
+                         const std::vector<std::uint32_t>& sub_root, std::vector<FrameBvhNode>& nodes, std::size_t& /*next*/) {
+    // Ranges as the leaves of a top built by equal groups: four groups of up to four tops.
+    std::vector<std::uint32_t> codes(tops.size());
+    // Splice the subtrees first (their node indices shift by their offset).
+    std::vector<std::size_t> offset(tops.size());
+    const std::size_t top_nodes = 1 + (tops.size() > 4 ? (tops.size() + 3) / 4 : 0);
+    std::size_t at = top_nodes;
+    for (std::size_t t = 0; t < tops.size(); ++t) {
+      offset[t] = at;
+      at += sub[t].size();
+    }
+    nodes.resize(at);
+    for (std::size_t t = 0; t < tops.size(); ++t) {
+      std::size_t put = offset[t];
+      for (FrameBvhNode nd : sub[t]) {
+        for (int j = 0; j < 4; ++j)
+          if (nd.child[j] != FrameBvhNode::empty && !FrameBvhNode::is_leaf(nd.child[j]))
+            nd.child[j] += static_cast<std::uint32_t>(offset[t]);
+        nodes[put++] = nd;
+      }
+      codes[t] = FrameBvhNode::is_leaf(sub_root[t]) ? sub_root[t] : sub_root[t] + static_cast<std::uint32_t>(offset[t]);
+      std::vector<FrameBvhNode>().swap(sub[t]);
+    }
+    auto fill = [&](FrameBvhNode& nd, const std::uint32_t* c, const Range* rg, std::size_t count) {
+      for (int j = 0; j < 4; ++j) {
+        const bool has = static_cast<std::size_t>(j) < count;
+        for (int a = 0; a < 3; ++a) {
+          nd.lo[a][j] = has ? rg[j].lo[a] : std::numeric_limits<float>::infinity();
+          nd.hi[a][j] = has ? rg[j].hi[a] : -std::numeric_limits<float>::infinity();
+        }
+        nd.child[j] = has ? c[j] : FrameBvhNode::empty;
+      }
+    };
+    if (tops.size() <= 4) {
+      fill(nodes[0], codes.data(), tops.data(), tops.size());
+      return 0;
+    }
+    std::vector<Range> groups;
+    std::vector<std::uint32_t> gcodes;
+    for (std::size_t g = 0; g * 4 < tops.size(); ++g) {
+      const std::size_t first = g * 4, count = std::min<std::size_t>(4, tops.size() - first);
+      fill(nodes[1 + g], codes.data() + first, tops.data() + first, count);
+      Range u = tops[first];
+      for (std::size_t k = 1; k < count; ++k)
+        for (int a = 0; a < 3; ++a) {
+          u.lo[a] = std::min(u.lo[a], tops[first + k].lo[a]);
+          u.hi[a] = std::max(u.hi[a], tops[first + k].hi[a]);
+        }
+      groups.push_back(u);
+      gcodes.push_back(static_cast<std::uint32_t>(1 + g));
+    }
+    (void)r;
+    fill(nodes[0], gcodes.data(), groups.data(), groups.size());
+    return 0;
+  }
+};
+
+}  // namespace cullkit::detail::nci

@@ -1,0 +1,225 @@
+// cullkit/detail/nci/frame_tile.hpp: one screen tile served by the frame hierarchy instead of the
+// grid walk (NciCrowdedPath): the tile's rays are set up as for the walk, cast in packets of 8x8
+// through the hierarchy (frame_cast.hpp), four packets taking turns, and every triangle of a leaf
+// a packet reaches goes through the walk's own steps: the frame's cached screen rectangle (which
+// holds the front-face rule), then test_triangle (depth rejects, corner-ray planes, footprint, the
+// watertight test, ties to the lower mesh index, edge-band records). The per-pixel answer is the
+// walk's: the same triangles reach test_triangle for every ray that could report them.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+
+#include "frame_cast.hpp"
+#include "slice_walk.hpp"
+
+namespace cullkit::detail::nci {
+
+// detail::faces_eye (the eye strictly on the front side of the triangle's plane, in double) from
+// the corners relative to the eye in float (a, b, c) where their triple product is clear of its
+// rounding by a factor of 2^8 (the corners' own rounding, 2^-24 of each, and the products'); the
+// double test otherwise. The same answer as faces_eye, at float cost for all but near edge-on
+// triangles.
+[[nodiscard]] inline bool faces_eye_fast(const float a[3], const float b[3], const float c[3], const glm::vec3& p0,
+                                         const glm::vec3& p1, const glm::vec3& p2, const glm::dvec3& eye) noexcept {
+  const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const float n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  const float side = -(n[0] * a[0] + n[1] * a[1] + n[2] * a[2]);
+  const float la = std::fabs(a[0]) + std::fabs(a[1]) + std::fabs(a[2]);
+  const float lb = std::fabs(b[0]) + std::fabs(b[1]) + std::fabs(b[2]) + la;
+  const float lc = std::fabs(c[0]) + std::fabs(c[1]) + std::fabs(c[2]) + la;
+  const float err = 0x1p-16f * la * lb * lc;
+  if (std::isfinite(err) && err > 0x1p-100f) {
+    if (side > err) return true;
+    if (side < -err) return false;
+  }
+  return detail::faces_eye(p0, p1, p2, eye);
+}
+
+// What a leaf of the frame hierarchy does for one packet: prefetch its entries when it is pushed;
+// phase 0: load them and prefetch the triangles' vertex ids and cached rectangles; phase 1: load
+// the vertex ids and prefetch the corners; then the test.
+struct FrameLeaf {
+  static constexpr std::uint32_t phases = 2;
+  const IndexData& data;
+  const ViewSetup& f;
+  TileState& r;
+  Worker& worker;
+  FrameSlot& slot;
+  const std::uint8_t* class_on;  // per class: it may face some live ray of the tile (select_classes)
+  std::size_t& met;
+
+  // Whether internal triangle tri's class may face a ray of the tile: classes are runs of ids, found
+  // by a branch-free binary search of class_tri_begin.
+  [[nodiscard]] bool active(std::uint32_t tri) const {
+    const std::uint32_t* b = data.class_tri_begin.data();
+    std::size_t lo = 0, n = data.class_tri_begin.size() - 1;  // the class lies in [lo, lo + n)
+    while (n > 1) {
+      const std::size_t half = n / 2;
+      lo = b[lo + half] <= tri ? lo + half : lo;
+      n -= half;
+    }
+    return class_on[lo] != 0;
+  }
+
+  void prefetch(std::uint32_t first, std::uint32_t) const { __builtin_prefetch(data.frame.tris.data() + first); }
+
+  // Phase 0 finds the triangles of active classes (bit q of the carry: triangle first + q) and
+  // prefetches their vertex ids; phase 1 prefetches their corners.
+  std::uint32_t prepare(std::uint32_t first, std::uint32_t count, std::uint32_t phase, std::uint32_t carry) const {
+    if (phase == 0) carry = 0;
+    for (std::uint32_t q = 0; q < count; ++q) {
+      const std::uint32_t tri = data.frame.tris[first + q];
+      const std::size_t v = 3 * std::size_t{tri};
+      if (phase == 0) {
+        if (!active(tri)) continue;
+        carry |= 1u << q;
+        if (data.tri_vertices.empty()) __builtin_prefetch(&data.tri_vertices16[v]);
+        else __builtin_prefetch(&data.tri_vertices[v]);
+      } else if (carry >> q & 1u) {
+        for (int k = 0; k < 3; ++k) __builtin_prefetch(&data.corner(tri, k));
+      }
+    }
+    return carry;
+  }
+
+  void test(std::uint32_t first, std::uint32_t count, std::uint64_t mask, std::uint32_t carry) {
+    FramePacket& p = slot.p;
+    const int stride = r.stride;
+    // The leaf's triangles nearest first along the packet's mean ray (as the walk sorts its
+    // candidates), so that near hits let the depth rejects drop the triangles behind them.
+    std::uint32_t order[FrameBvhNode::leaf_max];
+    float key[FrameBvhNode::leaf_max];
+    std::uint32_t kept = 0;
+    for (std::uint32_t q = 0; q < count; ++q) {
+      if (!(carry >> q & 1u)) continue;  // a back face for every ray of the tile
+      const std::uint32_t tri = data.frame.tris[first + q];
+      float k = std::numeric_limits<float>::infinity();
+      for (int c = 0; c < 3; ++c) {
+        const glm::vec3 d = data.corner(tri, c) - f.eye_f;
+        k = std::min(k, d.x * slot.dir[0] + d.y * slot.dir[1] + d.z * slot.dir[2]);
+      }
+      std::uint32_t at = kept++;
+      for (; at > 0 && (key[at - 1] > k || (key[at - 1] == k && order[at - 1] > tri)); --at) {
+        key[at] = key[at - 1];
+        order[at] = order[at - 1];
+      }
+      key[at] = k;
+      order[at] = tri;
+    }
+    for (std::uint32_t q = 0; q < kept; ++q) {
+      const std::uint32_t tri = order[q];
+      ++met;
+      const glm::vec3 &p0 = data.corner(tri, 0), &p1 = data.corner(tri, 1), &p2 = data.corner(tri, 2);
+      // Corners relative to the eye as test_triangle takes them.
+      const float ta[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};
+      const float tb[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
+      const float tc[3] = {p2.x - f.eye_f.x, p2.y - f.eye_f.y, p2.z - f.eye_f.z};
+      if (!faces_eye_fast(ta, tb, tc, p0, p1, p2, f.eye)) {
+        ++worker.stats.triangles_no_pixel;
+        continue;
+      }
+      const float mag[3] = {std::max({std::fabs(ta[0]), std::fabs(ta[1]), std::fabs(ta[2])}),
+                            std::max({std::fabs(tb[0]), std::fabs(tb[1]), std::fabs(tb[2])}),
+                            std::max({std::fabs(tc[0]), std::fabs(tc[1]), std::fabs(tc[2])})};
+      const float qlo[3] = {std::min({ta[0], tb[0], tc[0]}), std::min({ta[1], tb[1], tc[1]}), std::min({ta[2], tb[2], tc[2]})};
+      const float qhi[3] = {std::max({ta[0], tb[0], tc[0]}), std::max({ta[1], tb[1], tc[1]}), std::max({ta[2], tb[2], tc[2]})};
+      // The triangle's box grown as the hierarchy's boxes are (frame_box_growth).
+      const float grow = std::max({mag[0], mag[1], mag[2]}) * frame_box_growth;
+      const float glo[3] = {qlo[0] - grow, qlo[1] - grow, qlo[2] - grow};
+      const float ghi[3] = {qhi[0] + grow, qhi[1] + grow, qhi[2] + grow};
+      bool reached = false, any = false;
+      for (std::uint64_t m = mask; m; m &= m - 1) {
+        const int k = __builtin_ctzll(m);
+        const int i = (slot.by + k / 8) * stride + slot.bx + k % 8;
+        if (!frame_ray_meets(p, k, glo, ghi)) continue;
+        reached = true;
+        if (ray_behind(r, i, qlo, qhi)) continue;
+        any = true;
+        test_ray(data, r, worker, i, tri, ta, tb, tc, mag);
+      }
+      if (!reached) ++worker.stats.triangles_no_pixel;  // between the packet's pixel centres
+      if (!any) continue;
+      worker.tested_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
+      ++worker.tested_count;  // (triangle, packet) pairs: a triangle is met once per packet
+    }
+    for (std::uint64_t m = mask; m; m &= m - 1) {
+      const int k = __builtin_ctzll(m);
+      p.t[k] = r.solid_t[(slot.by + k / 8) * stride + slot.bx + k % 8];
+    }
+  }
+};
+
+// Opens the next 8x8 block of the tile that holds live rays into `slot`; false when none is left.
+inline bool open_frame_block(const IndexData& data, const TileState& r, const Mask* live, int tw, int th, int& next,
+                             FrameSlot& slot) {
+  const int nbx = (tw + 7) / 8, nby = (th + 7) / 8;
+  while (next < nbx * nby) {
+    const int b = next++;
+    slot.bx = (b % nbx) * 8;
+    slot.by = (b / nbx) * 8;
+    slot.bw = std::min(8, tw - slot.bx);
+    slot.bh = std::min(8, th - slot.by);
+    std::uint64_t packet = 0;
+    slot.dir[0] = slot.dir[1] = slot.dir[2] = 0.0f;
+    for (int j = 0; j < slot.bh; ++j) {
+      const Mask bits = (live[slot.by + j] >> slot.bx) & TileState::columns(0, slot.bw - 1);
+      for (Mask m = bits; m; m &= m - 1) {
+        const int x = TileState::low_bit(m), k = 8 * j + x, i = (slot.by + j) * r.stride + slot.bx + x;
+        slot.p.ix[k] = frame_inverse(r.dx[i]);
+        slot.p.iy[k] = frame_inverse(r.dy[i]);
+        slot.p.iz[k] = frame_inverse(r.dz[i]);
+        slot.p.t[k] = r.solid_t[i];
+        slot.dir[0] += r.dx[i];
+        slot.dir[1] += r.dy[i];
+        slot.dir[2] += r.dz[i];
+      }
+      packet |= static_cast<std::uint64_t>(bits) << (8 * j);
+    }
+    if (!packet) continue;
+    slot.cur.start(data.frame, packet);
+    slot.busy = true;
+    return true;
+  }
+  return false;
+}
+
+// One screen tile (x0, y0)..(x1, y1) through the frame hierarchy: the same outputs as
+// process_tile (slice_walk.hpp).
+inline void process_tile_frame(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
+                               Worker& worker, Scratch& scratch) {
+  if (write_if_off_scene(f, x0, y0, x1, y1, scratch)) return;
+  const int tw = x1 - x0, th = y1 - y0;
+  r.stride = (tw + 3) & ~3;
+  TileMasks m;
+  const glm::dvec3 cone_sum = setup_rays(data, f, x0, y0, tw, th, r, m);
+  select_classes(data, r, tw, th, m.live, cone_sum, worker.active_classes);
+  worker.class_on.assign(data.class_axis.size(), 0u);
+  for (const std::uint16_t k : worker.active_classes) worker.class_on[k] = 1u;
+  ++worker.stats.tiles_ray_cast;
+  if (worker.frame_slots.size() != frame_turns) worker.frame_slots.resize(frame_turns);
+  const float eye[3] = {f.eye_f.x, f.eye_f.y, f.eye_f.z};
+  std::size_t met = 0;
+  FrameCastStats cast;
+  int next = 0, active = 0;
+  for (FrameSlot& slot : worker.frame_slots) {
+    slot.busy = false;
+    active += open_frame_block(data, r, m.live, tw, th, next, slot);
+  }
+  while (active > 0) {
+    for (FrameSlot& slot : worker.frame_slots) {
+      if (!slot.busy) continue;
+      FrameLeaf leaf{data, f, r, worker, slot, worker.class_on.data(), met};
+      frame_cursor_step(data.frame, eye, slot.p, slot.cur, leaf, cast);
+      if (!slot.cur.done()) continue;
+      slot.busy = false;
+      if (!open_frame_block(data, r, m.live, tw, th, next, slot)) --active;
+    }
+  }
+  worker.stats.triangles_met += met;
+  collect_edge_band(f, r, x0, y0, tw, th, worker);
+  write_tile(f, r, x0, y0, tw, th, scratch, worker);
+}
+
+}  // namespace cullkit::detail::nci
