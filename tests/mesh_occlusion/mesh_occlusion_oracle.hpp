@@ -49,6 +49,17 @@ struct TestScene {
   }
 };
 
+/// Adds a grid of nu x nv quads spanning the parallelogram origin + [0,1] u + [0,1] v to the
+/// current object, counter-clockwise seen from the side u x v points to.
+inline void grid_quads(TestScene& s, const glm::vec3& origin, const glm::vec3& u, const glm::vec3& v, int nu, int nv) {
+  const auto at = [&](int i, int j) { return origin + u * (float(i) / float(nu)) + v * (float(j) / float(nv)); };
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      s.triangle(at(i, j), at(i + 1, j), at(i + 1, j + 1));
+      s.triangle(at(i, j), at(i + 1, j + 1), at(i, j + 1));
+    }
+}
+
 /// The near side of a camera: a point counts only if dot(p - eye, forward) > near.
 struct NearSide {
   glm::dvec3 eye, forward;

@@ -22,16 +22,10 @@ using mesh_oracle::TestScene;
 
 namespace {
 
-// A planar grid of nu x nv quads from `origin` along u and v (counter-clockwise seen from the side
-// u x v points to), as one object.
+// A planar grid of quads as one object (mesh_oracle::grid_quads).
 void quad_grid(TestScene& s, const glm::vec3& origin, const glm::vec3& u, const glm::vec3& v, int nu, int nv) {
   s.begin_object();
-  const auto at = [&](int i, int j) { return origin + u * (float(i) / float(nu)) + v * (float(j) / float(nv)); };
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      s.triangle(at(i, j), at(i + 1, j), at(i + 1, j + 1));
-      s.triangle(at(i, j), at(i + 1, j + 1), at(i, j + 1));
-    }
+  mesh_oracle::grid_quads(s, origin, u, v, nu, nv);
 }
 
 struct Variant {

@@ -27,15 +27,7 @@ using mesh_oracle::TestScene;
 
 namespace {
 
-// A grid of quads spanning the parallelogram origin + [0,1] u + [0,1] v, facing u x v.
-void grid_quads(TestScene& s, const glm::vec3& origin, const glm::vec3& u, const glm::vec3& v, int nu, int nv) {
-  const auto at = [&](int i, int j) { return origin + u * (float(i) / float(nu)) + v * (float(j) / float(nv)); };
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      s.triangle(at(i, j), at(i + 1, j), at(i + 1, j + 1));
-      s.triangle(at(i, j), at(i + 1, j + 1), at(i, j + 1));
-    }
-}
+using mesh_oracle::grid_quads;
 
 struct Tally {
   int targets = 0, hidden = 0, violations = 0;
