@@ -29,19 +29,27 @@
 //                  separately timed pass with the step probes on; shares of that pass times the median above).
 //   --scene=TEXT   only the scenes whose name contains TEXT (each scene keeps the cameras of a full run).
 //   --grid=WxH     the culler's grid size; overrides GW and GH.
+//   --split-edges=LEN  the real scenes with every edge longer than LEN (scene units) split at its midpoint,
+//                  until none is (a conforming subdivision: both triangles of an edge split it at the same
+//                  new vertex, so no crack or T-junction appears). The same surfaces in more, smaller
+//                  triangles: what an occluder's depth extent costs the culler.
 // The environment variables GW, GH, BUDGET, RATIO, MINFRAC, PATCH, OBJTRI and TJUNCTIONS override the
 // culler's parameters (grid size, occluder triangle budget, depth band ratio, occluder size floor,
 // patch size, triangle-test patch size, T-junction cuts 0/1) in every mode, for measuring alternatives without rebuilding;
 // --grid, given too, wins over GW and GH.
 // CULLKIT_BENCH_SMOKE=1: the small generated city, 2 cameras, 320x180, 1 rep.
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include <glm/geometric.hpp>
 
 #include <cullkit/occlusion_culling.hpp>
 
@@ -124,10 +132,12 @@ std::vector<std::uint8_t> embree_frame(const CullScene& cs, const ObjectMap& map
 ///   box     then hidden when tested with its own front-facing triangles instead of its box;
 ///   other   none of these: seams that do not fuse (cracks, overlapping parts), gaps between
 ///           pixel centres, the part of an occluder within the clipping margin of the near plane,
-///           back faces.
+///           back faces; or covered cells whose depth bound lies beyond the object. Split by the
+///           cells that fail the idealised triangle test: `other_open` when some of them is not
+///           covered at all, `other_depth` when all are covered but behind a bound too far.
 /// "Alone": each of supply, depth, grid, box applied on its own to the default culler.
 struct Reasons {
-  double excess = 0, near = 0, supply = 0, depth = 0, grid = 0, box = 0, other = 0;
+  double excess = 0, near = 0, supply = 0, depth = 0, grid = 0, box = 0, other = 0, other_open = 0, other_depth = 0;
   double alone_supply = 0, alone_depth = 0, alone_grid = 0, alone_box = 0;
 };
 
@@ -189,7 +199,10 @@ class ReasonProbe {
       else if (hid_sd[o]) r.depth += share;
       else if (hid_all[o]) r.grid += share;
       else if (triangles_hidden(cam, fine_scratch, o)) r.box += share;
-      else r.other += share;
+      else {
+        r.other += share;
+        (some_cell_open(fine_scratch, o) ? r.other_open : r.other_depth) += share;
+      }
     }
   }
 
@@ -228,6 +241,36 @@ class ReasonProbe {
       if (!rect.empty() && !(std::isfinite(threshold) && s.grid.all_nearer(rect, threshold))) return false;
     }
     return true;
+  }
+
+  // True when some cell that fails the triangle test of object o (as in triangles_hidden) is not
+  // covered at all; false when every such cell is covered, behind a depth bound too far.
+  bool some_cell_open(const dmo::Scratch& s, std::uint32_t o) const {
+    if (!s.view.enabled) return true;
+    const auto& so = scene_.objects[o];
+    for (std::uint32_t t = so.first_triangle; t < so.first_triangle + so.triangle_count; ++t) {
+      double x[3], y[3], w[3];
+      bool usable = true;
+      for (int k = 0; k < 3; ++k) {
+        const glm::vec3& p = scene_.positions[scene_.indices[3 * std::size_t(t) + std::size_t(k)]];
+        const dmo::Projected q = s.view.project(p.x, p.y, p.z);
+        usable = usable && q.usable;
+        x[k] = q.x;
+        y[k] = q.y;
+        w[k] = q.w;
+      }
+      if (!usable) return true;
+      const double area2 = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+      if (area2 * s.view.orient < 0.0) continue;
+      const dmo::CellRect rect = s.grid.cells_of(std::min({x[0], x[1], x[2]}), std::min({y[0], y[1], y[2]}),
+                                                 std::max({x[0], x[1], x[2]}), std::max({y[0], y[1], y[2]}));
+      const float threshold = static_cast<float>((1.0 / std::min({w[0], w[1], w[2]})) * (1.0 + 0x1p-20));
+      if (rect.empty() || !std::isfinite(threshold) || s.grid.all_nearer(rect, threshold)) continue;
+      for (int j = rect.y0; j <= rect.y1; ++j)
+        for (int i = rect.x0; i <= rect.x1; ++i)
+          if (!s.grid.all_nearer(dmo::CellRect{i, j, i, j}, 0.0f)) return true;
+    }
+    return false;
   }
 
   const support::Scene& scene_;
@@ -304,9 +347,10 @@ Row measure(const std::string& name, const CullScene& cs, const std::vector<Came
   row.occluders /= n;
   row.occluder_triangles /= n;
   if (reasons) {
-    double* fields[] = {&reasons->excess, &reasons->near, &reasons->supply, &reasons->depth, &reasons->grid,
-                        &reasons->box, &reasons->other, &reasons->alone_supply, &reasons->alone_depth,
-                        &reasons->alone_grid, &reasons->alone_box};
+    double* fields[] = {&reasons->excess,       &reasons->near,        &reasons->supply,      &reasons->depth,
+                        &reasons->grid,         &reasons->box,         &reasons->other,       &reasons->other_open,
+                        &reasons->other_depth,  &reasons->alone_supply, &reasons->alone_depth, &reasons->alone_grid,
+                        &reasons->alone_box};
     for (double* f : fields) *f /= n;
   }
   row.seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
@@ -386,7 +430,83 @@ void print_reasons(const std::vector<Row>& rows, const std::vector<Reasons>& rea
                 100 * r.supply, 100 * r.depth, 100 * r.grid, 100 * r.box, 100 * r.other, 100 * r.alone_supply,
                 100 * r.alone_depth, 100 * r.alone_grid, 100 * r.alone_box);
   }
+  std::printf("\n\"other\" by the cells that fail the idealised triangle test: some not covered at all, or all covered "
+              "behind a depth bound beyond the object:\n\n| scene | other | not covered | covered, bound too far |\n"
+              "|---|---:|---:|---:|\n");
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    if (rows[i].has_reasons)
+      std::printf("| %s | %.2f | %.2f | %.2f |\n", rows[i].scene.c_str(), 100 * reasons[i].other,
+                  100 * reasons[i].other_open, 100 * reasons[i].other_depth);
   std::fflush(stdout);
+}
+
+/// --split-edges: the scene with every edge longer than `len` split at its midpoint, round after
+/// round until none is. A triangle splits the edges that are too long and only those (into 2, 3 or 4
+/// triangles), and an edge's midpoint is one vertex shared by both its triangles, so the mesh stays
+/// as connected as it was. Objects keep their triangles, in more pieces.
+support::Scene split_edges(const support::Scene& in, float len) {
+  support::Scene out;
+  out.name = in.name;
+  std::vector<glm::vec3> pos = in.positions;  // the scene's vertices, then the midpoints
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> midpoints;
+  const auto too_long = [&](std::uint32_t a, std::uint32_t b) {
+    return glm::length(pos[a] - pos[b]) > len;
+  };
+  const auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
+    const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+    const auto it = midpoints.find(key);
+    if (it != midpoints.end()) return it->second;
+    pos.push_back(0.5f * (pos[key.first] + pos[key.second]));
+    const auto v = static_cast<std::uint32_t>(pos.size() - 1);
+    midpoints.emplace(key, v);
+    return v;
+  };
+  std::vector<std::array<std::uint32_t, 3>> tris, next;
+  for (const support::SceneObject& o : in.objects) {
+    tris.clear();
+    for (std::uint32_t t = o.first_triangle; t < o.first_triangle + o.triangle_count; ++t)
+      tris.push_back({in.indices[3 * std::size_t(t)], in.indices[3 * std::size_t(t) + 1], in.indices[3 * std::size_t(t) + 2]});
+    for (bool again = true; again;) {
+      again = false;
+      next.clear();
+      for (std::array<std::uint32_t, 3> c : tris) {
+        bool split[3] = {too_long(c[0], c[1]), too_long(c[1], c[2]), too_long(c[2], c[0])};
+        const int n = int(split[0]) + int(split[1]) + int(split[2]);
+        if (n == 0) {
+          next.push_back(c);
+          continue;
+        }
+        again = true;
+        if (n == 3) {
+          const std::uint32_t ab = midpoint(c[0], c[1]), bc = midpoint(c[1], c[2]), ca = midpoint(c[2], c[0]);
+          next.insert(next.end(), {{c[0], ab, ca}, {ab, c[1], bc}, {ca, bc, c[2]}, {ab, bc, ca}});
+          continue;
+        }
+        // Turn the corners so that the split edges come first (edge 0, then edge 1 if two).
+        while (!split[0] || (n == 2 && !split[1])) {
+          c = {c[1], c[2], c[0]};
+          const bool s0 = split[0];
+          split[0] = split[1];
+          split[1] = split[2];
+          split[2] = s0;
+        }
+        const std::uint32_t ab = midpoint(c[0], c[1]);
+        if (n == 1) {
+          next.insert(next.end(), {{c[0], ab, c[2]}, {ab, c[1], c[2]}});
+        } else {
+          const std::uint32_t bc = midpoint(c[1], c[2]);
+          next.insert(next.end(), {{ab, c[1], bc}, {c[0], ab, bc}, {c[0], bc, c[2]}});
+        }
+      }
+      tris.swap(next);
+    }
+    std::vector<glm::vec3> corners;
+    for (const auto& c : tris)
+      for (std::uint32_t v : c) corners.push_back(pos[v]);
+    const std::uint32_t k = out.add_triangles(corners, o.name);
+    out.objects[k].major_occluder = o.major_occluder;
+  }
+  return out;
 }
 
 // ---- --hash / --phases: the culler alone, its answers as a hash and its time per step ----
@@ -406,6 +526,7 @@ struct Flags {
   bool reasons = false, hash = false, phases = false;
   std::string scene;
   int grid_width = 0, grid_height = 0;
+  float split_edges = 0.0f;
 };
 
 void culler_only(const std::string& name, const CullScene& cs, const std::vector<Camera>& cams, int reps,
@@ -479,6 +600,8 @@ int main(int argc, char** argv) {
       else if (arg == "--hash") flags.hash = true;
       else if (arg == "--phases") flags.hash = flags.phases = true;
       else if (arg.rfind("--scene=", 0) == 0) flags.scene = arg.substr(8);
+      else if (arg.rfind("--split-edges=", 0) == 0 && (flags.split_edges = std::strtof(arg.c_str() + 14, nullptr)) > 0.0f) {
+      }
       else if (arg.rfind("--grid=", 0) == 0 && std::sscanf(arg.c_str() + 7, "%dx%d", &flags.grid_width, &flags.grid_height) == 2 &&
                flags.grid_width > 0 && flags.grid_height > 0) {
       } else {
@@ -491,7 +614,7 @@ int main(int argc, char** argv) {
     if (v <= 0 || positional >= 4) {
       std::fprintf(stderr,
                    "usage: %s [cameras=60] [width=1920] [height=1080] [reps=3] [--reasons] [--hash] [--phases] "
-                   "[--scene=TEXT] [--grid=WxH]\n",
+                   "[--scene=TEXT] [--grid=WxH] [--split-edges=LEN]\n",
                    argv[0]);
       return 2;
     }
@@ -546,7 +669,7 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "%s: could not be loaded, skipped\n", file.c_str());
         continue;
       }
-      run(file, std::move(*s), scene_seed);
+      run(file, flags.split_edges > 0.0f ? split_edges(*s, flags.split_edges) : std::move(*s), scene_seed);
     }
   }
   if (flags.hash) return 0;
