@@ -13,3 +13,5 @@ cullkit_add_test(test_mesh_occlusion_nearclip SOURCES ${CMAKE_CURRENT_LIST_DIR}/
 cullkit_add_test(test_mesh_occlusion_tjunctions SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_tjunctions.cpp)
 # Per-patch layers: a wall standing on a floor that goes in before it; the control without them.
 cullkit_add_test(test_mesh_occlusion_layers SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_layers.cpp TIMEOUT 300)
+# Objects long in depth behind a slanted occluder: hidden cell by cell, not by their rectangle.
+cullkit_add_test(test_mesh_occlusion_slanted SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_slanted.cpp TIMEOUT 300)

@@ -368,6 +368,49 @@ class CoverageGrid {
     return true;
   }
 
+  /// True when every cell the triangle (grid corners x, y, depths w, all beyond the near plane)
+  /// touches is covered nearer than any point of the triangle in that cell. Per cell, the
+  /// triangle's inverse depth is at most its plane's largest value over the cell (1/w is affine on
+  /// screen over a plane) and at most its nearest corner's: a big triangle seen at a slant is held
+  /// to its own depth cell by cell, not to its nearest corner's everywhere on its rectangle.
+  [[nodiscard]] bool triangle_behind(const double* x, const double* y, const double* w) const {
+    const double xmin = std::min(std::min(x[0], x[1]), x[2]), xmax = std::max(std::max(x[0], x[1]), x[2]);
+    const double ymin = std::min(std::min(y[0], y[1]), y[2]), ymax = std::max(std::max(y[0], y[1]), y[2]);
+    const CellRect r = cells_of(xmin, ymin, xmax, ymax);
+    if (r.empty()) return true;  // it meets no ray through the frustum
+    const double m = cell_margin(std::max(std::max(std::fabs(xmin), std::fabs(xmax)), std::max(std::fabs(ymin), std::fabs(ymax))));
+    const TriangleEdges edges = edges_of(x, y);
+    const double w_min = std::min(std::min(w[0], w[1]), w[2]);
+    const double highest = (1.0 / w_min) * (1.0 + 0x1p-20);
+    if (!std::isfinite(highest)) return false;
+    // The plane's inverse depth at the corner of cell (r.x0, r.y0) that maximizes it, then a per
+    // column and b per row, plus the rounding of the solve (as add_depth's, the other way).
+    double v00 = HUGE_VAL, a = 0.0, b = 0.0;
+    const double area2 = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+    const double extent = std::max(xmax - xmin, ymax - ymin);
+    if (std::fabs(area2) > 1e-6 * extent * extent) {
+      const double inv[3] = {1.0 / w[0], 1.0 / w[1], 1.0 / w[2]};
+      a = ((inv[1] - inv[0]) * (y[2] - y[0]) - (inv[2] - inv[0]) * (y[1] - y[0])) / area2;
+      b = ((x[1] - x[0]) * (inv[2] - inv[0]) - (x[2] - x[0]) * (inv[1] - inv[0])) / area2;
+      const double v = inv[0] + a * (r.x0 + (a > 0.0 ? 1.0 : 0.0) - x[0]) + b * (r.y0 + (b > 0.0 ? 1.0 : 0.0) - y[0]);
+      const double span = std::fabs(a) * (r.x1 - r.x0 + 1) + std::fabs(b) * (r.y1 - r.y0 + 1);
+      const double inv_max = std::max(std::max(inv[0], inv[1]), inv[2]);
+      const double err = 0x1p-19 * (std::fabs(v) + span + inv_max) + 1e-12 * inv_max * (1.0 + extent * extent / std::fabs(area2));
+      if (std::isfinite(v) && std::isfinite(err) && std::isfinite(a) && std::isfinite(b)) v00 = v + err;
+    }
+    for (int j = r.y0; j <= r.y1; ++j) {
+      int i0, i1;
+      if (!row_span(edges, j, m, i0, i1)) continue;
+      const float* row = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+      const double start = v00 + b * (j - r.y0);
+      for (int i = i0; i <= i1; ++i) {
+        const double upper = std::min(highest, start + a * (i - r.x0));
+        if (!(static_cast<double>(row[i]) > upper)) return false;
+      }
+    }
+    return true;
+  }
+
   /// True when every cell the box of the n corners touches (with a margin) is covered already.
   [[nodiscard]] bool all_frozen(const double* x, const double* y, int n = 3) const {
     double xmin = x[0], xmax = x[0], ymin = y[0], ymax = y[0];

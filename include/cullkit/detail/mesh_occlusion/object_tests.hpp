@@ -130,13 +130,14 @@ inline bool patch_triangles_hidden(const MeshIndex& index, Scratch& s, const Pat
   for (std::uint32_t k = patch.first; k < patch.first + patch.count; ++k) {
     const std::uint32_t* c = &index.corners[3 * std::size_t(index.patches.triangles[k])];
     BoxView b{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, HUGE_VAL, true};
-    double x[3], y[3];
+    double x[3], y[3], w[3];
     bool usable = true;
     for (int v = 0; v < 3 && usable; ++v) {
       const Projected& p = project_vertex(index, s, c[v]);
       usable = p.usable;  // else through the near plane: tested below
       x[v] = p.x;
       y[v] = p.y;
+      w[v] = p.w;
       b.x0 = std::min(b.x0, p.x);
       b.x1 = std::max(b.x1, p.x);
       b.y0 = std::min(b.y0, p.y);
@@ -152,7 +153,8 @@ inline bool patch_triangles_hidden(const MeshIndex& index, Scratch& s, const Pat
     const double area2 = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
     const double extent = std::max(b.x1 - b.x0, b.y1 - b.y0);
     if (area2 * s.view.orient < -1e-9 * extent * extent) continue;
-    if (!rect_hidden(s.grid, b)) return false;
+    // Its rectangle at its nearest depth first (tile minima make it cheap), then cell by cell.
+    if (!rect_hidden(s.grid, b) && !s.grid.triangle_behind(x, y, w)) return false;
   }
   return true;
 }
