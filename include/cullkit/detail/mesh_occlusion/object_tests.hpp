@@ -121,7 +121,15 @@ inline bool crossing_triangle_hidden(const MeshIndex& index, const Scratch& s, c
   // Rounding of the interpolation, far inside this margin (rect_hidden adds its own 2^-20).
   b.w_min = 1.0 / (iw_max * (1.0 + 0x1p-30));
   const bool finite = std::isfinite(b.x0) && std::isfinite(b.x1) && std::isfinite(b.y0) && std::isfinite(b.y1);
-  return finite && std::isfinite(b.w_min) && b.w_min > 0.0 && rect_hidden(s.grid, b);
+  if (!finite || !std::isfinite(b.w_min) || !(b.w_min > 0.0)) return false;
+  if (rect_hidden(s.grid, b)) return true;
+  // Cell by cell, as a fan of triangles in the triangle's plane, with the same rounding margin.
+  for (int f = 1; f + 1 < n; ++f) {
+    const double fx[3] = {x[0], x[f], x[f + 1]}, fy[3] = {y[0], y[f], y[f + 1]};
+    const double fw[3] = {1.0 / (iw[0] * (1.0 + 0x1p-30)), 1.0 / (iw[f] * (1.0 + 0x1p-30)), 1.0 / (iw[f + 1] * (1.0 + 0x1p-30))};
+    if (!s.grid.triangle_behind(fx, fy, fw)) return false;
+  }
+  return true;
 }
 
 /// True when each of the patch's triangles is clearly back-facing (no ray sees its front) or hidden
