@@ -156,21 +156,22 @@ inline void gather_triangles(const MeshIndex& index, Scratch& s) {
       double wmax = w[0];
       for (int k = 1; k < n; ++k) wmax = std::max(wmax, w[k]);
       double key_w = inside != 7u ? wmax : wmin;
-      // A part of a cut triangle goes in only when every corner of the whole triangle is beyond the
-      // clipping level (then so is every part, unclipped), and sorts as the whole (by the whole's
-      // nearest corner): the parts then share a band and their inner edges cancel within it. Parts
-      // of a triangle that reaches the near plane are left out with it: inserted alone, their inner
-      // edges would be outline across cells that nearer occluders cover (measured: fzk_haus kept
-      // more).
+      // A part of a cut triangle sorts as the whole, so that the parts share a band and their inner
+      // edges cancel within it: by the whole's nearest corner, or, when the whole reaches the
+      // clipping level (then each part is clipped on its own, at the same points on shared edges),
+      // by the whole's farthest corner, as a clipped polygon goes in.
       if (!index.parts.whole.empty() && index.parts.whole[t] != none) {
         const std::uint32_t* whole = &index.parts.whole_corners[3 * std::size_t(index.parts.whole[t])];
         bool whole_inside = true;
-        for (int k = 0; k < 3 && whole_inside; ++k) {
+        double whole_far = -HUGE_VAL;
+        for (int k = 0; k < 3; ++k) {
           const Projected& p = project_vertex(index, s, whole[k]);
-          whole_inside = p.inside;
-          key_w = std::min(key_w, p.w);
+          whole_inside = whole_inside && p.inside;
+          if (whole_inside) key_w = std::min(key_w, p.w);
+          const glm::vec3& at = index.positions[whole[k]];
+          whole_far = std::max(whole_far, s.view.depth(at.x, at.y, at.z));
         }
-        if (!whole_inside) continue;
+        if (!whole_inside) key_w = whole_far;
       }
       const float key = static_cast<float>(key_w);
       std::uint32_t bits;

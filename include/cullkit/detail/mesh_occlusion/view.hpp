@@ -158,6 +158,12 @@ struct View {
     return out.usable;
   }
 
+  /// Depth w of a world point, as `project` measures it, for any point (also one not usable).
+  [[nodiscard]] double depth(double px, double py, double pz) const {
+    const double qx = px - eye[0], qy = py - eye[1], qz = pz - eye[2];
+    return row[2][0] * qx + row[2][1] * qy + row[2][2] * qz;
+  }
+
   /// Projects a world point.
   [[nodiscard]] Projected project(double px, double py, double pz) const {
     const double qx = px - eye[0], qy = py - eye[1], qz = pz - eye[2];
