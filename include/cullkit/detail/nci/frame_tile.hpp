@@ -141,7 +141,7 @@ struct FrameLeaf {
       }
       if (!reached) ++worker.stats.triangles_no_pixel;  // between the packet's pixel centres
       if (!any) continue;
-      worker.tested_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
+      worker.mark_tested(tri);
       ++worker.tested_count;  // (triangle, packet) pairs: a triangle is met once per packet
     }
     for (std::uint64_t m = mask; m; m &= m - 1) {
