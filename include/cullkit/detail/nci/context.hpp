@@ -66,8 +66,9 @@ struct Worker {
   // triangles it tested and the ones it selected (pixel winners and edge-band extras). The merge
   // ORs them: no serial pass over the pixels, no sort.
   std::vector<std::uint64_t> tested_bits, shown_bits;
-  // One bit per 64 words of tested_bits and shown_bits: the words either set bits in, so that
-  // the merge reads those words only (a frame of a large index touches a small share of them).
+  // One bit per 64 words of tested_bits and shown_bits, set with any bit of those words, so that
+  // the merge reads only the words a frame wrote instead of all of them (their count grows with
+  // the index, the written ones with the frame).
   std::vector<std::uint64_t> touched;
   void mark_tested(std::uint32_t tri) noexcept {
     tested_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
