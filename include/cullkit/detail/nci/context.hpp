@@ -66,6 +66,18 @@ struct Worker {
   // triangles it tested and the ones it selected (pixel winners and edge-band extras). The merge
   // ORs them: no serial pass over the pixels, no sort.
   std::vector<std::uint64_t> tested_bits, shown_bits;
+  // One bit per 64 words of tested_bits and shown_bits, set with any bit of those words, so that
+  // the merge reads only the words a frame wrote instead of all of them (their count grows with
+  // the index, the written ones with the frame).
+  std::vector<std::uint64_t> touched;
+  void mark_tested(std::uint32_t tri) noexcept {
+    tested_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
+    touched[tri / 4096] |= std::uint64_t{1} << (tri / 64 % 64);
+  }
+  void mark_shown(std::uint32_t tri) noexcept {
+    shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
+    touched[tri / 4096] |= std::uint64_t{1} << (tri / 64 % 64);
+  }
   std::uint32_t tested_count = 0;  // ray-tested (triangle, tile) pairs so far in this call
   std::vector<EdgeBandHit> edge_hits;
   std::vector<Extra> extra;  // selected beside the pixels' first hits (edge hits, solid)
@@ -87,6 +99,7 @@ struct Scratch {
   std::vector<float> pixel_solid_t;       // per pixel: the nearest hit outside every edge band
   std::vector<Extra> extras;              // the last call's Worker::extra, in the mesh's numbering
   std::vector<std::uint64_t> shown_mesh;  // the merge's selected set as a bit set over mesh ids
+  std::vector<std::uint64_t> shown_mesh_touched;  // one bit per 64 words of shown_mesh that hold some
   std::unique_ptr<MovingScratch> objects;  // moving objects' scratch, made on first use
 };
 

@@ -76,9 +76,10 @@ struct IndexData {
   bool wide_ids = false;
   // NciCrowdedPath::automatic casts a frame through `frame` when the eye is outside the scene box
   // and the index holds at least this many triangles per pixel of the box's screen rectangle.
-  // Measured (docs/nci.md, "Crowded views"): the cast took 0.15-0.24 of the walk's time at 24-63
-  // triangles per pixel and 0.76 at 2.1; 1.06 at 1.7, 0.96 at 0.83, 1.06-2.6 below.
-  static constexpr double cast_crowding = 2.0;
+  // Measured (docs/nci.md, "Crowded views"), with the cast's footprint pre-test: the cast took
+  // 0.67-0.68 of the walk's time at 2.1 triangles per pixel, 0.88-0.89 at 1.7 and at 0.83, 1.22-1.27
+  // at 0.66 and 1.0-1.76 from 0.07 to 0.33 (0.15-0.24 at 24-63 before the pre-test).
+  static constexpr double cast_crowding = 0.75;
   // One hierarchy over every kept triangle (frame_bvh.hpp): the tiles of a crowded frame cast their
   // rays through it (frame_tile.hpp) instead of walking the grid. Leaves name internal ids.
   FrameBvh frame;

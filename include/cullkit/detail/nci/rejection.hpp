@@ -200,7 +200,7 @@ namespace cullkit::detail::nci {
 //    a relative 1e-12 of the coordinates.
 //  A pixel centre outside the grown triangle has one exact edge function below -(margin), so its
 //  float ray sees that edge function negative and the watertight test rejects it.
-[[nodiscard]] inline bool footprint_mask(const ViewSetup& f, const glm::vec3& p0, const glm::vec3& p1,
+[[nodiscard]] CULLKIT_FORCEINLINE bool footprint_mask(const ViewSetup& f, const glm::vec3& p0, const glm::vec3& p1,
                                          const glm::vec3& p2, int x0, int y0, int ry0, int ry1,
                                          const Mask* bits, Mask* mask, int x_last) noexcept {
   double px[3], py[3];

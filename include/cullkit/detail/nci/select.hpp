@@ -109,6 +109,7 @@ inline void run_tiles(const IndexData& data, const ViewSetup& frame, NciContext&
     const std::size_t words = (data.triangle_count() + 63) / 64;
     worker.tested_bits.assign(words, 0u);
     worker.shown_bits.assign(words, 0u);
+    worker.touched.assign((words + 63) / 64, 0u);
     for (;;) {
       const std::size_t t = next.fetch_add(1, std::memory_order_relaxed);
       if (t >= tile_count) break;
@@ -166,23 +167,34 @@ inline void merge_workers(const IndexData& data, NciContext& context, Scratch& s
   }
   auto& mesh_bits = scratch.shown_mesh;
   mesh_bits.assign((data.stats.triangles_input + 63) / 64, 0u);
-  const std::size_t words = (data.triangle_count() + 63) / 64;
-  for (std::size_t w = 0; w < words; ++w) {
-    std::uint64_t tested = 0, shown = 0;
-    for (unsigned i = 0; i < count; ++i) {
-      tested |= scratch.workers[i].tested_bits[w];
-      shown |= scratch.workers[i].shown_bits[w];
-    }
-    out.triangles_tested += static_cast<std::size_t>(__builtin_popcountll(tested));
-    while (shown) {
-      const std::uint32_t m = data.original(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(__builtin_ctzll(shown)));
-      shown &= shown - 1;
-      mesh_bits[m / 64] |= std::uint64_t{1} << (m % 64);
+  auto& mesh_touched = scratch.shown_mesh_touched;
+  mesh_touched.assign((mesh_bits.size() + 63) / 64, 0u);
+  const std::size_t blocks = (data.triangle_count() + 4095) / 4096;
+  for (std::size_t b = 0; b < blocks; ++b) {
+    std::uint64_t any = 0;
+    for (unsigned i = 0; i < count; ++i) any |= scratch.workers[i].touched[b];
+    for (; any; any &= any - 1) {
+      const std::size_t w = 64 * b + static_cast<std::size_t>(__builtin_ctzll(any));
+      std::uint64_t tested = 0, shown = 0;
+      for (unsigned i = 0; i < count; ++i) {
+        tested |= scratch.workers[i].tested_bits[w];
+        shown |= scratch.workers[i].shown_bits[w];
+      }
+      out.triangles_tested += static_cast<std::size_t>(__builtin_popcountll(tested));
+      while (shown) {
+        const std::uint32_t m = data.original(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(__builtin_ctzll(shown)));
+        shown &= shown - 1;
+        mesh_bits[m / 64] |= std::uint64_t{1} << (m % 64);
+        mesh_touched[m / 4096] |= std::uint64_t{1} << (m / 64 % 64);
+      }
     }
   }
-  for (std::size_t w = 0; w < mesh_bits.size(); ++w) {
-    for (std::uint64_t bits = mesh_bits[w]; bits; bits &= bits - 1)
-      out.triangles.push_back(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(__builtin_ctzll(bits)));
+  for (std::size_t b = 0; b < mesh_touched.size(); ++b) {
+    for (std::uint64_t any = mesh_touched[b]; any; any &= any - 1) {
+      const std::size_t w = 64 * b + static_cast<std::size_t>(__builtin_ctzll(any));
+      for (std::uint64_t bits = mesh_bits[w]; bits; bits &= bits - 1)
+        out.triangles.push_back(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(__builtin_ctzll(bits)));
+    }
   }
 }
 

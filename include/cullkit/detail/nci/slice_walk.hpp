@@ -77,7 +77,7 @@ inline void write_tile(const ViewSetup& f, const TileState& r, int x0, int y0, i
       scratch.pixel_t[p] = r.best_t[y * stride + x];
       scratch.pixel_solid_t[p] = r.solid_t[y * stride + x];
       const std::uint32_t tri = r.best[y * stride + x];
-      if (tri != no_triangle) worker.shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
+      if (tri != no_triangle) worker.mark_shown(tri);
     }
   }
 }
@@ -396,7 +396,7 @@ CULLKIT_FORCEINLINE void test_candidates(TileWalk& w) {
   for (const auto& cand : worker.candidates)
     if (test_triangle(w.data, w.f, w.x0, w.y0, cand, w.live, w.r, worker)) {
       ++worker.tested_count;
-      worker.tested_bits[cand.tri / 64] |= std::uint64_t{1} << (cand.tri % 64);
+      worker.mark_tested(cand.tri);
     }
   worker.candidates.clear();
 }
@@ -476,7 +476,7 @@ inline void collect_edge_band(const ViewSetup& f, const TileState& r, int x0, in
     return static_cast<std::uint32_t>(y0 + i / stride) * static_cast<std::uint32_t>(f.width) +
            static_cast<std::uint32_t>(x0 + i % stride);
   };
-  const auto show = [&](std::uint32_t tri) { worker.shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64); };
+  const auto show = [&](std::uint32_t tri) { worker.mark_shown(tri); };
   for (const auto& u : worker.edge_hits) {
     if (u.t <= r.solid_t[u.pixel] && u.tri != r.best[u.pixel]) {
       worker.extra.push_back(Extra{u.tri, u.t, global(u.pixel)});

@@ -69,7 +69,7 @@ struct NciParams {
   void* progress_user = nullptr;
   /// Which path serves a frame's tiles (see NciCrowdedPath). Never changes the answer. The build
   /// keeps the hierarchy whatever this says (about 16 bytes per triangle). `automatic` casts a frame
-  /// when the eye is outside the scene box and the index holds at least two triangles per pixel of
+  /// when the eye is outside the scene box and the index holds at least 0.75 triangles per pixel of
   /// the box's screen rectangle, where it measured faster than the walk (see docs/nci.md).
   NciCrowdedPath crowded_path = NciCrowdedPath::automatic;
 };
