@@ -404,8 +404,9 @@ class CoverageGrid {
       const float* row = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
       const double start = v00 + b * (j - r.y0);
       for (int i = i0; i <= i1; ++i) {
+        // An uncovered cell holds 0: a bound that is not positive (rounding gone wild) proves nothing.
         const double upper = std::min(highest, start + a * (i - r.x0));
-        if (!(static_cast<double>(row[i]) > upper)) return false;
+        if (!(upper > 0.0 && static_cast<double>(row[i]) > upper)) return false;
       }
     }
     return true;
