@@ -40,24 +40,37 @@ struct Reader {
   }
 };
 
+// det[x, y, z] and a bound on its rounding (the permanent of the magnitudes, times 2^-40).
+double det3(const glm::dvec3& x, const glm::dvec3& y, const glm::dvec3& z, double& bound) {
+  bound = 0x1p-40 * (std::fabs(x.x) * (std::fabs(y.y * z.z) + std::fabs(y.z * z.y)) +
+                     std::fabs(x.y) * (std::fabs(y.x * z.z) + std::fabs(y.z * z.x)) +
+                     std::fabs(x.z) * (std::fabs(y.x * z.y) + std::fabs(y.y * z.x)));
+  return x.x * (y.y * z.z - y.z * z.y) - x.y * (y.x * z.z - y.z * z.x) + x.z * (y.x * z.y - y.y * z.x);
+}
+
 // Front-face hit parameter, or -1. grow > 0 widens the triangle (occluders), < 0 shrinks it.
+// Everything is decided from the corners relative to the eye: A, B, C = a, b, c - o. The eye is on
+// the front side when det[A, B, C] < 0, and the ray meets the triangle beyond the eye when d is a
+// non-negative mix of A, B, C, i.e. when det[d, B, C], det[A, d, C] and det[A, B, d] all have the
+// sign of det[A, B, C] (then t = det[A, B, C] / their sum). Corners near 1e30 make world-space
+// edges and barycentrics meaningless; these determinants carry their own rounding bounds, and
+// where a sign is within its bound the answer is taken the way that claims less: an occluder
+// (grow > 0) faces the eye and is met, a hidden object is not.
 double hit(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
            double grow) {
-  const glm::dvec3 e1 = b - a, e2 = c - a;
-  if (!(glm::dot(d, glm::cross(e1, e2)) < 0.0)) return -1.0;
-  const glm::dvec3 p = glm::cross(d, e2);
-  const double inv = 1.0 / glm::dot(e1, p);
-  const glm::dvec3 s = o - a, q = glm::cross(s, e1);
-  const double u = glm::dot(s, p) * inv, v = glm::dot(d, q) * inv, t = glm::dot(e2, q) * inv;
-  if (!(u >= -grow && v >= -grow && u + v <= 1.0 + grow)) return -1.0;
-  if (!(t > 0.0) || !std::isfinite(t)) return -1.0;
-  // A needle (corners 1e-22 apart, 3e7 long) makes u and v meaningless: the ray can pass the
-  // needle's line far outside the triangle. A hit must lie in the triangle's box (up to rounding).
-  const glm::dvec3 h = o + t * d, lo = glm::min(a, glm::min(b, c)), hi = glm::max(a, glm::max(b, c));
-  for (int k = 0; k < 3; ++k) {
-    const double slack = 1e-9 * (hi[k] - lo[k]) + 1e-12 * (std::fabs(h[k]) + 1.0);
-    if (h[k] < lo[k] - slack || h[k] > hi[k] + slack) return -1.0;
+  const glm::dvec3 A = a - o, B = b - o, C = c - o;
+  double bs, b0, b1, b2;
+  const double s = det3(A, B, C, bs);
+  if (std::fabs(s) <= bs ? grow < 0.0 : !(s < 0.0)) return -1.0;
+  const double k[3] = {det3(d, B, C, b0), det3(A, d, C, b1), det3(A, B, d, b2)}, bound[3] = {b0, b1, b2};
+  const double sum = k[0] + k[1] + k[2];
+  for (int i = 0; i < 3; ++i) {
+    // Inside means k[i] <= 0 (the sign of s); grow scales a margin on the mix's weights.
+    const double margin = bound[i] + std::fabs(grow) * std::fabs(sum);
+    if (grow < 0.0 ? !(k[i] < -margin) : !(k[i] <= margin)) return -1.0;
   }
+  const double t = s / sum;
+  if (!(t > 0.0) || !std::isfinite(t)) return -1.0;
   return t;
 }
 }  // namespace
