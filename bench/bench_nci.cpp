@@ -309,6 +309,20 @@ void precision_table(const std::string& name, const Scene& s, unsigned threads, 
   }
 }
 
+// An index per path of --path (the path and the thread count are fixed at build).
+std::vector<std::unique_ptr<NormalClassIndex<glm::vec3>>> indices_per_path(const Scene& s, unsigned threads,
+                                                                          unsigned build_threads) {
+  std::vector<std::unique_ptr<NormalClassIndex<glm::vec3>>> index;
+  for (const PathChoice& path : g_paths) {
+    NciParams p;
+    p.threads = threads;
+    p.build_threads = build_threads;
+    p.crowded_path = path.path;
+    index.push_back(std::make_unique<NormalClassIndex<glm::vec3>>(s.mesh(), p));
+  }
+  return index;
+}
+
 // One race per size x view x thread count: Embree single rays, Embree packets, then select_visible
 // on each path of --path (an index per path and thread count: both are fixed at build).
 void speed(const std::string& name, const Scene& s, unsigned build_threads, bool smoke) {
@@ -318,14 +332,7 @@ void speed(const std::string& name, const Scene& s, unsigned build_threads, bool
       : g_quick ? std::vector<std::pair<int, int>>{{640, 480}}
                 : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}};
   for (const unsigned threads : g_threads) {
-    std::vector<std::unique_ptr<NormalClassIndex<glm::vec3>>> index;
-    for (const PathChoice& path : g_paths) {
-      NciParams p;
-      p.threads = threads;
-      p.build_threads = build_threads;
-      p.crowded_path = path.path;
-      index.push_back(std::make_unique<NormalClassIndex<glm::vec3>>(s.mesh(), p));
-    }
+    const auto index = indices_per_path(s, threads, build_threads);
     for (auto [w, h] : sizes) {
       const auto cams = views(s, w, h);
       for (std::size_t ci = 0; ci < cams.size(); ++ci) {
@@ -604,17 +611,10 @@ int frame_race(const std::string& name, int reps) {
   std::fflush(stdout);
   const int views_wanted = std::getenv("FRAME_VIEWS") ? std::atoi(std::getenv("FRAME_VIEWS")) : 2;
   for (const unsigned threads : g_threads) {
-    std::vector<std::unique_ptr<NormalClassIndex<glm::vec3>>> index;
-    for (const PathChoice& path : g_paths) {
-      NciParams p;
-      p.threads = threads;
-      p.build_threads = hw;
-      p.crowded_path = path.path;
-      index.push_back(std::make_unique<NormalClassIndex<glm::vec3>>(s->mesh(), p));
-      std::printf("nci_build,%s,%s,build_s=%.3f,bytes_per_tri=%.2f\n", name.c_str(), path.name,
-                  index.back()->stats().build_seconds,
-                  double(index.back()->memory_bytes()) / double(s->triangle_count()));
-    }
+    const auto index = indices_per_path(*s, threads, hw);
+    for (std::size_t k = 0; k < g_paths.size(); ++k)
+      std::printf("nci_build,%s,%s,build_s=%.3f,bytes_per_tri=%.2f\n", name.c_str(), g_paths[k].name,
+                  index[k]->stats().build_seconds, double(index[k]->memory_bytes()) / double(s->triangle_count()));
     for (auto [w, h] : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}}) {
       const auto cams = views(*s, w, h);
       for (int ci = 0; ci < views_wanted; ++ci) {

@@ -219,11 +219,10 @@ inline bool open_frame_block(const IndexData& data, const TileState& r, const Ma
 // process_tile (slice_walk.hpp).
 inline void process_tile_frame(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
                                Worker& worker, Scratch& scratch) {
-  if (write_if_off_scene(f, x0, y0, x1, y1, scratch)) return;
-  const int tw = x1 - x0, th = y1 - y0;
-  r.stride = (tw + 3) & ~3;
   TileMasks m;
-  const glm::dvec3 cone_sum = setup_rays(data, f, x0, y0, tw, th, r, m);
+  glm::dvec3 cone_sum;
+  if (!start_tile(data, f, x0, y0, x1, y1, r, scratch, m, cone_sum)) return;
+  const int tw = x1 - x0, th = y1 - y0;
   select_classes(data, r, tw, th, m.live, cone_sum, worker.active_classes);
   worker.class_on.assign(data.class_axis.size(), 0u);
   for (const std::uint16_t k : worker.active_classes) worker.class_on[k] = 1u;

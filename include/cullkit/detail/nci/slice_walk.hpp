@@ -494,16 +494,26 @@ inline void collect_edge_band(const ViewSetup& f, const TileState& r, int x0, in
     }
 }
 
+// The start of a tile on either path (the walk here, the frame hierarchy in frame_tile.hpp): false
+// when the tile lies off the scene (its pixels are then written); else its rays are set up in `r`
+// and `m`, and `cone_sum` is the sum of their directions.
+[[nodiscard]] inline bool start_tile(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1,
+                                     TileState& r, Scratch& scratch, TileMasks& m, glm::dvec3& cone_sum) {
+  if (write_if_off_scene(f, x0, y0, x1, y1, scratch)) return false;
+  r.stride = (x1 - x0 + 3) & ~3;
+  cone_sum = setup_rays(data, f, x0, y0, x1 - x0, y1 - y0, r, m);
+  return true;
+}
+
 // One screen tile (x0, y0)..(x1, y1) of the frame: its pixels' first hits, solid hits and edge-band
 // extras into the worker's records and the frame's per-pixel buffers. `r` is the worker's scratch
 // (any contents): every field read is set here first.
 inline void process_tile(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
                          Worker& worker, Scratch& scratch) {
-  if (write_if_off_scene(f, x0, y0, x1, y1, scratch)) return;
-  const int tw = x1 - x0, th = y1 - y0;
-  r.stride = (tw + 3) & ~3;
   TileMasks m;
-  const glm::dvec3 cone_sum = setup_rays(data, f, x0, y0, tw, th, r, m);
+  glm::dvec3 cone_sum;
+  if (!start_tile(data, f, x0, y0, x1, y1, r, scratch, m, cone_sum)) return;
+  const int tw = x1 - x0, th = y1 - y0;
   bool any = false;
   for (int y = 0; y < th; ++y) any = any || m.live[y] != 0;
   if (!any) {
