@@ -304,6 +304,25 @@ class CoverageGrid {
     return open;
   }
 
+  /// The cells lying wholly inside the rectangle [x0, x1] x [y0, y1] (grid coordinates), clamped to
+  /// the grid: the only cells that triangles whose corners all lie in the rectangle can cover.
+  [[nodiscard]] CellRect cells_inside(double x0, double y0, double x1, double y1) const {
+    const auto first = [](double v, int n) { return v <= 0.0 ? 0.0 : std::min(std::ceil(v), double(n)); };
+    const auto past = [](double v, int n) { return v >= n ? double(n) : std::max(std::floor(v), 0.0); };
+    if (!(x0 <= x1 && y0 <= y1)) return CellRect{0, 0, -1, -1};
+    return CellRect{int(first(x0, width_)), int(first(y0, height_)), int(past(x1, width_)) - 1, int(past(y1, height_)) - 1};
+  }
+
+  /// True when some cell of `r` is uncovered or covered with an inverse depth below `nearest`.
+  [[nodiscard]] bool any_below(const CellRect& r, float nearest) const {
+    for (int j = r.y0; j <= r.y1; ++j) {
+      const float* row = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+      for (int i = r.x0; i <= r.x1; ++i)
+        if (!(row[i] >= nearest)) return true;
+    }
+    return false;
+  }
+
   /// Where `layer` (a grid of the same size, after its last band) has a cell covered with a nearer
   /// bound than this grid's, takes it: either set of occluders bounds the depth of every ray through
   /// the cell, so the nearer bound holds.
@@ -471,7 +490,7 @@ class CoverageGrid {
   // Cells of row j that the triangle touches (its part in the row's slab, widened by m): the
   // depth bound of a triangle only matters where a ray can meet it, and a slanted triangle's box
   // is mostly elsewhere. False when it misses the row.
-  bool row_span(const TriangleEdges& e, int j, double m, int& i0, int& i1) const {
+  CULLKIT_FORCEINLINE bool row_span(const TriangleEdges& e, int j, double m, int& i0, int& i1) const {
     const double lo = j - m, hi = j + 1 + m;
     double xl = HUGE_VAL, xr = -HUGE_VAL;
     for (int k = 0; k < 3; ++k) {

@@ -387,8 +387,13 @@ inline void refine_by_patches(const MeshIndex& index, const MeshOcclusionParams&
         wmin = std::min(wmin, w[k]);
       }
     }
-    s.layer.reset(s.grid.width(), s.grid.height());
+    // A patch can only gain the cells it covers alone, and those lie wholly inside its corners' box:
+    // when each of them is already as near in the union as the patch's nearest point, or there is
+    // none (a patch thinner than a cell on screen), the layer could change nothing.
     const float nearest = static_cast<float>(1.0 / wmin);
+    const CellRect inside = s.grid.cells_inside(xmin, ymin, xmax, ymax);
+    if (inside.empty() || !s.grid.any_below(inside, nearest)) continue;
+    s.layer.reset(s.grid.width(), s.grid.height());
     if (!s.layer.seed_frozen(s.grid, s.grid.cells_of(xmin, ymin, xmax, ymax), nearest)) continue;
     std::size_t inserted = 0;
     insert_run(index, params, s, s.layer, s.layer_order.data() + b, s.layer_order.data() + e,
