@@ -11,7 +11,12 @@
 //   a T-junction, which the coverage grid cannot fuse); cubes behind the seam are hidden by the
 //   solid-box tree, not without it (max_box_occluders = 0). Eyes nearer a box than the near plane
 //   check that a box reaching into the clipped part of the frustum hides nothing it should not.
+// - far_backdrop: the same wall and cubes inside a sky dome (an inward-facing sphere of 2,048
+//   triangles, one object, whose patches' boxes hold the eye). The dome is farther than every other
+//   object, so it can hide none of them: it must take no part in the occluders (the same occluder
+//   triangles and the same answers as without it), and the cubes stay hidden.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -36,14 +41,15 @@ struct Tally {
 // Culls from each eye with `params`; counts how many of `targets` are hidden, and checks every
 // hidden object (targets or not) against the oracle.
 Tally run(const TestScene& s, const std::vector<std::uint32_t>& targets, const std::vector<glm::vec3>& eyes,
-          const glm::vec3& look_at, float near_plane, const cullkit::MeshOcclusionParams& params, const char* name) {
+          const glm::vec3& look_at, float near_plane, const cullkit::MeshOcclusionParams& params, const char* name,
+          float far_plane = 200.0f) {
   const cullkit::MeshOcclusionCuller<glm::vec3> culler(s.mesh(), s.objects.data(), s.objects.size(), params);
   cullkit::MeshOcclusionContext context;
   std::vector<std::uint32_t> out;
   Rng rng(17);
   Tally tally;
   for (std::size_t e = 0; e < eyes.size(); ++e) {
-    const cullkit::Camera cam = cullkit::support::make_camera(eyes[e], look_at, 60.0f, 320, 180, near_plane, 200.0f);
+    const cullkit::Camera cam = cullkit::support::make_camera(eyes[e], look_at, 60.0f, 320, 180, near_plane, far_plane);
     culler.cull(cam, context, out);
     std::vector<char> kept(s.objects.size(), 0);
     for (std::uint32_t o : out) kept[o] = 1;
@@ -136,11 +142,63 @@ void touching_boxes() {
   CHECK(clipped.hidden < clipped.targets);
 }
 
+// A wall of 8 x 4 quads at z = 0 facing +z, with 6 cubes behind it.
+std::vector<std::uint32_t> wall_and_cubes(TestScene& s) {
+  s.begin_object();
+  grid_quads(s, glm::vec3(-6, 0, 0), glm::vec3(12, 0, 0), glm::vec3(0, 4, 0), 8, 4);
+  std::vector<std::uint32_t> cubes;
+  for (int i = -1; i <= 1; ++i)
+    for (int k = 1; k <= 2; ++k)
+      cubes.push_back(s.box(glm::vec3(1.5f * i - 0.3f, 0.2f, -2.0f * k - 0.3f), glm::vec3(1.5f * i + 0.3f, 1.2f, -2.0f * k + 0.3f)));
+  return cubes;
+}
+
+void far_backdrop() {
+  TestScene plain;
+  const std::vector<std::uint32_t> cubes = wall_and_cubes(plain);
+  TestScene domed = plain;
+  const std::uint32_t dome = domed.begin_object();
+  const float radius = 500.0f;
+  const int around = 64, up = 16;  // 2 * 64 * 16 = 2,048 triangles
+  const auto at = [&](int u, int v) {
+    const float phi = 6.2831853f * static_cast<float>(u) / around, theta = 3.1415927f * static_cast<float>(v) / up;
+    return radius * glm::vec3(std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi));
+  };
+  for (int v = 0; v < up; ++v)
+    for (int u = 0; u < around; ++u) {  // counter-clockwise seen from the centre
+      domed.triangle(at(u, v), at(u, v + 1), at(u + 1, v));
+      domed.triangle(at(u + 1, v), at(u, v + 1), at(u + 1, v + 1));
+    }
+  const std::vector<glm::vec3> eyes = {{0, 1.7f, 6}, {-1, 1.7f, 8}, {1, 1.7f, 5}, {0.5f, 2.5f, 7}, {0, 3.0f, 12}};
+  const glm::vec3 look_at(0, 1.5f, 0);
+  const float far_plane = 2000.0f;
+  const cullkit::MeshOcclusionParams params;
+  const Tally with = run(domed, cubes, eyes, look_at, 0.1f, params, "far_backdrop dome", far_plane);
+  CHECK(with.hidden == with.targets);
+  const cullkit::MeshOcclusionCuller<glm::vec3> a(plain.mesh(), plain.objects.data(), plain.objects.size(), params);
+  const cullkit::MeshOcclusionCuller<glm::vec3> b(domed.mesh(), domed.objects.data(), domed.objects.size(), params);
+  cullkit::MeshOcclusionContext ca, cb;
+  std::vector<std::uint32_t> out_a, out_b;
+  for (std::size_t e = 0; e < eyes.size(); ++e) {
+    const cullkit::Camera cam = cullkit::support::make_camera(eyes[e], look_at, 60.0f, 320, 180, 0.1f, far_plane);
+    a.cull(cam, ca, out_a);
+    b.cull(cam, cb, out_b);
+    out_b.erase(std::remove(out_b.begin(), out_b.end(), dome), out_b.end());
+    std::sort(out_a.begin(), out_a.end());
+    std::sort(out_b.begin(), out_b.end());
+    CHECK_MSG(out_a == out_b, "far_backdrop eye %zu: the dome changed the answer", e);
+    CHECK_MSG(ca.stats().occluder_triangles == cb.stats().occluder_triangles,
+              "far_backdrop eye %zu: %zu occluder triangles without the dome, %zu with it", e,
+              ca.stats().occluder_triangles, cb.stats().occluder_triangles);
+  }
+}
+
 }  // namespace
 
 int main() {
   big_object();
   slanted_beam();
   touching_boxes();
+  far_backdrop();
   return cullkit_test::report("test_mesh_occlusion_patches");
 }

@@ -30,6 +30,7 @@ struct BoxView {
   double x0, y0, x1, y1;
   double w_min;
   bool usable;
+  double w_max = HUGE_VAL;  // at least the largest depth of any point of the box, usable or not
 };
 
 /// An occluder triangle clipped at the near plane (View::clip_level): its part beyond, a triangle or a
@@ -160,6 +161,11 @@ inline BoxView project_box(const View& view, const Aabb& box) {
   const double ntol = 0x1p-18 * scale[3] + 0x1p-40 * scale[3];
   const double wtol = 1e-8 * scale[2];
   BoxView b{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, HUGE_VAL, false};
+  // Depth is affine: its largest value over the box is at the corner taking each edge whose step
+  // raises it, whatever the other corners do (behind the eye included).
+  double far = base[2];
+  for (int a = 0; a < 3; ++a) far += std::max(0.0, step[a][2]);
+  b.w_max = std::isfinite(far) ? far + wtol : HUGE_VAL;
   for (int k = 0; k < 8; ++k) {
     double c[4] = {base[0], base[1], base[2], base[3]};
     for (int a = 0; a < 3; ++a)

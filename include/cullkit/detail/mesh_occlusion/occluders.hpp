@@ -10,6 +10,9 @@
 #include <utility>
 #include <vector>
 
+#include <glm/ext/vector_double3.hpp>
+#include <glm/geometric.hpp>
+
 #include "coverage.hpp"
 #include "frame.hpp"
 #include "index.hpp"
@@ -19,6 +22,24 @@ namespace cullkit {
 namespace detail {
 namespace mesh_occlusion {
 
+/// True when the plane of every triangle of the patch is farther from `eye` than `limit`: then so is
+/// every point of the patch (a point of a triangle is no nearer than its plane). Triangles of zero
+/// area never occlude and are passed over.
+inline bool patch_farther_than(const MeshIndex& index, const glm::dvec3& eye, const Patch& patch, double limit) {
+  const PatchSet& ps = index.patches;
+  for (std::uint32_t k = patch.first; k < patch.first + patch.count; ++k) {
+    const std::uint32_t* c = &index.corners[3 * std::size_t(ps.triangles[k])];
+    if (c[0] == none) continue;
+    const glm::dvec3 a(index.positions[c[0]]), b(index.positions[c[1]]), d(index.positions[c[2]]);
+    const glm::dvec3 n = glm::cross(b - a, d - a);
+    const double length = glm::length(n);
+    if (!(length > 0.0)) continue;
+    // Relative rounding of the cross and dot products, far inside 2^-30.
+    if (!(std::fabs(glm::dot(n, eye - a)) > length * limit * (1.0 + 0x1p-30))) return false;
+  }
+  return true;
+}
+
 /// Picks occluder patches by size on screen, biggest first, within the triangle budget; fills
 /// `s.occluders`. A patch too big for what is left of the budget is skipped, smaller ones still fit.
 /// An object of one patch is measured by its own box (already projected).
@@ -26,6 +47,43 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
   const double grid_cells = double(s.grid.width()) * double(s.grid.height());
   const double min_cells = std::max(1.0, params.min_occluder_screen_fraction * grid_cells);
   const PatchSet& ps = index.patches;
+  // An occluder can only hide what lies beyond it along some ray from the eye, and both depth and
+  // distance from the eye grow along every such ray: a patch whose nearest point is farther, by
+  // either measure, than every point of every other object in the frustum hides none of them (a sky
+  // dome, the back wall of the view). Per measure, the largest over the objects and the runner-up
+  // (for the object holding the largest).
+  const glm::dvec3 eye(s.view.eye[0], s.view.eye[1], s.view.eye[2]);
+  struct Farthest {
+    double first = -HUGE_VAL, second = -HUGE_VAL;
+    std::size_t at = ~std::size_t{0};
+    void add(double v, std::size_t i) {
+      if (v > first) {
+        second = first;
+        first = v;
+        at = i;
+      } else if (v > second) {
+        second = v;
+      }
+    }
+    [[nodiscard]] double without(std::size_t i) const { return i == at ? second : first; }
+  } depth, distance;
+  for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
+    depth.add(s.boxes[i].w_max, i);
+    const Aabb& box = index.bounds[s.in_frustum[i]];
+    double d2 = 0.0;
+    for (int a = 0; a < 3; ++a) {
+      const double reach = std::max(std::fabs(double(box.min[a]) - eye[a]), std::fabs(double(box.max[a]) - eye[a]));
+      d2 += reach * reach;
+    }
+    distance.add(std::isfinite(d2) ? std::sqrt(d2) * (1.0 + 0x1p-30) : HUGE_VAL, i);
+  }
+  const auto beyond_the_rest = [&](const BoxView& b, const Patch& patch, std::size_t i) {
+    if (b.usable && b.w_min > depth.without(i)) return true;
+    // A curved patch's box may reach far nearer than its surface, up to the eye (a piece of a sky
+    // dome around the scene): its triangles' planes are the tighter bound.
+    const double limit = distance.without(i);
+    return std::isfinite(limit) && patch_farther_than(index, eye, patch, limit);
+  };
   s.candidates.clear();
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
     const std::uint32_t o = s.in_frustum[i];
@@ -34,15 +92,16 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
     const double object_cells = screen_cells(s.boxes[i], s.grid);
     if (object_cells < min_cells) continue;
     if (p1 - p0 == 1) {
-      s.candidates.emplace_back(static_cast<float>(object_cells), p0);
+      if (!beyond_the_rest(s.boxes[i], ps.patches[p0], i)) s.candidates.emplace_back(static_cast<float>(object_cells), p0);
       continue;
     }
     for (std::uint32_t p = p0; p < p1; ++p) {
       // A patch outside the frustum (behind the eye, say) would otherwise count as through the near
       // plane, the biggest of all.
       if (s.frustum.classify(ps.patches[p].box) == Containment::outside) continue;
-      const double cells = screen_cells(patch_box(index, s, p), s.grid);
-      if (cells >= min_cells) s.candidates.emplace_back(static_cast<float>(cells), p);
+      const BoxView& b = patch_box(index, s, p);
+      const double cells = screen_cells(b, s.grid);
+      if (cells >= min_cells && !beyond_the_rest(b, ps.patches[p], i)) s.candidates.emplace_back(static_cast<float>(cells), p);
     }
   }
   // Biggest first. A full sort of the candidates only (they are the patches above the size floor).
