@@ -14,11 +14,14 @@
 // - far_backdrop: the same wall and cubes inside a sky dome (an inward-facing sphere of 2,048
 //   triangles, one object, whose patches' boxes hold the eye). The dome is farther than every other
 //   object, so it can hide none of them: it must take no part in the occluders (the same occluder
-//   triangles and the same answers as without it), and the cubes stay hidden.
+//   triangles and the same answers as without it, also from an eye 2 mm beyond the near plane from
+//   the wall, where the dome's extent must not move the occluders' clipping level), and the cubes
+//   stay hidden.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <cullkit/cullkit.hpp>
@@ -179,8 +182,13 @@ void far_backdrop() {
   const cullkit::MeshOcclusionCuller<glm::vec3> b(domed.mesh(), domed.objects.data(), domed.objects.size(), params);
   cullkit::MeshOcclusionContext ca, cb;
   std::vector<std::uint32_t> out_a, out_b;
-  for (std::size_t e = 0; e < eyes.size(); ++e) {
-    const cullkit::Camera cam = cullkit::support::make_camera(eyes[e], look_at, 60.0f, 320, 180, 0.1f, far_plane);
+  // The last eye stands 2 mm beyond the near plane from the wall, looking straight at it: the wall is
+  // an occluder only if it is clipped at a level set by the occluders' own extent, not by the dome's.
+  std::vector<std::pair<glm::vec3, glm::vec3>> views;
+  for (const glm::vec3& eye : eyes) views.emplace_back(eye, look_at);
+  views.emplace_back(glm::vec3(0.2f, 1.0f, 0.102f), glm::vec3(0.2f, 1.0f, -10.0f));
+  for (std::size_t e = 0; e < views.size(); ++e) {
+    const cullkit::Camera cam = cullkit::support::make_camera(views[e].first, views[e].second, 60.0f, 320, 180, 0.1f, far_plane);
     a.cull(cam, ca, out_a);
     b.cull(cam, cb, out_b);
     out_b.erase(std::remove(out_b.begin(), out_b.end(), dome), out_b.end());

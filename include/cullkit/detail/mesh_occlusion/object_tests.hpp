@@ -34,7 +34,7 @@ inline bool rect_hidden(const CoverageGrid& grid, const BoxView& b) {
 /// The object test of a triangle with a corner not clearly beyond the near plane (which cannot be
 /// projected whole). True when no ray through the frustum can see it unhidden: it lies outside the
 /// frustum, or is clearly back-facing (the eye on its back side, in world space), or its part that
-/// can be drawn (near-plane value at least -clip_level: a margin on the near side this time), cut to
+/// can be drawn (near-plane value at least -drawable_level: a margin on the near side this time), cut to
 /// the grid's rectangle on screen, has its rectangle hidden at that part's nearest depth. 1/w is
 /// affine on screen over the triangle's plane, so the cut interpolates it exactly up to rounding.
 inline bool crossing_triangle_hidden(const MeshIndex& index, const Scratch& s, const std::uint32_t* c) {
@@ -52,10 +52,10 @@ inline bool crossing_triangle_hidden(const MeshIndex& index, const Scratch& s, c
                      q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0]);
   const auto len = [](const double* v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); };
   if (det > 1e-9 * len(q[0]) * len(q[1]) * len(q[2])) return true;
-  // The drawable part: clipped at -clip_level, in the triangle's own order (no fusion needed here).
+  // The drawable part: clipped at -drawable_level, in the triangle's own order (no fusion needed here).
   double x[8], y[8], iw[8];
   int n = 0;
-  const double level = -view.clip_level;
+  const double level = -view.drawable_level;
   double value[3];
   for (int k = 0; k < 3; ++k) {
     const glm::vec3& p = index.positions[c[k]];

@@ -111,12 +111,18 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
             });
   s.occluders.clear();
   std::uint64_t budget = params.occluder_triangle_budget;
+  Aabb chosen = Aabb::empty();
   for (const auto& c : s.candidates) {
     if (s.occluders.size() >= params.max_occluder_objects || budget == 0) break;
     const std::uint32_t n = ps.patches[c.second].count;
     if (n > budget) continue;
     budget -= n;
     s.occluders.emplace_back(0.0, c.second);
+    chosen = merge(chosen, ps.patches[c.second].box);
+  }
+  if (!s.occluders.empty()) {
+    const double lo[3] = {chosen.min.x, chosen.min.y, chosen.min.z}, hi[3] = {chosen.max.x, chosen.max.y, chosen.max.z};
+    s.view.narrow_clip_level(lo, hi);
   }
 }
 

@@ -41,7 +41,8 @@ struct View {
   int width = 0, height = 0;
   int orient = 1;  // front-facing triangles have grid signed area of this sign
   // Occluder triangles are clipped where the near-plane value falls below this (see set_clip_level).
-  double clip_level = HUGE_VAL;
+  double clip_level = HUGE_VAL;      // occluders are clipped where the near-plane value reaches it
+  double drawable_level = HUGE_VAL;  // object triangles count as drawable down to minus this
 
   /// Sets up the frame; `enabled` is false when the matrix is not a usable perspective projection
   /// centred (within a small fraction of the near distance) on the eye.
@@ -123,18 +124,29 @@ struct View {
     enabled = true;
   }
 
-  /// Sets the occluder clipping level for points inside the box [lo, hi] (the mesh's usable
-  /// objects). A point is usable only when its near-plane value exceeds 2^-18 of its magnitude sum
-  /// (see `project`), which differs from point to point; clipping needs one plane, so the level is
-  /// twice that margin taken at its largest over the box (the magnitude sum is convex, largest at a
-  /// corner). Every point of a clipped polygon is then usable by the per-point rule, with room for
-  /// the rounding of the clip points.
-  void set_clip_level(const double* lo, const double* hi) {
+  /// The clipping level for points inside the box [lo, hi]. A point is usable only when its
+  /// near-plane value exceeds 2^-18 of its magnitude sum (see `project`), which differs from point
+  /// to point; clipping needs one plane, so the level is twice that margin taken at its largest over
+  /// the box (the magnitude sum is convex, largest at a corner). Every point of the box beyond the
+  /// level is then usable by the per-point rule, with room for the rounding of clip points.
+  [[nodiscard]] double level_for(const double* lo, const double* hi) const {
     double sum = std::fabs(near_plane[3]);
     for (int a = 0; a < 3; ++a) sum += std::max(std::fabs(near_plane[a] * lo[a]), std::fabs(near_plane[a] * hi[a]));
-    clip_level = 0x1p-17 * sum;
-    if (!std::isfinite(clip_level)) clip_level = HUGE_VAL;  // nothing is inside: no clipping
+    const double level = 0x1p-17 * sum;
+    return std::isfinite(level) ? level : HUGE_VAL;  // nothing is inside: no clipping
   }
+
+  /// Sets both levels for the box of the mesh's usable objects: the drawable margin of object
+  /// triangles keeps it; occluders may narrow theirs to their own box (`narrow_clip_level`).
+  void set_clip_level(const double* lo, const double* hi) {
+    clip_level = level_for(lo, hi);
+    drawable_level = clip_level;
+  }
+
+  /// Clips this frame's occluders at the level of the box holding all of them, when lower: only
+  /// their points are clipped, and one plane for all of them keeps shared edges' clip points equal.
+  /// A sky dome far around the scene then no longer pushes the level away from the near plane.
+  void narrow_clip_level(const double* lo, const double* hi) { clip_level = std::min(clip_level, level_for(lo, hi)); }
 
   /// Near-plane value of a world point (positive beyond the near plane).
   [[nodiscard]] double near_value(double px, double py, double pz) const {
