@@ -435,8 +435,10 @@ CULLKIT_FORCEINLINE void finish_rays(TileWalk& w, int s) {
 }
 
 // Walks the slices from the eye's outward in one direction until every ray of the walk is
-// finished or the grid ends (which finishes the rest).
-CULLKIT_FORCEINLINE void walk_slices(TileWalk& w, const std::vector<std::uint16_t>& active) {
+// finished or the grid ends (which finishes the rest). False when the tile has met more than
+// `budget` triangles (both walks together; 0: no limit) before that: the walk stops after the
+// slice where it crossed it, and its unfinished rays stay live, their hits so far kept.
+CULLKIT_FORCEINLINE bool walk_slices(TileWalk& w, const std::vector<std::uint16_t>& active, std::size_t budget) {
   const IndexData& data = w.data;
   const int step = w.walk == 0 ? 1 : -1;
   const int start = data.cell_of(w.ea, w.a);
@@ -461,11 +463,13 @@ CULLKIT_FORCEINLINE void walk_slices(TileWalk& w, const std::vector<std::uint16_
       }
     }
     finish_rays(w, s);
+    if (budget != 0 && w.met > budget) return false;
   }
   for (int y = 0; y < w.th; ++y) {  // a walk that ran out of slices finishes its rays
     w.live[y] &= ~w.mask[y];
     w.mask[y] = 0;
   }
+  return true;
 }
 
 // Beside each pixel's first hit: the triangles within rounding of an edge in front of its solid
@@ -505,23 +509,21 @@ inline void collect_edge_band(const ViewSetup& f, const TileState& r, int x0, in
   return true;
 }
 
-// One screen tile (x0, y0)..(x1, y1) of the frame: its pixels' first hits, solid hits and edge-band
-// extras into the worker's records and the frame's per-pixel buffers. `r` is the worker's scratch
-// (any contents): every field read is set here first.
-inline void process_tile(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
-                         Worker& worker, Scratch& scratch) {
-  TileMasks m;
-  glm::dvec3 cone_sum;
-  if (!start_tile(data, f, x0, y0, x1, y1, r, scratch, m, cone_sum)) return;
-  const int tw = x1 - x0, th = y1 - y0;
+// The walk of a tile whose rays start_tile set up: both walk directions, nearest slices first.
+// False when the tile met more than `budget` triangles (0: no limit) before every ray finished;
+// `m.live` then holds the unfinished rays, whose hits so far stay in `r` (any path may go on from
+// there: both only lower a ray's hits). The classes that may face a live ray are left in
+// worker.active_classes either way.
+inline bool walk_tile(const IndexData& data, const ViewSetup& f, int x0, int y0, int tw, int th, TileState& r,
+                      Worker& worker, TileMasks& m, const glm::dvec3& cone_sum, std::size_t budget) {
+  auto& active = worker.active_classes;
   bool any = false;
   for (int y = 0; y < th; ++y) any = any || m.live[y] != 0;
   if (!any) {
-    write_tile(f, r, x0, y0, tw, th, scratch, worker);
-    return;
+    active.clear();
+    return true;
   }
   make_beam(r, tw, th, m.live);
-  auto& active = worker.active_classes;
   select_classes(data, r, tw, th, m.live, cone_sum, active);
   if (++worker.stamp_value == 0) {
     for (auto& t : worker.tri) t.stamp = 0u;
@@ -529,14 +531,28 @@ inline void process_tile(const IndexData& data, const ViewSetup& f, int x0, int 
   }
   const int a = f.axis, b = (a + 1) % 3, c = (a + 2) % 3;
   std::size_t met = 0;
-  for (int walk = 0; walk < 2; ++walk) {
+  bool finished = true;
+  for (int walk = 0; walk < 2 && finished; ++walk) {
     TileWalk w{data, f, r, worker, x0, y0, tw, th, m.live, m.walk[walk], walk, a, b, c, f.eye[a], f.eye[b], f.eye[c],
                data.dims[a], data.dims[b], data.dims[c], worker.stamp_value};
     w.met = met;
-    walk_slices(w, active);
+    finished = walk_slices(w, active, budget);
     met = w.met;
   }
   worker.stats.triangles_met += met;
+  return finished;
+}
+
+// One screen tile (x0, y0)..(x1, y1) of the frame, walked: its pixels' first hits, solid hits and
+// edge-band extras into the worker's records and the frame's per-pixel buffers. `r` is the
+// worker's scratch (any contents): every field read is set here first.
+inline void process_tile(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
+                         Worker& worker, Scratch& scratch) {
+  TileMasks m;
+  glm::dvec3 cone_sum;
+  if (!start_tile(data, f, x0, y0, x1, y1, r, scratch, m, cone_sum)) return;
+  const int tw = x1 - x0, th = y1 - y0;
+  (void)walk_tile(data, f, x0, y0, tw, th, r, worker, m, cone_sum, 0);
   collect_edge_band(f, r, x0, y0, tw, th, worker);
   write_tile(f, r, x0, y0, tw, th, scratch, worker);
 }
