@@ -339,8 +339,9 @@ CULLKIT_FORCEINLINE void visit_cell(TileWalk& w, std::uint16_t k, std::uint32_t 
 }
 
 // The cells of slice s in rows rlo..rhi and columns clo..chi, class by class (active classes
-// only), found by binary search in the sorted rows and columns.
-CULLKIT_FORCEINLINE void visit_slice(TileWalk& w, const std::vector<std::uint16_t>& active, int s, int rlo, int rhi,
+// only), found by binary search in the sorted rows and columns. False when the tile's triangles
+// met passed w.budget (then the rest of the slice is not visited).
+CULLKIT_FORCEINLINE bool visit_slice(TileWalk& w, const std::vector<std::uint16_t>& active, int s, int rlo, int rhi,
                                      int clo, int chi) {
   const IndexData& data = w.data;
   const int a = w.a;
@@ -380,9 +381,11 @@ CULLKIT_FORCEINLINE void visit_slice(TileWalk& w, const std::vector<std::uint16_
         }
         ++w.worker.stats.cells_walked;
         visit_cell(w, k, e, e_end);
+        if (w.budget != 0 && w.met > w.budget) return false;
       }
     }
   }
+  return true;
 }
 
 // Ray-tests the slice's candidates nearest first, so hits found early let behind_hits drop the
@@ -436,9 +439,10 @@ CULLKIT_FORCEINLINE void finish_rays(TileWalk& w, int s) {
 
 // Walks the slices from the eye's outward in one direction until every ray of the walk is
 // finished or the grid ends (which finishes the rest). False when the tile has met more than
-// `budget` triangles (both walks together; 0: no limit) before that: the walk stops after the
-// slice where it crossed it, and its unfinished rays stay live, their hits so far kept.
-CULLKIT_FORCEINLINE bool walk_slices(TileWalk& w, const std::vector<std::uint16_t>& active, std::size_t budget) {
+// w.budget triangles (both walks together; 0: no limit) before that: the walk stops at the cell
+// where it crossed it (the candidates met so far are still tested; no ray is finished in that
+// slice, whose other cells were not visited), and its unfinished rays stay live, hits kept.
+CULLKIT_FORCEINLINE bool walk_slices(TileWalk& w, const std::vector<std::uint16_t>& active) {
   const IndexData& data = w.data;
   const int step = w.walk == 0 ? 1 : -1;
   const int start = data.cell_of(w.ea, w.a);
@@ -458,12 +462,12 @@ CULLKIT_FORCEINLINE bool walk_slices(TileWalk& w, const std::vector<std::uint16_
       int rlo, rhi, clo, chi;
       beam_cells(w, s0, s1, rlo, rhi, clo, chi);
       if (rlo <= rhi && clo <= chi) {
-        visit_slice(w, active, s, rlo, rhi, clo, chi);
+        const bool whole = visit_slice(w, active, s, rlo, rhi, clo, chi);
         test_candidates(w);
+        if (!whole) return false;
       }
     }
     finish_rays(w, s);
-    if (budget != 0 && w.met > budget) return false;
   }
   for (int y = 0; y < w.th; ++y) {  // a walk that ran out of slices finishes its rays
     w.live[y] &= ~w.mask[y];
@@ -536,7 +540,8 @@ inline bool walk_tile(const IndexData& data, const ViewSetup& f, int x0, int y0,
     TileWalk w{data, f, r, worker, x0, y0, tw, th, m.live, m.walk[walk], walk, a, b, c, f.eye[a], f.eye[b], f.eye[c],
                data.dims[a], data.dims[b], data.dims[c], worker.stamp_value};
     w.met = met;
-    finished = walk_slices(w, active, budget);
+    w.budget = budget;
+    finished = walk_slices(w, active);
     met = w.met;
   }
   worker.stats.triangles_met += met;
