@@ -154,13 +154,12 @@ struct FrameLeaf {
       const float grow = std::max({mag[0], mag[1], mag[2]}) * frame_box_growth;
       const float glo[3] = {qlo[0] - grow, qlo[1] - grow, qlo[2] - grow};
       const float ghi[3] = {qhi[0] + grow, qhi[1] + grow, qhi[2] + grow};
-      bool reached = false;
+      const std::uint64_t meet = frame_rays_meet(p, mask, glo, ghi);
+      const bool reached = meet != 0;
       std::uint64_t rays = 0;
-      for (std::uint64_t m = mask; m; m &= m - 1) {
+      for (std::uint64_t m = meet; m; m &= m - 1) {
         const int k = __builtin_ctzll(m);
         const int i = (slot.by + k / 8) * stride + slot.bx + k % 8;
-        if (!frame_ray_meets(p, k, glo, ghi)) continue;
-        reached = true;
         if (ray_behind(r, i, qlo, qhi)) continue;
         rays |= std::uint64_t{1} << k;
       }
