@@ -175,6 +175,40 @@ CULLKIT_FORCEINLINE void frame_node_test(const FrameBvhNode& node, const float e
   return tn * (1.0f - frame_t_slack) <= tf * (1.0f + frame_t_slack);
 }
 
+// The rays of `mask` that meet the box lo..hi: frame_ray_meets for each, four rays per compare
+// where SSE is available (the same float operations in the same order, so the same answer; the
+// std::min / std::max operand order is kept by the order of the SSE operands).
+[[nodiscard]] CULLKIT_FORCEINLINE std::uint64_t frame_rays_meet(const FramePacket& p, std::uint64_t mask, const float lo[3],
+                                                                const float hi[3]) {
+  std::uint64_t out = 0;
+#if CULLKIT_HAS_SSE2
+  const __m128 l[3] = {_mm_set1_ps(lo[0]), _mm_set1_ps(lo[1]), _mm_set1_ps(lo[2])};
+  const __m128 h[3] = {_mm_set1_ps(hi[0]), _mm_set1_ps(hi[1]), _mm_set1_ps(hi[2])};
+  const __m128 lo_scale = _mm_set1_ps(1.0f - frame_t_slack), hi_scale = _mm_set1_ps(1.0f + frame_t_slack);
+  const float* inv[3] = {p.ix, p.iy, p.iz};
+  for (std::uint64_t m = mask; m;) {
+    const int g = __builtin_ctzll(m) & ~3;  // the first lane of the group of four
+    m &= ~(std::uint64_t{0xF} << g);
+    __m128 tn = _mm_setzero_ps(), tf = _mm_load_ps(p.t + g);
+    for (int a = 0; a < 3; ++a) {
+      const __m128 r = _mm_load_ps(inv[a] + g);
+      const __m128 t0 = _mm_mul_ps(l[a], r), t1 = _mm_mul_ps(h[a], r);
+      tn = _mm_max_ps(_mm_min_ps(t1, t0), tn);  // std::max(tn, std::min(t0, t1))
+      tf = _mm_min_ps(_mm_max_ps(t1, t0), tf);  // std::min(tf, std::max(t0, t1))
+    }
+    const int in = _mm_movemask_ps(_mm_cmple_ps(_mm_mul_ps(tn, lo_scale), _mm_mul_ps(tf, hi_scale)));
+    out |= static_cast<std::uint64_t>(in) << g;
+  }
+  return out & mask;
+#else
+  for (std::uint64_t m = mask; m; m &= m - 1) {
+    const int k = __builtin_ctzll(m);
+    if (frame_ray_meets(p, k, lo, hi)) out |= std::uint64_t{1} << k;
+  }
+  return out;
+#endif
+}
+
 // One step of cursor `c` over packet `p`: pops an entry, drops the rays whose solid hit now lies
 // before its box; a leaf is prepared (`carry = leaf.prepare(first, count, phase, carry)`,
 // Leaf::phases times: load what the previous phase prefetched, prefetch what it names) and then

@@ -154,13 +154,12 @@ struct FrameLeaf {
       const float grow = std::max({mag[0], mag[1], mag[2]}) * frame_box_growth;
       const float glo[3] = {qlo[0] - grow, qlo[1] - grow, qlo[2] - grow};
       const float ghi[3] = {qhi[0] + grow, qhi[1] + grow, qhi[2] + grow};
-      bool reached = false;
+      const std::uint64_t meet = frame_rays_meet(p, mask, glo, ghi);
+      const bool reached = meet != 0;
       std::uint64_t rays = 0;
-      for (std::uint64_t m = mask; m; m &= m - 1) {
+      for (std::uint64_t m = meet; m; m &= m - 1) {
         const int k = __builtin_ctzll(m);
         const int i = (slot.by + k / 8) * stride + slot.bx + k % 8;
-        if (!frame_ray_meets(p, k, glo, ghi)) continue;
-        reached = true;
         if (ray_behind(r, i, qlo, qhi)) continue;
         rays |= std::uint64_t{1} << k;
       }
@@ -215,15 +214,11 @@ inline bool open_frame_block(const IndexData& data, const TileState& r, const Ma
   return false;
 }
 
-// One screen tile (x0, y0)..(x1, y1) through the frame hierarchy: the same outputs as
-// process_tile (slice_walk.hpp).
-inline void process_tile_frame(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
-                               Worker& worker, Scratch& scratch) {
-  TileMasks m;
-  glm::dvec3 cone_sum;
-  if (!start_tile(data, f, x0, y0, x1, y1, r, scratch, m, cone_sum)) return;
-  const int tw = x1 - x0, th = y1 - y0;
-  select_classes(data, r, tw, th, m.live, cone_sum, worker.active_classes);
+// The live rays of a tile (`live`, their hits so far in `r`) cast through the frame hierarchy in
+// packets of 8x8, four taking turns, triangles of the classes in worker.active_classes only. Every
+// hit they can still take is found: a packet's rays start from their solid hits.
+inline void cast_live_rays(const IndexData& data, const ViewSetup& f, int x0, int y0, int tw, int th, const Mask* live,
+                           TileState& r, Worker& worker) {
   worker.class_on.assign(data.class_axis.size(), 0u);
   for (const std::uint16_t k : worker.active_classes) worker.class_on[k] = 1u;
   ++worker.stats.tiles_ray_cast;
@@ -234,7 +229,7 @@ inline void process_tile_frame(const IndexData& data, const ViewSetup& f, int x0
   int next = 0, active = 0;
   for (FrameSlot& slot : worker.frame_slots) {
     slot.busy = false;
-    active += open_frame_block(data, r, m.live, tw, th, next, slot);
+    active += open_frame_block(data, r, live, tw, th, next, slot);
   }
   while (active > 0) {
     for (FrameSlot& slot : worker.frame_slots) {
@@ -243,10 +238,22 @@ inline void process_tile_frame(const IndexData& data, const ViewSetup& f, int x0
       frame_cursor_step(data.frame, eye, slot.p, slot.cur, leaf, cast);
       if (!slot.cur.done()) continue;
       slot.busy = false;
-      if (!open_frame_block(data, r, m.live, tw, th, next, slot)) --active;
+      if (!open_frame_block(data, r, live, tw, th, next, slot)) --active;
     }
   }
   worker.stats.triangles_met += met;
+}
+
+// One screen tile (x0, y0)..(x1, y1) through the frame hierarchy: the same outputs as
+// process_tile (slice_walk.hpp).
+inline void process_tile_frame(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
+                               Worker& worker, Scratch& scratch) {
+  TileMasks m;
+  glm::dvec3 cone_sum;
+  if (!start_tile(data, f, x0, y0, x1, y1, r, scratch, m, cone_sum)) return;
+  const int tw = x1 - x0, th = y1 - y0;
+  select_classes(data, r, tw, th, m.live, cone_sum, worker.active_classes);
+  cast_live_rays(data, f, x0, y0, tw, th, m.live, r, worker);
   collect_edge_band(f, r, x0, y0, tw, th, worker);
   write_tile(f, r, x0, y0, tw, th, scratch, worker);
 }

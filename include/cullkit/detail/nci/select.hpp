@@ -15,6 +15,7 @@
 #include "core.hpp"
 #include "index_data.hpp"
 #include "frame_tile.hpp"
+#include "mixed_tile.hpp"
 #include "slice_walk.hpp"
 #include "view.hpp"
 
@@ -118,6 +119,9 @@ inline void run_tiles(const IndexData& data, const ViewSetup& frame, NciContext&
       const std::uint32_t before = worker.tested_count;
       if (frame.cast_frame)
         process_tile_frame(data, frame, tx * tile, ty * tile, std::min(width, (tx + 1) * tile),
+                           std::min(height, (ty + 1) * tile), rays, worker, scratch);
+      else if (frame.cast_crowded_tiles)
+        process_tile_mixed(data, frame, tx * tile, ty * tile, std::min(width, (tx + 1) * tile),
                            std::min(height, (ty + 1) * tile), rays, worker, scratch);
       else
         process_tile(data, frame, tx * tile, ty * tile, std::min(width, (tx + 1) * tile), std::min(height, (ty + 1) * tile),
@@ -242,6 +246,8 @@ CULLKIT_CORE_FN void select_frame(const IndexData& data, const Camera& camera, N
     frame.initial_depth = initial_depth;
     frame.initial_solid = initial_solid;
     frame.cast_frame = cast_frame(data, frame);
+    frame.cast_crowded_tiles = !frame.cast_frame && data.frame.root != FrameBvhNode::empty &&
+                               data.params.crowded_path == NciCrowdedPath::automatic;
     const int tile = frame.tile = tile_edge(data, width, height);
     context.stats.axis = frame.axis;
     const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;

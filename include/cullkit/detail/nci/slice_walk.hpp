@@ -339,8 +339,9 @@ CULLKIT_FORCEINLINE void visit_cell(TileWalk& w, std::uint16_t k, std::uint32_t 
 }
 
 // The cells of slice s in rows rlo..rhi and columns clo..chi, class by class (active classes
-// only), found by binary search in the sorted rows and columns.
-CULLKIT_FORCEINLINE void visit_slice(TileWalk& w, const std::vector<std::uint16_t>& active, int s, int rlo, int rhi,
+// only), found by binary search in the sorted rows and columns. False when the tile's triangles
+// met passed w.budget (then the rest of the slice is not visited).
+CULLKIT_FORCEINLINE bool visit_slice(TileWalk& w, const std::vector<std::uint16_t>& active, int s, int rlo, int rhi,
                                      int clo, int chi) {
   const IndexData& data = w.data;
   const int a = w.a;
@@ -380,9 +381,11 @@ CULLKIT_FORCEINLINE void visit_slice(TileWalk& w, const std::vector<std::uint16_
         }
         ++w.worker.stats.cells_walked;
         visit_cell(w, k, e, e_end);
+        if (w.budget != 0 && w.met > w.budget) return false;
       }
     }
   }
+  return true;
 }
 
 // Ray-tests the slice's candidates nearest first, so hits found early let behind_hits drop the
@@ -435,8 +438,11 @@ CULLKIT_FORCEINLINE void finish_rays(TileWalk& w, int s) {
 }
 
 // Walks the slices from the eye's outward in one direction until every ray of the walk is
-// finished or the grid ends (which finishes the rest).
-CULLKIT_FORCEINLINE void walk_slices(TileWalk& w, const std::vector<std::uint16_t>& active) {
+// finished or the grid ends (which finishes the rest). False when the tile has met more than
+// w.budget triangles (both walks together; 0: no limit) before that: the walk stops at the cell
+// where it crossed it (the candidates met so far are still tested; no ray is finished in that
+// slice, whose other cells were not visited), and its unfinished rays stay live, hits kept.
+CULLKIT_FORCEINLINE bool walk_slices(TileWalk& w, const std::vector<std::uint16_t>& active) {
   const IndexData& data = w.data;
   const int step = w.walk == 0 ? 1 : -1;
   const int start = data.cell_of(w.ea, w.a);
@@ -456,8 +462,9 @@ CULLKIT_FORCEINLINE void walk_slices(TileWalk& w, const std::vector<std::uint16_
       int rlo, rhi, clo, chi;
       beam_cells(w, s0, s1, rlo, rhi, clo, chi);
       if (rlo <= rhi && clo <= chi) {
-        visit_slice(w, active, s, rlo, rhi, clo, chi);
+        const bool whole = visit_slice(w, active, s, rlo, rhi, clo, chi);
         test_candidates(w);
+        if (!whole) return false;
       }
     }
     finish_rays(w, s);
@@ -466,6 +473,7 @@ CULLKIT_FORCEINLINE void walk_slices(TileWalk& w, const std::vector<std::uint16_
     w.live[y] &= ~w.mask[y];
     w.mask[y] = 0;
   }
+  return true;
 }
 
 // Beside each pixel's first hit: the triangles within rounding of an edge in front of its solid
@@ -505,23 +513,21 @@ inline void collect_edge_band(const ViewSetup& f, const TileState& r, int x0, in
   return true;
 }
 
-// One screen tile (x0, y0)..(x1, y1) of the frame: its pixels' first hits, solid hits and edge-band
-// extras into the worker's records and the frame's per-pixel buffers. `r` is the worker's scratch
-// (any contents): every field read is set here first.
-inline void process_tile(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
-                         Worker& worker, Scratch& scratch) {
-  TileMasks m;
-  glm::dvec3 cone_sum;
-  if (!start_tile(data, f, x0, y0, x1, y1, r, scratch, m, cone_sum)) return;
-  const int tw = x1 - x0, th = y1 - y0;
+// The walk of a tile whose rays start_tile set up: both walk directions, nearest slices first.
+// False when the tile met more than `budget` triangles (0: no limit) before every ray finished;
+// `m.live` then holds the unfinished rays, whose hits so far stay in `r` (any path may go on from
+// there: both only lower a ray's hits). The classes that may face a live ray are left in
+// worker.active_classes either way.
+inline bool walk_tile(const IndexData& data, const ViewSetup& f, int x0, int y0, int tw, int th, TileState& r,
+                      Worker& worker, TileMasks& m, const glm::dvec3& cone_sum, std::size_t budget) {
+  auto& active = worker.active_classes;
   bool any = false;
   for (int y = 0; y < th; ++y) any = any || m.live[y] != 0;
   if (!any) {
-    write_tile(f, r, x0, y0, tw, th, scratch, worker);
-    return;
+    active.clear();
+    return true;
   }
   make_beam(r, tw, th, m.live);
-  auto& active = worker.active_classes;
   select_classes(data, r, tw, th, m.live, cone_sum, active);
   if (++worker.stamp_value == 0) {
     for (auto& t : worker.tri) t.stamp = 0u;
@@ -529,14 +535,29 @@ inline void process_tile(const IndexData& data, const ViewSetup& f, int x0, int 
   }
   const int a = f.axis, b = (a + 1) % 3, c = (a + 2) % 3;
   std::size_t met = 0;
-  for (int walk = 0; walk < 2; ++walk) {
+  bool finished = true;
+  for (int walk = 0; walk < 2 && finished; ++walk) {
     TileWalk w{data, f, r, worker, x0, y0, tw, th, m.live, m.walk[walk], walk, a, b, c, f.eye[a], f.eye[b], f.eye[c],
                data.dims[a], data.dims[b], data.dims[c], worker.stamp_value};
     w.met = met;
-    walk_slices(w, active);
+    w.budget = budget;
+    finished = walk_slices(w, active);
     met = w.met;
   }
   worker.stats.triangles_met += met;
+  return finished;
+}
+
+// One screen tile (x0, y0)..(x1, y1) of the frame, walked: its pixels' first hits, solid hits and
+// edge-band extras into the worker's records and the frame's per-pixel buffers. `r` is the
+// worker's scratch (any contents): every field read is set here first.
+inline void process_tile(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
+                         Worker& worker, Scratch& scratch) {
+  TileMasks m;
+  glm::dvec3 cone_sum;
+  if (!start_tile(data, f, x0, y0, x1, y1, r, scratch, m, cone_sum)) return;
+  const int tw = x1 - x0, th = y1 - y0;
+  (void)walk_tile(data, f, x0, y0, tw, th, r, worker, m, cone_sum, 0);
   collect_edge_band(f, r, x0, y0, tw, th, worker);
   write_tile(f, r, x0, y0, tw, th, scratch, worker);
 }

@@ -124,6 +124,7 @@ struct TileWalk {
   int na, nb, nc;
   std::uint32_t stamp;  // the tile's stamp in Worker::tri (each triangle met once per tile)
   std::size_t met = 0;  // NciSelectStats::triangles_met of this tile (a local: the visit loop is hot)
+  std::size_t budget = 0;  // the walk stops once `met` passes it (0: never; see walk_slices)
   // The walk's live rays' slopes across the walk axis (recomputed only after rays finished).
   bool slopes_stale = true, full = false;
   float smin_b = 0.0f, smax_b = 0.0f, smin_c = 0.0f, smax_c = 0.0f;

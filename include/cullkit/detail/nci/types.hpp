@@ -17,7 +17,8 @@ namespace cullkit {
 /// all its triangles. Both give the same per-pixel answer and set; they differ in cost (and in
 /// `VisibleSet::triangles_tested`).
 enum class NciCrowdedPath : std::uint8_t {
-  automatic,  ///< per frame: the hierarchy for crowded views seen from outside the scene box, else the walk
+  automatic,  ///< per frame: the hierarchy for crowded views seen from outside the scene box, else the walk,
+              ///< a tile's walk handing its unfinished rays to the hierarchy where it meets many triangles
   walk_only,  ///< always the walk
   rays_only,  ///< always the hierarchy
 };
@@ -70,7 +71,9 @@ struct NciParams {
   /// Which path serves a frame's tiles (see NciCrowdedPath). Never changes the answer. The build
   /// keeps the hierarchy whatever this says (about 16 bytes per triangle). `automatic` casts a frame
   /// when the eye is outside the scene box and the index holds at least 0.75 triangles per pixel of
-  /// the box's screen rectangle, where it measured faster than the walk (see docs/nci.md).
+  /// the box's screen rectangle, where it measured faster than the walk (see docs/nci.md); in a
+  /// walked frame, a tile whose walk has met more than 4 triangles per live ray casts its unfinished
+  /// rays through the hierarchy from the hits the walk found.
   NciCrowdedPath crowded_path = NciCrowdedPath::automatic;
 };
 
@@ -122,7 +125,8 @@ struct NciSelectStats {
   /// through a BVH does less work.
   std::size_t triangles_no_pixel = 0;
   std::size_t cells_walked = 0;    ///< (tile, cell) pairs served by the near-to-far walk
-  std::size_t tiles_ray_cast = 0;  ///< tiles whose rays were cast through the frame hierarchy instead of walking the grid
+  std::size_t tiles_ray_cast = 0;  ///< tiles whose rays were cast through the frame hierarchy (from the start, or
+                                   ///< after their walk met too many triangles)
   int axis = 0;                    ///< grid axis walked
   /// Moving objects whose transform could not be used (singular, NaN or infinite, or projective;
   /// see NciMovingObject): each was reported whole and hid nothing.

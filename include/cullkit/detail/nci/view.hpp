@@ -56,6 +56,7 @@ struct ViewSetup {
   Rect box_rect{Rect::full, 0, 0, 0};
   int tile = 32;  // the tile edge of this call
   bool cast_frame = false;  // tiles are cast through the frame hierarchy (frame_tile.hpp), not walked
+  bool cast_crowded_tiles = false;  // walked tiles that turn out crowded are cast (mixed_tile.hpp)
 };
 
 // Whether a corner lies (nearly) at the eye: its offsets from the eye, as the float ray test takes
