@@ -248,14 +248,10 @@ inline void cast_live_rays(const IndexData& data, const ViewSetup& f, int x0, in
 // process_tile (slice_walk.hpp).
 inline void process_tile_frame(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
                                Worker& worker, Scratch& scratch) {
-  TileMasks m;
-  glm::dvec3 cone_sum;
-  if (!start_tile(data, f, x0, y0, x1, y1, r, scratch, m, cone_sum)) return;
-  const int tw = x1 - x0, th = y1 - y0;
-  select_classes(data, r, tw, th, m.live, cone_sum, worker.active_classes);
-  cast_live_rays(data, f, x0, y0, tw, th, m.live, r, worker);
-  collect_edge_band(f, r, x0, y0, tw, th, worker);
-  write_tile(f, r, x0, y0, tw, th, scratch, worker);
+  drive_tile(data, f, x0, y0, x1, y1, r, worker, scratch, [&](int tw, int th, TileMasks& m, const glm::dvec3& cone_sum) {
+    select_classes(data, r, tw, th, m.live, cone_sum, worker.active_classes);
+    cast_live_rays(data, f, x0, y0, tw, th, m.live, r, worker);
+  });
 }
 
 }  // namespace cullkit::detail::nci

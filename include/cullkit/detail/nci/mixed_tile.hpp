@@ -26,16 +26,12 @@ inline constexpr double tile_cast_crowding = 4.0;
 // walk found. The same outputs as process_tile: both paths keep every hit a ray can still take.
 inline void process_tile_mixed(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
                                Worker& worker, Scratch& scratch) {
-  TileMasks m;
-  glm::dvec3 cone_sum;
-  if (!start_tile(data, f, x0, y0, x1, y1, r, scratch, m, cone_sum)) return;
-  const int tw = x1 - x0, th = y1 - y0;
-  int live_rays = 0;
-  for (int y = 0; y < th; ++y) live_rays += __builtin_popcountll(m.live[y]);
-  if (!walk_tile(data, f, x0, y0, tw, th, r, worker, m, cone_sum, tile_cast_budget(live_rays)))
-    cast_live_rays(data, f, x0, y0, tw, th, m.live, r, worker);
-  collect_edge_band(f, r, x0, y0, tw, th, worker);
-  write_tile(f, r, x0, y0, tw, th, scratch, worker);
+  drive_tile(data, f, x0, y0, x1, y1, r, worker, scratch, [&](int tw, int th, TileMasks& m, const glm::dvec3& cone_sum) {
+    int live_rays = 0;
+    for (int y = 0; y < th; ++y) live_rays += __builtin_popcountll(m.live[y]);
+    if (!walk_tile(data, f, x0, y0, tw, th, r, worker, m, cone_sum, tile_cast_budget(live_rays)))
+      cast_live_rays(data, f, x0, y0, tw, th, m.live, r, worker);
+  });
 }
 
 }  // namespace cullkit::detail::nci

@@ -548,18 +548,29 @@ inline bool walk_tile(const IndexData& data, const ViewSetup& f, int x0, int y0,
   return finished;
 }
 
+// The frame of every tile path: the tile's rays set up (start_tile), `find_hits(tw, th, masks,
+// cone_sum)` finding their hits, then the edge band collected and the tile written. Each path
+// differs only in how it finds the hits.
+template <class FindHits>
+CULLKIT_FORCEINLINE void drive_tile(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
+                                    Worker& worker, Scratch& scratch, FindHits&& find_hits) {
+  TileMasks m;
+  glm::dvec3 cone_sum;
+  if (!start_tile(data, f, x0, y0, x1, y1, r, scratch, m, cone_sum)) return;
+  const int tw = x1 - x0, th = y1 - y0;
+  find_hits(tw, th, m, cone_sum);
+  collect_edge_band(f, r, x0, y0, tw, th, worker);
+  write_tile(f, r, x0, y0, tw, th, scratch, worker);
+}
+
 // One screen tile (x0, y0)..(x1, y1) of the frame, walked: its pixels' first hits, solid hits and
 // edge-band extras into the worker's records and the frame's per-pixel buffers. `r` is the
 // worker's scratch (any contents): every field read is set here first.
 inline void process_tile(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
                          Worker& worker, Scratch& scratch) {
-  TileMasks m;
-  glm::dvec3 cone_sum;
-  if (!start_tile(data, f, x0, y0, x1, y1, r, scratch, m, cone_sum)) return;
-  const int tw = x1 - x0, th = y1 - y0;
-  (void)walk_tile(data, f, x0, y0, tw, th, r, worker, m, cone_sum, 0);
-  collect_edge_band(f, r, x0, y0, tw, th, worker);
-  write_tile(f, r, x0, y0, tw, th, scratch, worker);
+  drive_tile(data, f, x0, y0, x1, y1, r, worker, scratch, [&](int tw, int th, TileMasks& m, const glm::dvec3& cone_sum) {
+    (void)walk_tile(data, f, x0, y0, tw, th, r, worker, m, cone_sum, 0);
+  });
 }
 
 }  // namespace cullkit::detail::nci
