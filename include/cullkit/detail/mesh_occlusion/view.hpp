@@ -40,9 +40,10 @@ struct View {
   double scale_x = 0, scale_y = 0, offset_x = 0, offset_y = 0;  // ndc -> grid
   int width = 0, height = 0;
   int orient = 1;  // front-facing triangles have grid signed area of this sign
-  // Occluder triangles are clipped where the near-plane value falls below this (see set_clip_level).
-  double clip_level = HUGE_VAL;      // occluders are clipped where the near-plane value reaches it
-  double drawable_level = HUGE_VAL;  // object triangles count as drawable down to minus this
+  // Near-plane values (see set_clip_level): occluder triangles are clipped where theirs falls below
+  // clip_level; an object's triangle counts as drawable down to -drawable_level.
+  double clip_level = HUGE_VAL;
+  double drawable_level = HUGE_VAL;
 
   /// Sets up the frame; `enabled` is false when the matrix is not a usable perspective projection
   /// centred (within a small fraction of the near distance) on the eye.
