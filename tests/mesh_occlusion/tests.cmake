@@ -3,6 +3,8 @@ cullkit_add_test(test_mesh_occlusion_fusion SOURCES ${CMAKE_CURRENT_LIST_DIR}/te
 cullkit_add_test(test_mesh_occlusion_bruteforce SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_bruteforce.cpp TIMEOUT 300)
 find_package(Threads REQUIRED)
 cullkit_add_test(test_mesh_occlusion_input SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_input.cpp LIBS Threads::Threads)
+# A warm context allocates nothing per frame, on generated and real scenes.
+cullkit_add_test(test_mesh_occlusion_warm_frames SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_warm_frames.cpp TIMEOUT 300)
 # MeshOcclusionCuller against Embree on real and generated scenes.
 include(${CMAKE_CURRENT_LIST_DIR}/embree.cmake)
 # Surface patches, triangle-level object tests and solid-box occluders, each against its control.

@@ -14,32 +14,9 @@
 #include <vector>
 
 #include "check.hpp"
+#include "count_allocations.hpp"
 #include "nci_test_util.hpp"
 
-namespace {
-std::atomic<long long> g_allocations{0};
-}  // namespace
-
-// The replacements below pair malloc with free; GCC cannot see that through inlined callers.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-#endif
-
-void* operator new(std::size_t size) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size ? size : 1)) return p;
-  std::abort();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  return std::malloc(size ? size : 1);
-}
-void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept { return operator new(size, tag); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 using namespace cullkit;
 using cullkit::support::Scene;
@@ -142,26 +119,26 @@ void test_warm_frames_allocate_nothing(const Scene& city, const std::vector<Came
     VisibleSet set;
     NciPixels pixels;
     // The counter sees the cold frame's allocations (buffers growing): it can fail.
-    const long long before_cold = g_allocations.load();
+    const long long before_cold = cullkit_test::allocations().load();
     index.select_visible(cams[0], ctx, set, &pixels);
-    CHECK_MSG(g_allocations.load() > before_cold, "threads=%u: the cold frame allocated nothing?", threads);
+    CHECK_MSG(cullkit_test::allocations().load() > before_cold, "threads=%u: the cold frame allocated nothing?", threads);
     for (const Camera& cam : cams) index.select_visible(cam, ctx, set, &pixels);  // every view once
     const std::size_t pool_threads = detail::WorkerPool::shared().thread_count();
-    const long long before = g_allocations.load();
+    const long long before = cullkit_test::allocations().load();
     std::size_t selected = 0;
     for (int frame = 0; frame < 20; ++frame) {
       index.select_visible(cams[static_cast<std::size_t>(frame) % cams.size()], ctx, set, &pixels);
       selected += set.triangles.size();
     }
-    const long long warm = g_allocations.load() - before;
+    const long long warm = cullkit_test::allocations().load() - before;
     CHECK_MSG(warm == 0, "threads=%u: 20 warm frames allocated %lld times", threads, warm);
     CHECK_MSG(detail::WorkerPool::shared().thread_count() == pool_threads, "threads=%u: warm frames started threads",
               threads);
     CHECK(selected > 0);
     // A fresh context per frame does allocate: the count above is not blind to the frame's work.
-    const long long before_fresh = g_allocations.load();
+    const long long before_fresh = cullkit_test::allocations().load();
     (void)select(index, cams[1]);
-    CHECK(g_allocations.load() - before_fresh > 0);
+    CHECK(cullkit_test::allocations().load() - before_fresh > 0);
   }
   // The pool holds at most the largest worker count asked for minus the caller.
   const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
