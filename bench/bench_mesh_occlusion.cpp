@@ -573,7 +573,7 @@ void culler_only(const std::string& name, const CullScene& cs, const std::vector
   static const char* const names[mo::phase_count] = {"frustum walk", "object boxes", "occluder choice",
                                                      "triangle setup and sort", "vertex projection", "bands",
                                                      "depths", "counts", "edge marking", "band ends",
-                                                     "finish", "box occluders", "object tests"};
+                                                     "patch grids", "finish", "box occluders", "object tests"};
   std::uint64_t sum = 0;
   for (std::uint64_t t : times.ticks) sum += t;
   const double median = spread(ms).median;

@@ -32,11 +32,11 @@ struct MeshOcclusionParams {
   /// Objects whose box covers less than this fraction of the screen are never occluders. Default
   /// 0.0005 (about 1000 pixels at 1920x1080). Small objects hide little and cost as much per triangle.
   float min_occluder_screen_fraction = 0.0005f;
-  /// Occluder triangles go in nearest first, in bands: a band holds the triangles whose nearest
-  /// corner is at most (1 + depth_band_ratio) times as far as the band's first. A cell is given
-  /// its depth when a band ends, as the farthest of the triangles near it so far. Default 0.1.
-  /// 0 makes every distinct depth its own band (tightest depths, slowest); larger values are
-  /// faster and hide less behind layered occluders.
+  /// Occluder patches go in one at a time, nearest first, and each patch's triangles nearest first,
+  /// in bands: a band holds the triangles whose nearest corner is at most (1 + depth_band_ratio)
+  /// times as far as the band's first. A cell is given its depth when a band ends, as the farthest
+  /// of the triangles near it so far. Default 0.1. 0 makes every distinct depth its own band
+  /// (tightest depths, slowest); larger values are faster and hide less behind folded occluders.
   float depth_band_ratio = 0.1f;
   /// Most occluder patches per frame. Default 4096.
   std::uint32_t max_occluder_objects = 4096;
@@ -68,11 +68,12 @@ struct MeshOcclusionParams {
   /// triangle, so no answer can become less conservative. The cut triangles remain one triangle
   /// for everything but occlusion. Default true. false: triangles are used as given.
   bool cut_tjunctions = true;
-  /// Each frame, each occluder patch is also inserted alone into a grid of its own, and a cell it
-  /// covers by itself takes the patch's depth bound where that is nearer than the union's. The union
-  /// of all occluders fuses their seams but keeps, per cell, the farthest depth of every triangle that
-  /// touched the cell before it was covered (a floor's far part where a wall stands in front of it);
-  /// a patch alone gives its own. Default true. false: the union only, about half the insertion time.
+  /// Each occluder patch goes into a grid of its own before it joins the union of all occluders, and
+  /// a cell it covers by itself takes the patch's depth bound where that is nearer than the union's.
+  /// The union fuses the occluders' seams but keeps, per cell, the farthest depth of every triangle
+  /// that touched the cell before it was covered (a floor's far part where a wall stands in front of
+  /// it); a patch alone gives its own. Default true. false: the union's depths only, for comparison:
+  /// it hides less and is no faster (fewer cells covered early leaves more work to later patches).
   bool patch_layers = true;
   /// Parameters of the frustum-culling tree over object bounds.
   AbtParams tree = {};

@@ -59,6 +59,10 @@ class CoverageGrid {
       band_lo_.assign(static_cast<std::size_t>(height), width);
       band_hi_.assign(static_cast<std::size_t>(height), -1);
       band_rows_.assign(static_cast<std::size_t>(height), 0);
+      used_lo_.assign(static_cast<std::size_t>(height), width);
+      used_hi_.assign(static_cast<std::size_t>(height), -1);
+      used_rows_.assign(static_cast<std::size_t>(height), 0);
+      used_row_count_ = 0;
       band_row_count_ = 0;
       dirty_ = CellRect{width, height, -1, -1};
       fresh_ = dirty_;
@@ -185,6 +189,7 @@ class CoverageGrid {
         const float start = static_cast<float>(v00 - err) + bf * static_cast<float>(j - r.y0);
         int i0, i1;
         if (!row_span(edges, j, m, i0, i1) || !unfrozen_span(j, i0, i1)) continue;
+        use(j, i0, i1);
         for (int i = i0; i <= i1; ++i) {
           const float v = std::max(lowest, start + af * static_cast<float>(i - r.x0));
           row[i] = std::min(row[i], v);
@@ -195,6 +200,7 @@ class CoverageGrid {
         float* row = bound_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
         int i0, i1;
         if (!row_span(edges, j, m, i0, i1) || !unfrozen_span(j, i0, i1)) continue;
+        use(j, i0, i1);
         for (int i = i0; i <= i1; ++i) row[i] = std::min(row[i], lowest);
       }
     }
@@ -215,6 +221,7 @@ class CoverageGrid {
       grow(dirty_, CellRect{i0, j, i1, j});
       const int last = accumulate_row(base, i0, i1) - 1;
       grow(dirty_, CellRect{i0, j, last, j});
+      use(j, i0, last);
       const std::size_t fresh = freeze(j, i0, last);
       if (fresh != 0) grow(fresh_, CellRect{i0, j, last, j});
       covered += fresh;
@@ -321,6 +328,30 @@ class CoverageGrid {
         if (!(row[i] >= nearest)) return true;
     }
     return false;
+  }
+
+  /// Adds `patch` (a grid of the same size, after its last band) into this one: its counts, outline
+  /// counters and running bounds over every cell it changed, which this grid's next end_band scans.
+  void absorb(const CoverageGrid& patch) {
+    if (patch.dirty_.empty()) return;
+    grow(dirty_, patch.dirty_);
+    for (int n = 0; n < patch.used_row_count_; ++n) {
+      const int j = patch.used_rows_[static_cast<std::size_t>(n)];
+      const int i0 = patch.used_lo_[static_cast<std::size_t>(j)], i1 = patch.used_hi_[static_cast<std::size_t>(j)];
+      const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+      std::int32_t* count = count_.data() + base;
+      std::int32_t* block = block_.data() + base;
+      float* bound = bound_.data() + base;
+      const std::int32_t* from_count = patch.count_.data() + base;
+      const std::int32_t* from_block = patch.block_.data() + base;
+      const float* from_bound = patch.bound_.data() + base;
+      for (int i = i0; i <= i1; ++i) {
+        count[i] += from_count[i];
+        block[i] += from_block[i];
+        bound[i] = std::min(bound[i], from_bound[i]);
+      }
+      mark(j, i0, i1);
+    }
   }
 
   /// Where `layer` (a grid of the same size, after its last band) has a cell covered with a nearer
@@ -617,10 +648,20 @@ class CoverageGrid {
 
   // Cell range [i0, i1] of row j changed in this band: end_band scans it.
   void mark(int j, int i0, int i1) {
+    use(j, i0, i1);
     const auto r = static_cast<std::size_t>(j);
     if (band_hi_[r] < 0) band_rows_[static_cast<std::size_t>(band_row_count_++)] = j;  // each row once per band
     band_lo_[r] = std::min(band_lo_[r], i0);
     band_hi_[r] = std::max(band_hi_[r], i1);
+  }
+
+  // Cell range [i0, i1] of row j may have changed counters or bounds since the grid was last
+  // cleared: clear_dirty and absorb visit it.
+  void use(int j, int i0, int i1) {
+    const auto r = static_cast<std::size_t>(j);
+    if (used_hi_[r] < 0) used_rows_[static_cast<std::size_t>(used_row_count_++)] = j;
+    used_lo_[r] = std::min(used_lo_[r], i0);
+    used_hi_[r] = std::max(used_hi_[r], i1);
   }
 
   static int clamp_cell(double v, int n) {
@@ -662,13 +703,23 @@ class CoverageGrid {
   // Returns the touched part of the grid to the empty state.
   void clear_dirty() {
     fresh_ = CellRect{width_, height_, -1, -1};
+    // Counters and bounds where they were used; depths and covered bits over the changed rectangle
+    // (seed_frozen and take_nearer write those across it).
+    for (int n = 0; n < used_row_count_; ++n) {
+      const auto j = static_cast<std::size_t>(used_rows_[static_cast<std::size_t>(n)]);
+      const std::size_t base = j * static_cast<std::size_t>(width_);
+      const auto b = static_cast<std::ptrdiff_t>(base) + used_lo_[j], e = static_cast<std::ptrdiff_t>(base) + used_hi_[j] + 1;
+      std::fill(count_.begin() + b, count_.begin() + e, 0);
+      std::fill(block_.begin() + b, block_.begin() + e, 0);
+      std::fill(bound_.begin() + b, bound_.begin() + e, std::numeric_limits<float>::infinity());
+      used_lo_[j] = width_;
+      used_hi_[j] = -1;
+    }
+    used_row_count_ = 0;
     if (dirty_.empty()) return;
     for (int j = dirty_.y0; j <= dirty_.y1; ++j) {
       const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
       const auto b = static_cast<std::ptrdiff_t>(base) + dirty_.x0, e = static_cast<std::ptrdiff_t>(base) + dirty_.x1 + 1;
-      std::fill(count_.begin() + b, count_.begin() + e, 0);
-      std::fill(block_.begin() + b, block_.begin() + e, 0);
-      std::fill(bound_.begin() + b, bound_.begin() + e, std::numeric_limits<float>::infinity());
       std::fill(depth_.begin() + b, depth_.begin() + e, 0.0f);
     }
     std::fill(frozen_bits_.begin() + static_cast<std::ptrdiff_t>(dirty_.y0) * words_,
@@ -685,6 +736,8 @@ class CoverageGrid {
   std::vector<std::uint64_t> frozen_bits_;   // per row, a bit per covered (frozen) cell
   std::vector<int> band_lo_, band_hi_, band_rows_;  // per row: cells changed in the current band
   int band_row_count_ = 0;                          // rows listed in band_rows_
+  std::vector<int> used_lo_, used_hi_, used_rows_;  // per row: cells whose counters or bound changed since clear_dirty
+  int used_row_count_ = 0;                          // rows listed in used_rows_
   CellRect dirty_{0, 0, -1, -1};
   CellRect fresh_{0, 0, -1, -1};  // since seed_frozen: the rows' ranges where end_band covered cells
 };

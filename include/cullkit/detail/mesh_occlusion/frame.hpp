@@ -62,12 +62,19 @@ struct Scratch {
   std::vector<Projected> projected;
   View view;
   CoverageGrid grid;
-  // Per-patch layers (refine_by_patches): the patch that gathered each triangle, a stamp for the
-  // members of the current layer, the gathered triangles grouped by patch, and the layer's grid.
-  std::vector<std::uint32_t> triangle_owner, layer_stamp, layer_first;
-  std::uint32_t layer_value = 0;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> layer_order;
-  CoverageGrid layer;
+  // Insertion patch by patch (insert_patches): the occluder that gathered each triangle, the
+  // gathered triangles grouped by it (`by_patch`, group q starting at patch_first[q]), the order of
+  // the groups, a stamp for the members of the group being inserted, one for the triangles
+  // inserted so far, and the grid each group goes into alone.
+  std::vector<std::uint32_t> triangle_owner, patch_first;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> by_patch;
+  // (nearest key, patch), nearest first, and its own sort buffer (radix_sort swaps the two: sharing
+  // the triangles' would trade a small vector into their place and regrow it every frame).
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> patch_order, patch_sort_buffer;
+  std::vector<std::uint32_t> member_stamp;
+  std::uint32_t member_value = 0;
+  std::vector<std::uint32_t> done_stamp;
+  CoverageGrid patch_grid;
   std::vector<std::pair<float, std::uint32_t>> box_candidates;  // (screen cells, object)
   std::vector<Aabb> box_occluders;
   OcclusionTree box_tree{glm::vec3(0.0f)};  // the solid boxes' hidden region, when box_occluders is not empty
@@ -105,8 +112,9 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
     s.triangle_band.assign(index.corners.size() / 3, 0);
     s.clip_stamp.assign(index.corners.size() / 3, 0);
     s.triangle_owner.assign(index.corners.size() / 3, 0);
-    s.layer_stamp.assign(index.corners.size() / 3, 0);
-    s.layer_value = 0;
+    s.done_stamp.assign(index.corners.size() / 3, 0);
+    s.member_stamp.assign(index.corners.size() / 3, 0);
+    s.member_value = 0;
     s.clip_slot.assign(index.corners.size() / 3, 0);
     s.patch_stamp.assign(index.patches.patches.size(), 0);
     s.patch_boxes.resize(index.patches.patches.size());
@@ -116,6 +124,7 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
     std::fill(s.vertex_stamp.begin(), s.vertex_stamp.end(), 0);
     std::fill(s.triangle_stamp.begin(), s.triangle_stamp.end(), 0);
     std::fill(s.clip_stamp.begin(), s.clip_stamp.end(), 0);
+    std::fill(s.done_stamp.begin(), s.done_stamp.end(), 0);
     std::fill(s.patch_stamp.begin(), s.patch_stamp.end(), 0);
     s.frame = 1;
   }

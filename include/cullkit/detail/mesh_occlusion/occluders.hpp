@@ -249,10 +249,10 @@ inline void gather_triangles(const MeshIndex& index, Scratch& s) {
   radix_sort(s.triangles, s.sort_buffer);
 }
 
-/// Inserts a clipped occluder polygon as insert_triangles does a triangle: its depth and counts as a
+/// Inserts a clipped occluder polygon as insert_run does a triangle: its depth and counts as a
 /// fan of triangles whose diagonals are left out of the counts (each would cancel its twin in the
 /// fan exactly), its edges along the triangle's edges shared with neighbours as the triangle's
-/// would be (`inner`, `twin_band`: per triangle edge, as insert_triangles finds them; the shared
+/// would be (`inner`, `twin_band`: per triangle edge, as insert_run finds them; the shared
 /// part is the same segment on both sides), and its edge along the clipping line as outline.
 inline void insert_clipped(CoverageGrid& grid, const ClippedPolygon& poly, int orient, unsigned inner,
                            const std::uint32_t* twin_band, std::uint32_t my_band, PhaseProbe& probe) {
@@ -402,46 +402,81 @@ inline std::size_t insert_run(const MeshIndex& index, const MeshOcclusionParams&
   return covered;
 }
 
-/// Inserts every gathered triangle into the frame's grid (the union of all occluders: edges shared
-/// by two occluders cancel, whichever patch they came from). Returns the cells covered.
-inline std::size_t insert_triangles(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
-  std::size_t inserted = 0;
-  const std::size_t covered = insert_run(index, params, s, s.grid, s.triangles.data(), s.triangles.data() + s.triangles.size(),
-                                         RunMembers{s.triangle_stamp, s.frame}, inserted);
-  s.stats.occluder_triangles += inserted;
-  return covered;
+/// The segment of occluder triangle t along its edge k (0 to 2), as the triangle runs, into (x0, y0)
+/// -> (x1, y1): the triangle's corners, or its clipped polygon's part of that edge. False when the
+/// clipped polygon keeps nothing of the edge.
+inline bool edge_segment(const MeshIndex& index, const Scratch& s, std::uint32_t t, int k, double& x0, double& y0,
+                         double& x1, double& y1) {
+  if (!s.clipped.empty() && s.clip_stamp[t] == s.frame) {
+    const ClippedPolygon& poly = s.clipped[s.clip_slot[t]];
+    for (int c = 0; c < poly.n; ++c) {
+      if (poly.edge[c] != k) continue;
+      const int d = c + 1 == poly.n ? 0 : c + 1;
+      x0 = poly.x[c];
+      y0 = poly.y[c];
+      x1 = poly.x[d];
+      y1 = poly.y[d];
+      return true;
+    }
+    return false;
+  }
+  const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
+  const Projected& a = s.projected[s.vertex_slot[c[k]]];
+  const Projected& b = s.projected[s.vertex_slot[c[k == 2 ? 0 : k + 1]]];
+  x0 = a.x;
+  y0 = a.y;
+  x1 = b.x;
+  y1 = b.y;
+  return true;
 }
 
-/// Per-patch layers. The union's grid freezes a cell at the bound of every triangle that touched it
-/// before it was covered: a floor inserted early (its nearest corner is near) leaves its own far depth
-/// in the cells where a wall stands in front of it. Any set of occluders that covers a cell bounds the
-/// depth of every ray through it, so each occluder patch (a connected piece of surface) is also
-/// inserted alone into a grid of its own, and a cell it covers by itself takes the patch's bound
-/// where that is nearer than the union's.
-inline void refine_by_patches(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+/// Inserts every gathered triangle, patch by patch (a patch's nearest triangle first decides its
+/// turn), each patch alone into a grid of its own in depth bands, then added into the frame's grid.
+///
+/// The frame's grid holds the union of all occluders: an edge that a patch shares with a patch
+/// inserted before it is no outline there, so the earlier patch's mark of it and this patch's (its
+/// own grid's, now added) are both taken out again, and the seam fuses. The patch's own grid says
+/// which cells the patch covers by itself, at the patch's own depth bound: where that is nearer than
+/// the union's, the cell takes it (`patch_layers`). A wall standing on a floor that went in before
+/// it leaves its own depth, not the floor's, in front of what is behind it.
+///
+/// Why a patch's grid can be added into the union as it is: the patch's grid leaves out the cells it
+/// holds as covered (seeded from the union, or covered by the patch alone in an earlier band) when it
+/// marks outline edges, so the union may lack such a mark there; a later patch taking that edge out
+/// again may then leave the cell's outline counter low, and the cell may count as covered. Seeded
+/// cells are covered in the union already and never change again; a cell the patch covers alone is
+/// covered by the union too, and its bound holds (the triangles that covered it gave their bounds
+/// there before it was left out). So no cell that the union does not cover counts as covered.
+inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
   const std::size_t n = s.occluders.size();
-  if (n < 2 || s.triangles.empty()) return;  // one patch: the union is the patch
+  if (s.triangles.empty()) return 0;
   // The gathered triangles grouped by patch, each group still nearest first.
-  s.layer_first.assign(n + 1, 0);
-  for (const auto& tr : s.triangles) ++s.layer_first[s.triangle_owner[tr.second] + 1];
-  for (std::size_t q = 0; q < n; ++q) s.layer_first[q + 1] += s.layer_first[q];
-  s.layer_order.resize(s.triangles.size());
-  for (const auto& tr : s.triangles) s.layer_order[s.layer_first[s.triangle_owner[tr.second]]++] = tr;
-  for (std::size_t q = n; q > 0; --q) s.layer_first[q] = s.layer_first[q - 1];
-  s.layer_first[0] = 0;
-  for (std::size_t q = 0; q < n; ++q) {
-    const std::uint32_t b = s.layer_first[q], e = s.layer_first[q + 1];
-    if (b == e) continue;
-    if (++s.layer_value == 0) {
-      std::fill(s.layer_stamp.begin(), s.layer_stamp.end(), 0);
-      s.layer_value = 1;
+  s.patch_first.assign(n + 1, 0);
+  for (const auto& tr : s.triangles) ++s.patch_first[s.triangle_owner[tr.second] + 1];
+  for (std::size_t q = 0; q < n; ++q) s.patch_first[q + 1] += s.patch_first[q];
+  s.by_patch.resize(s.triangles.size());
+  for (const auto& tr : s.triangles) s.by_patch[s.patch_first[s.triangle_owner[tr.second]]++] = tr;
+  for (std::size_t q = n; q > 0; --q) s.patch_first[q] = s.patch_first[q - 1];
+  s.patch_first[0] = 0;
+  s.patch_order.clear();
+  for (std::size_t q = 0; q < n; ++q)
+    if (s.patch_first[q] != s.patch_first[q + 1])
+      s.patch_order.emplace_back(s.by_patch[s.patch_first[q]].first, static_cast<std::uint32_t>(q));
+  radix_sort(s.patch_order, s.patch_sort_buffer);
+  const int orient = s.view.orient;
+  std::size_t covered = 0, inserted = 0;
+  PhaseProbe probe;
+  for (const auto& entry : s.patch_order) {
+    const std::uint32_t q = entry.second;
+    const std::uint32_t b = s.patch_first[q], e = s.patch_first[q + 1];
+    if (++s.member_value == 0) {
+      std::fill(s.member_stamp.begin(), s.member_stamp.end(), 0);
+      s.member_value = 1;
     }
-    // The patch's cells and its nearest point: where the union is already at least that near, the
-    // patch alone cannot do better.
     double xmin = HUGE_VAL, ymin = HUGE_VAL, xmax = -HUGE_VAL, ymax = -HUGE_VAL, wmin = HUGE_VAL;
     for (std::uint32_t i = b; i < e; ++i) {
-      const std::uint32_t t = s.layer_order[i].second;
-      s.layer_stamp[t] = s.layer_value;
+      const std::uint32_t t = s.by_patch[i].second;
+      s.member_stamp[t] = s.member_value;
       double x[4], y[4], w[4];
       const int m = occluder_corners(index, s, t, x, y, w);
       for (int k = 0; k < m; ++k) {
@@ -452,19 +487,37 @@ inline void refine_by_patches(const MeshIndex& index, const MeshOcclusionParams&
         wmin = std::min(wmin, w[k]);
       }
     }
-    // A patch can only gain the cells it covers alone, and those lie wholly inside its corners' box:
-    // when each of them is already as near in the union as the patch's nearest point, or there is
-    // none (a patch thinner than a cell on screen), the layer could change nothing.
-    const float nearest = static_cast<float>(1.0 / wmin);
-    const CellRect inside = s.grid.cells_inside(xmin, ymin, xmax, ymax);
-    if (inside.empty() || !s.grid.any_below(inside, nearest)) continue;
-    s.layer.reset(s.grid.width(), s.grid.height());
-    if (!s.layer.seed_frozen(s.grid, s.grid.cells_of(xmin, ymin, xmax, ymax), nearest)) continue;
-    std::size_t inserted = 0;
-    insert_run(index, params, s, s.layer, s.layer_order.data() + b, s.layer_order.data() + e,
-               RunMembers{s.layer_stamp, s.layer_value}, inserted);
-    s.grid.take_nearer(s.layer);
+    // Cells the union covers at least as near as the patch's nearest point start covered: the patch
+    // can change nothing there. When that is all of them, it is skipped whole (as if no occluder).
+    s.patch_grid.reset(s.grid.width(), s.grid.height());
+    const bool open = s.patch_grid.seed_frozen(s.grid, s.grid.cells_of(xmin, ymin, xmax, ymax), static_cast<float>(1.0 / wmin));
+    probe.next(phase_patches);
+    if (!open) continue;
+    const RunMembers members{s.member_stamp, s.member_value};
+    insert_run(index, params, s, s.patch_grid, s.by_patch.data() + b, s.by_patch.data() + e, members, inserted);
+    probe.restart();  // insert_run charged its own steps
+    s.grid.absorb(s.patch_grid);
+    probe.next(phase_patches);
+    for (std::uint32_t i = b; i < e; ++i) {
+      const std::uint32_t t = s.by_patch[i].second;
+      if (!members.has(t)) continue;  // dropped over covered cells
+      s.done_stamp[t] = s.frame;
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
+        if (twin == none || s.done_stamp[twin / 3] != s.frame || s.triangle_owner[twin / 3] == q) continue;
+        double x0, y0, x1, y1;
+        if (!edge_segment(index, s, t, k, x0, y0, x1, y1)) continue;
+        s.grid.touch_edge(x1, y1, x0, y0, orient, -1);  // the earlier patch's edge, as its triangle runs
+        s.grid.touch_edge(x0, y0, x1, y1, orient, -1);  // this patch's
+      }
+    }
+    probe.next(phase_edges);
+    covered += s.grid.end_band();
+    if (params.patch_layers) s.grid.take_nearer(s.patch_grid);
+    probe.next(phase_end_band);
   }
+  s.stats.occluder_triangles += inserted;
+  return covered;
 }
 
 }  // namespace mesh_occlusion

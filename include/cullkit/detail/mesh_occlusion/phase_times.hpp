@@ -22,6 +22,7 @@ enum Phase : int {
   phase_counts,      // winding counts at cell centres
   phase_edges,       // outline edge marking
   phase_end_band,    // prefix sums and freezing per band
+  phase_patches,     // each patch's own grid: seeding it, adding it into the union, clearing it
   phase_finish,      // per-tile summaries
   phase_box_occluders,  // solid-box occluders: choice and their hidden region
   phase_tests,       // object tests

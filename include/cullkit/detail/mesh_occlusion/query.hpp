@@ -66,9 +66,8 @@ CULLKIT_CORE_FN void cull(const MeshIndex& index, const MeshOcclusionParams& par
   gather_triangles(index, s);
   probe.next(phase_gather);
   stats.occluders_used = s.occluders.size();
-  stats.cells_covered = insert_triangles(index, params, s);
-  if (params.patch_layers) refine_by_patches(index, params, s);
-  probe.restart();  // insert_triangles charged its own steps
+  stats.cells_covered = insert_patches(index, params, s);
+  probe.restart();  // insert_patches charged its own steps
   s.grid.finish();
   probe.next(phase_finish);
   s.view_eye = camera.eye;
