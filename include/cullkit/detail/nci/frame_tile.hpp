@@ -54,7 +54,7 @@ struct FrameLeaf {
   const ViewSetup& f;
   TileState& r;
   Worker& worker;
-  FrameSlot& slot;
+  FrameSlot* slot;  // the packet taking this step (one FrameLeaf serves every packet of a tile)
   const std::uint8_t* class_on;  // per class: it may face some live ray of the tile (select_classes)
   std::size_t& met;
   int x0, y0;  // the tile's first pixel
@@ -99,84 +99,98 @@ struct FrameLeaf {
   [[nodiscard]] std::uint64_t in_footprint(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
                                            std::uint64_t rays) const {
     TileState::Mask rows[TileState::max_tile], inside[TileState::max_tile];
-    const int ry0 = slot.by + __builtin_ctzll(rays) / 8, ry1 = slot.by + (63 - __builtin_clzll(rays)) / 8;
+    const int by = slot->by, bx = slot->bx;
+    const int ry0 = by + __builtin_ctzll(rays) / 8, ry1 = by + (63 - __builtin_clzll(rays)) / 8;
     for (int y = ry0; y <= ry1; ++y)
-      rows[y] = static_cast<TileState::Mask>((rays >> (8 * (y - slot.by))) & 0xFFu) << slot.bx;
+      rows[y] = static_cast<TileState::Mask>((rays >> (8 * (y - by))) & 0xFFu) << bx;
     if (!footprint_mask(f, p0, p1, p2, x0, y0, ry0, ry1, rows, inside, f.tile - 1)) return rays;
     std::uint64_t kept = 0;
     for (int y = ry0; y <= ry1; ++y)
-      kept |= static_cast<std::uint64_t>((inside[y] >> slot.bx) & 0xFFu) << (8 * (y - slot.by));
+      kept |= static_cast<std::uint64_t>((inside[y] >> bx) & 0xFFu) << (8 * (y - by));
     return kept & rays;
   }
 
   void test(std::uint32_t first, std::uint32_t count, std::uint64_t mask, std::uint32_t carry) {
-    FramePacket& p = slot.p;
-    const int stride = r.stride;
+    FramePacket& p = slot->p;
+    const int stride = r.stride, by = slot->by, bx = slot->bx;
+    const float dir[3] = {slot->dir[0], slot->dir[1], slot->dir[2]};
+    const auto pixel = [&](int k) { return (by + k / 8) * stride + bx + k % 8; };
     // The leaf's triangles nearest first along the packet's mean ray (as the walk sorts its
-    // candidates), so that near hits let the depth rejects drop the triangles behind them.
-    std::uint32_t order[FrameBvhNode::leaf_max];
-    float key[FrameBvhNode::leaf_max];
+    // candidates), so that near hits let the depth rejects drop the triangles behind them. Each
+    // one's corners relative to the eye (as test_ray takes them) are made once, here.
+    struct Item {
+      float key;
+      std::uint32_t tri;
+      float c[3][3];
+    };
+    Item item[FrameBvhNode::leaf_max];
     std::uint32_t kept = 0;
     for (std::uint32_t q = 0; q < count; ++q) {
       if (!(carry >> q & 1u)) continue;  // a back face for every ray of the tile
-      const std::uint32_t tri = data.frame.tris[first + q];
+      Item it;
+      it.tri = data.frame.tris[first + q];
       float k = std::numeric_limits<float>::infinity();
       for (int c = 0; c < 3; ++c) {
-        const glm::vec3 d = data.corner(tri, c) - f.eye_f;
-        k = std::min(k, d.x * slot.dir[0] + d.y * slot.dir[1] + d.z * slot.dir[2]);
+        const glm::vec3& v = data.corner(it.tri, c);
+        it.c[c][0] = v.x - f.eye_f.x;
+        it.c[c][1] = v.y - f.eye_f.y;
+        it.c[c][2] = v.z - f.eye_f.z;
+        k = std::min(k, it.c[c][0] * dir[0] + it.c[c][1] * dir[1] + it.c[c][2] * dir[2]);
       }
+      it.key = k;
       std::uint32_t at = kept++;
-      for (; at > 0 && (key[at - 1] > k || (key[at - 1] == k && order[at - 1] > tri)); --at) {
-        key[at] = key[at - 1];
-        order[at] = order[at - 1];
-      }
-      key[at] = k;
-      order[at] = tri;
+      for (; at > 0 && (item[at - 1].key > k || (item[at - 1].key == k && item[at - 1].tri > it.tri)); --at)
+        item[at] = item[at - 1];
+      item[at] = it;
     }
     for (std::uint32_t q = 0; q < kept; ++q) {
-      const std::uint32_t tri = order[q];
+      const std::uint32_t tri = item[q].tri;
       ++met;
+      const float* ta = item[q].c[0];
+      const float* tb = item[q].c[1];
+      const float* tc = item[q].c[2];
       const glm::vec3 &p0 = data.corner(tri, 0), &p1 = data.corner(tri, 1), &p2 = data.corner(tri, 2);
-      // Corners relative to the eye as test_triangle takes them.
-      const float ta[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};
-      const float tb[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
-      const float tc[3] = {p2.x - f.eye_f.x, p2.y - f.eye_f.y, p2.z - f.eye_f.z};
       if (!faces_eye_fast(ta, tb, tc, p0, p1, p2, f.eye)) {
         ++worker.stats.triangles_no_pixel;
         continue;
       }
-      const float mag[3] = {std::max({std::fabs(ta[0]), std::fabs(ta[1]), std::fabs(ta[2])}),
-                            std::max({std::fabs(tb[0]), std::fabs(tb[1]), std::fabs(tb[2])}),
-                            std::max({std::fabs(tc[0]), std::fabs(tc[1]), std::fabs(tc[2])})};
-      const float qlo[3] = {std::min({ta[0], tb[0], tc[0]}), std::min({ta[1], tb[1], tc[1]}), std::min({ta[2], tb[2], tc[2]})};
-      const float qhi[3] = {std::max({ta[0], tb[0], tc[0]}), std::max({ta[1], tb[1], tc[1]}), std::max({ta[2], tb[2], tc[2]})};
+      // std::min / std::max of three as two nested calls: the same value as the
+      // initializer-list forms (the first of equal operands), without their loops.
+      const auto min3 = [](float x, float y, float z) { return std::min(std::min(x, y), z); };
+      const auto max3 = [](float x, float y, float z) { return std::max(std::max(x, y), z); };
+      const float mag[3] = {max3(std::fabs(ta[0]), std::fabs(ta[1]), std::fabs(ta[2])),
+                            max3(std::fabs(tb[0]), std::fabs(tb[1]), std::fabs(tb[2])),
+                            max3(std::fabs(tc[0]), std::fabs(tc[1]), std::fabs(tc[2]))};
+      const float qlo[3] = {min3(ta[0], tb[0], tc[0]), min3(ta[1], tb[1], tc[1]), min3(ta[2], tb[2], tc[2])};
+      const float qhi[3] = {max3(ta[0], tb[0], tc[0]), max3(ta[1], tb[1], tc[1]), max3(ta[2], tb[2], tc[2])};
       // The triangle's box grown as the hierarchy's boxes are (frame_box_growth).
-      const float grow = std::max({mag[0], mag[1], mag[2]}) * frame_box_growth;
+      const float grow = max3(mag[0], mag[1], mag[2]) * frame_box_growth;
       const float glo[3] = {qlo[0] - grow, qlo[1] - grow, qlo[2] - grow};
       const float ghi[3] = {qhi[0] + grow, qhi[1] + grow, qhi[2] + grow};
       const std::uint64_t meet = frame_rays_meet(p, mask, glo, ghi);
-      const bool reached = meet != 0;
       std::uint64_t rays = 0;
       for (std::uint64_t m = meet; m; m &= m - 1) {
         const int k = __builtin_ctzll(m);
-        const int i = (slot.by + k / 8) * stride + slot.bx + k % 8;
-        if (ray_behind(r, i, qlo, qhi)) continue;
+        if (ray_behind(r, pixel(k), qlo, qhi)) continue;
         rays |= std::uint64_t{1} << k;
       }
-      if (!reached) ++worker.stats.triangles_no_pixel;  // between the packet's pixel centres
-      if (f.footprint && rays && __builtin_popcountll(rays) >= frame_footprint_rays) rays = in_footprint(p0, p1, p2, rays);
+      if (!meet) ++worker.stats.triangles_no_pixel;  // between the packet's pixel centres
+      if (f.footprint && at_least_footprint_rays(rays)) rays = in_footprint(p0, p1, p2, rays);
       if (!rays) continue;
-      for (std::uint64_t m = rays; m; m &= m - 1) {
-        const int k = __builtin_ctzll(m);
-        test_ray(data, r, worker, (slot.by + k / 8) * stride + slot.bx + k % 8, tri, ta, tb, tc, mag);
-      }
+      for (std::uint64_t m = rays; m; m &= m - 1) test_ray(data, r, worker, pixel(__builtin_ctzll(m)), tri, ta, tb, tc, mag);
       worker.mark_tested(tri);
       ++worker.tested_count;  // (triangle, packet) pairs: a triangle is met once per packet
     }
     for (std::uint64_t m = mask; m; m &= m - 1) {
       const int k = __builtin_ctzll(m);
-      p.t[k] = r.solid_t[(slot.by + k / 8) * stride + slot.bx + k % 8];
+      p.t[k] = r.solid_t[pixel(k)];
     }
+  }
+
+  // Whether `rays` holds at least frame_footprint_rays rays (no popcount instruction is assumed).
+  [[nodiscard]] static bool at_least_footprint_rays(std::uint64_t rays) noexcept {
+    for (int n = 1; n < frame_footprint_rays && rays; ++n) rays &= rays - 1;
+    return rays != 0;
   }
 };
 
@@ -231,10 +245,11 @@ inline void cast_live_rays(const IndexData& data, const ViewSetup& f, int x0, in
     slot.busy = false;
     active += open_frame_block(data, r, live, tw, th, next, slot);
   }
+  FrameLeaf leaf{data, f, r, worker, nullptr, worker.class_on.data(), met, x0, y0};
   while (active > 0) {
     for (FrameSlot& slot : worker.frame_slots) {
       if (!slot.busy) continue;
-      FrameLeaf leaf{data, f, r, worker, slot, worker.class_on.data(), met, x0, y0};
+      leaf.slot = &slot;
       frame_cursor_step(data.frame, eye, slot.p, slot.cur, leaf, cast);
       if (!slot.cur.done()) continue;
       slot.busy = false;
