@@ -1,10 +1,10 @@
 // cullkit/detail/nci/frame_tile.hpp: one screen tile served by the frame hierarchy instead of the
 // grid walk (NciCrowdedPath): the tile's rays are set up as for the walk, cast in packets of 8x8
 // through the hierarchy (frame_cast.hpp), four packets taking turns, and every triangle of a leaf
-// a packet reaches goes through the walk's own steps: the frame's cached screen rectangle (which
-// holds the front-face rule), then test_triangle (depth rejects, corner-ray planes, footprint, the
-// watertight test, ties to the lower mesh index, edge-band records). The per-pixel answer is the
-// walk's: the same triangles reach test_triangle for every ray that could report them.
+// a packet reaches goes through the walk's own cuts and ray step: its grown box against the
+// packet's rays, the front-face rule, the depth reject per ray, the 2D footprint, then test_ray
+// (the watertight test, ties to the lower mesh index, edge-band records). Each cut drops only rays
+// the float test could not report, so the per-pixel answer is the walk's.
 #pragma once
 
 #include <algorithm>
