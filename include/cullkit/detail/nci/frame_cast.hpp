@@ -220,20 +220,25 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const FrameBvh& bvh, const float eye[
                                            Leaf& leaf, FrameCastStats& stats) {
   const FrameCursor::Entry e = c.stack[--c.top];
   std::uint64_t mask = e.mask;
+  // A leaf's later phases skip the depth cut: only this packet's own leaf tests lower its p.t, and
+  // none ran since the cut of its first phase.
+  const bool cut = !FrameBvhNode::is_leaf(e.code) || e.phase == 0;
 #if CULLKIT_HAS_SSE2
-  {
-    // Four rays per compare over the whole packet: cheaper than one per live ray once a packet
-    // holds more than a few, and without the branch on each.
+  if (cut) {
+    // Four rays per compare, over the groups of four that hold rays of the entry (deep in the
+    // tree an entry holds a few rays of its packet, near the root most of them).
     const __m128 near = _mm_set1_ps(e.near), scale = _mm_set1_ps(1.0f + frame_t_slack);
     std::uint64_t drop = 0;
-    for (int g = 0; g < 16; ++g) {
-      const __m128 before = _mm_cmplt_ps(_mm_mul_ps(_mm_load_ps(p.t + 4 * g), scale), near);
-      drop |= static_cast<std::uint64_t>(_mm_movemask_ps(before)) << (4 * g);
+    for (std::uint64_t m = mask; m;) {
+      const int g = __builtin_ctzll(m) & ~3;
+      m &= ~(std::uint64_t{0xF} << g);
+      const __m128 before = _mm_cmplt_ps(_mm_mul_ps(_mm_load_ps(p.t + g), scale), near);
+      drop |= static_cast<std::uint64_t>(_mm_movemask_ps(before)) << g;
     }
     mask &= ~drop;
   }
 #else
-  for (std::uint64_t m = mask; m; m &= m - 1) {
+  for (std::uint64_t m = cut ? mask : 0; m; m &= m - 1) {
     const int k = __builtin_ctzll(m);
     if (p.t[k] * (1.0f + frame_t_slack) < e.near) mask &= ~(std::uint64_t{1} << k);
   }

@@ -1,13 +1,14 @@
 // cullkit/detail/nci/frame_tile.hpp: one screen tile served by the frame hierarchy instead of the
 // grid walk (NciCrowdedPath): the tile's rays are set up as for the walk, cast in packets of 8x8
 // through the hierarchy (frame_cast.hpp), four packets taking turns, and every triangle of a leaf
-// a packet reaches goes through the walk's own steps: the frame's cached screen rectangle (which
-// holds the front-face rule), then test_triangle (depth rejects, corner-ray planes, footprint, the
-// watertight test, ties to the lower mesh index, edge-band records). The per-pixel answer is the
-// walk's: the same triangles reach test_triangle for every ray that could report them.
+// a packet reaches goes through the walk's own cuts and ray step: its grown box against the
+// packet's rays, the front-face rule, the depth reject per ray, the 2D footprint, then test_ray
+// (the watertight test, ties to the lower mesh index, edge-band records). Each cut drops only rays
+// the float test could not report, so the per-pixel answer is the walk's.
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -24,27 +25,6 @@ namespace cullkit::detail::nci {
 // few per cent from 4 (72.8-83.4 ms against 69.7-76.9 in alternating runs; 8: within noise of 4).
 inline constexpr int frame_footprint_rays = 4;
 
-// detail::faces_eye (the eye strictly on the front side of the triangle's plane, in double) from
-// the corners relative to the eye in float (a, b, c) where their triple product is clear of its
-// rounding by a factor of 2^8 (the corners' own rounding, 2^-24 of each, and the products'); the
-// double test otherwise. The same answer as faces_eye, at float cost for all but near edge-on
-// triangles.
-[[nodiscard]] inline bool faces_eye_fast(const float a[3], const float b[3], const float c[3], const glm::vec3& p0,
-                                         const glm::vec3& p1, const glm::vec3& p2, const glm::dvec3& eye) noexcept {
-  const float u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  const float n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-  const float side = -(n[0] * a[0] + n[1] * a[1] + n[2] * a[2]);
-  const float la = std::fabs(a[0]) + std::fabs(a[1]) + std::fabs(a[2]);
-  const float lb = std::fabs(b[0]) + std::fabs(b[1]) + std::fabs(b[2]) + la;
-  const float lc = std::fabs(c[0]) + std::fabs(c[1]) + std::fabs(c[2]) + la;
-  const float err = 0x1p-16f * la * lb * lc;
-  if (std::isfinite(err) && err > 0x1p-100f) {
-    if (side > err) return true;
-    if (side < -err) return false;
-  }
-  return detail::faces_eye(p0, p1, p2, eye);
-}
-
 // What a leaf of the frame hierarchy does for one packet: prefetch its entries when it is pushed;
 // phase 0: load them and prefetch the triangles' vertex ids and cached rectangles; phase 1: load
 // the vertex ids and prefetch the corners; then the test.
@@ -54,14 +34,20 @@ struct FrameLeaf {
   const ViewSetup& f;
   TileState& r;
   Worker& worker;
-  FrameSlot& slot;
+  FrameSlot* slot;  // the packet taking this step (one FrameLeaf serves every packet of a tile)
   const std::uint8_t* class_on;  // per class: it may face some live ray of the tile (select_classes)
   std::size_t& met;
   int x0, y0;  // the tile's first pixel
 
+  // The class run of ids last found by active (run_lo > run_hi: none): a leaf's triangles lie on
+  // a few surfaces, so most of them fall in the run of the one before.
+  std::uint32_t run_lo, run_hi;
+  bool run_on;
+
   // Whether internal triangle tri's class may face a ray of the tile: classes are runs of ids, found
-  // by a branch-free binary search of class_tri_begin.
-  [[nodiscard]] bool active(std::uint32_t tri) const {
+  // by a branch-free binary search of class_tri_begin unless tri falls in the last run found.
+  [[nodiscard]] bool active(std::uint32_t tri) {
+    if (tri >= run_lo && tri <= run_hi) return run_on;
     const std::uint32_t* b = data.class_tri_begin.data();
     std::size_t lo = 0, n = data.class_tri_begin.size() - 1;  // the class lies in [lo, lo + n)
     while (n > 1) {
@@ -69,14 +55,17 @@ struct FrameLeaf {
       lo = b[lo + half] <= tri ? lo + half : lo;
       n -= half;
     }
-    return class_on[lo] != 0;
+    run_lo = b[lo];
+    run_hi = b[lo + 1] - 1;  // the run holds tri, so it is not empty
+    run_on = class_on[lo] != 0;
+    return run_on;
   }
 
   void prefetch(std::uint32_t first, std::uint32_t) const { __builtin_prefetch(data.frame.tris.data() + first); }
 
   // Phase 0 finds the triangles of active classes (bit q of the carry: triangle first + q) and
   // prefetches their vertex ids; phase 1 prefetches their corners.
-  std::uint32_t prepare(std::uint32_t first, std::uint32_t count, std::uint32_t phase, std::uint32_t carry) const {
+  std::uint32_t prepare(std::uint32_t first, std::uint32_t count, std::uint32_t phase, std::uint32_t carry) {
     if (phase == 0) carry = 0;
     for (std::uint32_t q = 0; q < count; ++q) {
       const std::uint32_t tri = data.frame.tris[first + q];
@@ -99,84 +88,125 @@ struct FrameLeaf {
   [[nodiscard]] std::uint64_t in_footprint(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
                                            std::uint64_t rays) const {
     TileState::Mask rows[TileState::max_tile], inside[TileState::max_tile];
-    const int ry0 = slot.by + __builtin_ctzll(rays) / 8, ry1 = slot.by + (63 - __builtin_clzll(rays)) / 8;
+    const int by = slot->by, bx = slot->bx;
+    const int ry0 = by + __builtin_ctzll(rays) / 8, ry1 = by + (63 - __builtin_clzll(rays)) / 8;
     for (int y = ry0; y <= ry1; ++y)
-      rows[y] = static_cast<TileState::Mask>((rays >> (8 * (y - slot.by))) & 0xFFu) << slot.bx;
+      rows[y] = static_cast<TileState::Mask>((rays >> (8 * (y - by))) & 0xFFu) << bx;
     if (!footprint_mask(f, p0, p1, p2, x0, y0, ry0, ry1, rows, inside, f.tile - 1)) return rays;
     std::uint64_t kept = 0;
     for (int y = ry0; y <= ry1; ++y)
-      kept |= static_cast<std::uint64_t>((inside[y] >> slot.bx) & 0xFFu) << (8 * (y - slot.by));
+      kept |= static_cast<std::uint64_t>((inside[y] >> bx) & 0xFFu) << (8 * (y - by));
     return kept & rays;
   }
 
+  // A leaf triangle on its way through test: its corners relative to the eye as test_ray takes
+  // them, their largest coordinates, their box, and the packet's rays that meet the grown box.
+  struct Item {
+    std::uint32_t tri;
+    float key;  // the smallest depth of a corner along the packet's mean ray
+    float c[3][3];
+    float mag[3], qlo[3], qhi[3];
+    std::uint64_t meet;
+  };
+
+  // The triangle of leaf slot `slot_index` with the packet's rays of `mask`; false when no ray
+  // meets its grown box (then it lies between the packet's pixel centres).
+  bool make_item(std::uint32_t slot_index, std::uint64_t mask, Item& it) const {
+    const float* dir = slot->dir;
+    it.tri = data.frame.tris[slot_index];
+    float k = std::numeric_limits<float>::infinity();
+    for (int c = 0; c < 3; ++c) {
+      const glm::vec3& v = data.corner(it.tri, c);
+      it.c[c][0] = v.x - f.eye_f.x;
+      it.c[c][1] = v.y - f.eye_f.y;
+      it.c[c][2] = v.z - f.eye_f.z;
+      k = std::min(k, it.c[c][0] * dir[0] + it.c[c][1] * dir[1] + it.c[c][2] * dir[2]);
+    }
+    it.key = k;
+    // std::min / std::max of three as two nested calls: the same value as the initializer-list
+    // forms (the first of equal operands), without their loops.
+    const auto min3 = [](float x, float y, float z) { return std::min(std::min(x, y), z); };
+    const auto max3 = [](float x, float y, float z) { return std::max(std::max(x, y), z); };
+    const float(&a)[3] = it.c[0];
+    const float(&b)[3] = it.c[1];
+    const float(&c)[3] = it.c[2];
+    for (int j = 0; j < 3; ++j) it.mag[j] = max3(std::fabs(it.c[j][0]), std::fabs(it.c[j][1]), std::fabs(it.c[j][2]));
+    for (int j = 0; j < 3; ++j) {
+      it.qlo[j] = min3(a[j], b[j], c[j]);
+      it.qhi[j] = max3(a[j], b[j], c[j]);
+    }
+    // The triangle's box grown as the hierarchy's boxes are (frame_box_growth).
+    const float grow = max3(it.mag[0], it.mag[1], it.mag[2]) * frame_box_growth;
+    const float glo[3] = {it.qlo[0] - grow, it.qlo[1] - grow, it.qlo[2] - grow};
+    const float ghi[3] = {it.qhi[0] + grow, it.qhi[1] + grow, it.qhi[2] + grow};
+    it.meet = frame_rays_meet(slot->p, mask, glo, ghi);
+    return it.meet != 0;
+  }
+
   void test(std::uint32_t first, std::uint32_t count, std::uint64_t mask, std::uint32_t carry) {
-    FramePacket& p = slot.p;
-    const int stride = r.stride;
-    // The leaf's triangles nearest first along the packet's mean ray (as the walk sorts its
-    // candidates), so that near hits let the depth rejects drop the triangles behind them.
-    std::uint32_t order[FrameBvhNode::leaf_max];
-    float key[FrameBvhNode::leaf_max];
+    FramePacket& p = slot->p;
+    const int stride = r.stride, by = slot->by, bx = slot->bx;
+    const auto pixel = [&](int k) { return (by + k / 8) * stride + bx + k % 8; };
+    // First the box test against the packet's rays: the packet's depths (p.t) do not change
+    // during a leaf's test, so it may come before the order is known, and the triangles between
+    // pixel centres (about half of those met on a crowded view) take no other step.
+    Item item[FrameBvhNode::leaf_max];
+    std::uint8_t order[FrameBvhNode::leaf_max];
     std::uint32_t kept = 0;
     for (std::uint32_t q = 0; q < count; ++q) {
       if (!(carry >> q & 1u)) continue;  // a back face for every ray of the tile
-      const std::uint32_t tri = data.frame.tris[first + q];
-      float k = std::numeric_limits<float>::infinity();
-      for (int c = 0; c < 3; ++c) {
-        const glm::vec3 d = data.corner(tri, c) - f.eye_f;
-        k = std::min(k, d.x * slot.dir[0] + d.y * slot.dir[1] + d.z * slot.dir[2]);
-      }
-      std::uint32_t at = kept++;
-      for (; at > 0 && (key[at - 1] > k || (key[at - 1] == k && order[at - 1] > tri)); --at) {
-        key[at] = key[at - 1];
-        order[at] = order[at - 1];
-      }
-      key[at] = k;
-      order[at] = tri;
-    }
-    for (std::uint32_t q = 0; q < kept; ++q) {
-      const std::uint32_t tri = order[q];
       ++met;
+      Item& it = item[kept];
+      if (!make_item(first + q, mask, it)) {
+        ++worker.stats.triangles_no_pixel;  // between the packet's pixel centres (or a back face)
+        continue;
+      }
+      // Nearest first along the packet's mean ray (as the walk sorts its candidates), so that
+      // near hits let the depth rejects drop the triangles behind them.
+      std::uint32_t at = kept++;
+      for (; at > 0 && (item[order[at - 1]].key > it.key ||
+                        (item[order[at - 1]].key == it.key && item[order[at - 1]].tri > it.tri));
+           --at)
+        order[at] = order[at - 1];
+      order[at] = static_cast<std::uint8_t>(kept - 1);
+    }
+    std::uint64_t tested = 0;
+    for (std::uint32_t q = 0; q < kept; ++q) {
+      const Item& it = item[order[q]];
+      const std::uint32_t tri = it.tri;
       const glm::vec3 &p0 = data.corner(tri, 0), &p1 = data.corner(tri, 1), &p2 = data.corner(tri, 2);
-      // Corners relative to the eye as test_triangle takes them.
-      const float ta[3] = {p0.x - f.eye_f.x, p0.y - f.eye_f.y, p0.z - f.eye_f.z};
-      const float tb[3] = {p1.x - f.eye_f.x, p1.y - f.eye_f.y, p1.z - f.eye_f.z};
-      const float tc[3] = {p2.x - f.eye_f.x, p2.y - f.eye_f.y, p2.z - f.eye_f.z};
-      if (!faces_eye_fast(ta, tb, tc, p0, p1, p2, f.eye)) {
+      // The front-face rule in double. (A float pre-test of the triple product, clear of its
+      // rounding, settles almost no triangle on a crowded view: they are small against their
+      // distance from the eye, so it only added its cost to the double test's.)
+      if (!detail::faces_eye(p0, p1, p2, f.eye)) {
         ++worker.stats.triangles_no_pixel;
         continue;
       }
-      const float mag[3] = {std::max({std::fabs(ta[0]), std::fabs(ta[1]), std::fabs(ta[2])}),
-                            std::max({std::fabs(tb[0]), std::fabs(tb[1]), std::fabs(tb[2])}),
-                            std::max({std::fabs(tc[0]), std::fabs(tc[1]), std::fabs(tc[2])})};
-      const float qlo[3] = {std::min({ta[0], tb[0], tc[0]}), std::min({ta[1], tb[1], tc[1]}), std::min({ta[2], tb[2], tc[2]})};
-      const float qhi[3] = {std::max({ta[0], tb[0], tc[0]}), std::max({ta[1], tb[1], tc[1]}), std::max({ta[2], tb[2], tc[2]})};
-      // The triangle's box grown as the hierarchy's boxes are (frame_box_growth).
-      const float grow = std::max({mag[0], mag[1], mag[2]}) * frame_box_growth;
-      const float glo[3] = {qlo[0] - grow, qlo[1] - grow, qlo[2] - grow};
-      const float ghi[3] = {qhi[0] + grow, qhi[1] + grow, qhi[2] + grow};
-      const std::uint64_t meet = frame_rays_meet(p, mask, glo, ghi);
-      const bool reached = meet != 0;
       std::uint64_t rays = 0;
-      for (std::uint64_t m = meet; m; m &= m - 1) {
+      for (std::uint64_t m = it.meet; m; m &= m - 1) {
         const int k = __builtin_ctzll(m);
-        const int i = (slot.by + k / 8) * stride + slot.bx + k % 8;
-        if (ray_behind(r, i, qlo, qhi)) continue;
+        if (ray_behind(r, pixel(k), it.qlo, it.qhi)) continue;
         rays |= std::uint64_t{1} << k;
       }
-      if (!reached) ++worker.stats.triangles_no_pixel;  // between the packet's pixel centres
-      if (f.footprint && rays && __builtin_popcountll(rays) >= frame_footprint_rays) rays = in_footprint(p0, p1, p2, rays);
+      if (f.footprint && at_least_footprint_rays(rays)) rays = in_footprint(p0, p1, p2, rays);
       if (!rays) continue;
-      for (std::uint64_t m = rays; m; m &= m - 1) {
-        const int k = __builtin_ctzll(m);
-        test_ray(data, r, worker, (slot.by + k / 8) * stride + slot.bx + k % 8, tri, ta, tb, tc, mag);
-      }
+      for (std::uint64_t m = rays; m; m &= m - 1)
+        test_ray(data, r, worker, pixel(__builtin_ctzll(m)), tri, it.c[0], it.c[1], it.c[2], it.mag);
       worker.mark_tested(tri);
       ++worker.tested_count;  // (triangle, packet) pairs: a triangle is met once per packet
+      tested |= rays;
     }
-    for (std::uint64_t m = mask; m; m &= m - 1) {
+    // Only a tested ray's solid hit can have moved (a pixel belongs to one packet of the tile).
+    for (std::uint64_t m = tested; m; m &= m - 1) {
       const int k = __builtin_ctzll(m);
-      p.t[k] = r.solid_t[(slot.by + k / 8) * stride + slot.bx + k % 8];
+      p.t[k] = r.solid_t[pixel(k)];
     }
+  }
+
+  // Whether `rays` holds at least frame_footprint_rays rays (no popcount instruction is assumed).
+  [[nodiscard]] static bool at_least_footprint_rays(std::uint64_t rays) noexcept {
+    for (int n = 1; n < frame_footprint_rays && rays; ++n) rays &= rays - 1;
+    return rays != 0;
   }
 };
 
@@ -231,10 +261,11 @@ inline void cast_live_rays(const IndexData& data, const ViewSetup& f, int x0, in
     slot.busy = false;
     active += open_frame_block(data, r, live, tw, th, next, slot);
   }
+  FrameLeaf leaf{data, f, r, worker, nullptr, worker.class_on.data(), met, x0, y0, 1u, 0u, false};
   while (active > 0) {
     for (FrameSlot& slot : worker.frame_slots) {
       if (!slot.busy) continue;
-      FrameLeaf leaf{data, f, r, worker, slot, worker.class_on.data(), met, x0, y0};
+      leaf.slot = &slot;
       frame_cursor_step(data.frame, eye, slot.p, slot.cur, leaf, cast);
       if (!slot.cur.done()) continue;
       slot.busy = false;
