@@ -3,7 +3,7 @@
 // perspective camera (either depth range, reversed-Z, infinite far plane, any grid size). Checks:
 // no crash, no sanitizer report, each written object once and in range, unusable objects written,
 // and the contract on a few rays: no pixel-rule ray through the screen sees a hidden object first
-// (front faces, beyond the near plane; double-precision brute force).
+// (front faces, between the near and the far plane; double-precision brute force).
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -153,7 +153,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
           if (!ok) continue;
           const bool mine = objects[ob].first_triangle <= t && t < std::uint64_t(objects[ob].first_triangle) + objects[ob].triangle_count;
           const double th = hit(o, d, p[0], p[1], p[2], mine ? -1e-9 : 1e-9);
-          if (th < 0.0 || !(th * glm::dot(d, fwd) > near_plane)) continue;
+          // Between the planes: beyond the far plane (finite) the frustum test rightly drops an
+          // object; hits within 2^-12 of it count as beyond (the culler's plane is float).
+          const double along = th * glm::dot(d, fwd);
+          if (th < 0.0 || !(along > near_plane) || (!infinite && !(along < far_plane * (1.0 - 0x1p-12)))) continue;
           if (mine && owner[t] >= 0) {
             if (t_ob < 0.0 || th < t_ob) t_ob = th;
           } else if (!mine && owner[t] >= 0) {
