@@ -271,10 +271,11 @@ class CoverageGrid {
     return covered;
   }
 
-  /// Starts a layer over the cells `r` of `main` (a grid of the same size): a cell that `main` covers
-  /// with an inverse depth of at least `nearest` (the layer's nearest point) can gain nothing from the
-  /// layer, so it starts frozen at `main`'s depth and the layer's depth and outline work skips it (as
-  /// it skips cells its own earlier bands covered). Returns false when every cell of `r` is such a cell.
+  /// Starts a patch's own grid over the cells `r` of `main` (the union, a grid of the same size): a
+  /// cell that `main` covers with an inverse depth of at least `nearest` (the patch's nearest point)
+  /// can gain nothing from the patch, so it starts frozen at `main`'s depth and the patch's depth and
+  /// outline work skips it (as it skips cells its own earlier bands covered). Returns false when every
+  /// cell of `r` is such a cell.
   bool seed_frozen(const CoverageGrid& main, const CellRect& r, float nearest) {
     if (r.empty()) return false;
     grow(dirty_, r);
@@ -301,7 +302,7 @@ class CoverageGrid {
         const __m128 d = _mm_loadu_ps(from + i);
         const __m128 near = _mm_cmpge_ps(d, limit);
         const int mask = _mm_movemask_ps(near);
-        _mm_storeu_ps(to + i, _mm_and_ps(near, d));  // the layer's cells start at 0 (uncovered)
+        _mm_storeu_ps(to + i, _mm_and_ps(near, d));  // the other cells start at 0 (uncovered)
         frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
         open = open || mask != 15;
       }
@@ -309,25 +310,6 @@ class CoverageGrid {
       for (; i <= r.x1; ++i) one(i);
     }
     return open;
-  }
-
-  /// The cells lying wholly inside the rectangle [x0, x1] x [y0, y1] (grid coordinates), clamped to
-  /// the grid: the only cells that triangles whose corners all lie in the rectangle can cover.
-  [[nodiscard]] CellRect cells_inside(double x0, double y0, double x1, double y1) const {
-    const auto first = [](double v, int n) { return v <= 0.0 ? 0.0 : std::min(std::ceil(v), double(n)); };
-    const auto past = [](double v, int n) { return v >= n ? double(n) : std::max(std::floor(v), 0.0); };
-    if (!(x0 <= x1 && y0 <= y1)) return CellRect{0, 0, -1, -1};
-    return CellRect{int(first(x0, width_)), int(first(y0, height_)), int(past(x1, width_)) - 1, int(past(y1, height_)) - 1};
-  }
-
-  /// True when some cell of `r` is uncovered or covered with an inverse depth below `nearest`.
-  [[nodiscard]] bool any_below(const CellRect& r, float nearest) const {
-    for (int j = r.y0; j <= r.y1; ++j) {
-      const float* row = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-      for (int i = r.x0; i <= r.x1; ++i)
-        if (!(row[i] >= nearest)) return true;
-    }
-    return false;
   }
 
   /// Adds `patch` (a grid of the same size, after its last band) into this one: its counts, outline
@@ -354,16 +336,16 @@ class CoverageGrid {
     }
   }
 
-  /// Where `layer` (a grid of the same size, after its last band) has a cell covered with a nearer
+  /// Where `patch` (a grid of the same size, after its last band) has a cell covered with a nearer
   /// bound than this grid's, takes it: either set of occluders bounds the depth of every ray through
   /// the cell, so the nearer bound holds.
-  void take_nearer(const CoverageGrid& layer) {
-    const CellRect& r = layer.fresh_;  // the cells the layer's own bands covered
+  void take_nearer(const CoverageGrid& patch) {
+    const CellRect& r = patch.fresh_;  // the cells the patch's own bands covered
     if (r.empty()) return;
     grow(dirty_, r);
     for (int j = r.y0; j <= r.y1; ++j) {
       const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-      const float* from = layer.depth_.data() + base;
+      const float* from = patch.depth_.data() + base;
       float* to = depth_.data() + base;
       std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
       const auto one = [&](int i) {
