@@ -19,3 +19,4 @@ _abt_compile_fail(compile_fail_abt_bounds_traits ${PROJECT_SOURCE_DIR}/tests/com
                   "no bounds for this Object type")
 _abt_compile_fail(compile_fail_abt_getter ${_abt}/compile_fail_getter.cpp "from_getter needs a callable")
 cullkit_add_test(test_abt_dynamic SOURCES ${_abt}/test_abt_dynamic.cpp LABELS abt)
+cullkit_add_test(test_abt_volume_scale SOURCES ${_abt}/test_abt_volume_scale.cpp LABELS abt)

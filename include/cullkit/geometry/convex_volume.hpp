@@ -36,13 +36,16 @@ class ConvexVolume {
       if (frustum.has_plane(i)) add_plane(frustum.plane(i));
   }
 
-  /// Adds a plane (normal pointing inward). Returns false and adds nothing when the volume already
-  /// has `max_planes`. A plane that is not valid (zero or non-finite normal, non-finite offset)
-  /// cannot reject anything: it is not stored, and the call still returns true.
+  /// Adds a plane (normal pointing inward, of any positive length: it is stored scaled to a unit
+  /// normal, see `normalized`, so `plane(i)` may differ from what was given by that factor and a
+  /// rounding). Returns false and adds nothing when the volume already has `max_planes`. A plane
+  /// that is not valid (zero or non-finite normal, non-finite offset) cannot reject anything: it is
+  /// not stored, and the call still returns true.
   bool add_plane(const Plane& plane) noexcept {
     if (count_ >= max_planes) return false;
-    if (!is_valid(plane)) return true;
-    planes_[count_++] = plane;
+    const Plane unit = normalized(plane);
+    if (!is_valid(unit)) return true;
+    planes_[count_++] = unit;
     return true;
   }
 

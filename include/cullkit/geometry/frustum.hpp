@@ -115,21 +115,11 @@ class Frustum {
       // Scale of the row, to tell a vanishing normal (an infinite far plane: row3 - row2 has a
       // normal that is zero up to rounding) from a genuine plane.
       const double scale = std::fabs(r[0]) + std::fabs(r[1]) + std::fabs(r[2]) + std::fabs(r[3]);
-      if (!(len > 1e-6 * scale) || !std::isfinite(len) || !std::isfinite(r[3])) continue;
-      // A unit-plane coefficient that is not zero but below the smallest normal float would lose
-      // its relative precision (or vanish) in float, and the box and sphere tolerances are relative:
-      // with coordinates near 1e38 a lost 1e-46 moves the plane by far more than they cover. Such a
-      // plane is dropped (as at infinity): the frustum only grows.
-      bool tiny = false;
-      for (int k = 0; k < 4; ++k) {
-        const double q = std::fabs(r[k] / len);
-        tiny = tiny || (q > 0.0 && q < static_cast<double>(std::numeric_limits<float>::min()));
-      }
-      if (tiny) continue;
-      Plane p{glm::vec3(static_cast<float>(r[0] / len), static_cast<float>(r[1] / len),
-                        static_cast<float>(r[2] / len)),
-              static_cast<float>(r[3] / len)};
-      if (!is_valid(p)) continue;
+      if (!(len > 1e-6 * scale)) continue;
+      // unit_plane drops a plane whose unit coefficients lose their precision in float (a plane
+      // at infinity, in effect): the frustum only grows.
+      Plane p;
+      if (!detail::unit_plane(r[0], r[1], r[2], r[3], p) || !is_valid(p)) continue;
       f.planes_[i] = p;
       f.mask_ = static_cast<PlaneMask>(f.mask_ | (1u << i));
     }
@@ -137,12 +127,14 @@ class Frustum {
     return f;
   }
 
-  /// Builds a frustum from up to six inward-facing planes; invalid ones are dropped.
+  /// Builds a frustum from up to six inward-facing planes, of any positive normal length (each is
+  /// stored scaled to a unit normal, see `normalized`); invalid ones are dropped.
   [[nodiscard]] static Frustum from_planes(const Plane* planes, int count) noexcept {
     Frustum f;
     for (int i = 0; i < count && i < max_planes; ++i) {
-      if (!is_valid(planes[i])) continue;
-      f.planes_[i] = planes[i];
+      const Plane p = normalized(planes[i]);
+      if (!is_valid(p)) continue;
+      f.planes_[i] = p;
       f.mask_ = static_cast<PlaneMask>(f.mask_ | (1u << i));
     }
     return f;
