@@ -120,5 +120,20 @@ int main() {
   // The top-left pixel looks up and left: y runs down from the top row.
   const Ray tl = PixelRays(c).ray(0, 0);
   CHECK(tl.direction.y > 0.0f && tl.direction.z < 0.0f);  // looking down +x: left is -z
+  // A NaN or an infinity in any entry, the depth row included (the centre itself does not read
+  // it), makes the camera inconsistent and its centre NaN.
+  {
+    const Camera good = support::make_camera(glm::vec3(3, 4, 5), glm::vec3(0), 60.0f, 64, 48, 0.1f, 100.0f,
+                                             DepthRange::negative_one_to_one);
+    CHECK(camera_is_consistent(good));
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r)
+        for (const float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+          Camera cam = good;
+          cam.view_proj[c][r] = bad;
+          CHECK_MSG(!camera_is_consistent(cam), "entry [%d][%d] = %g accepted", c, r, double(bad));
+          CHECK(std::isnan(projection_centre(cam.view_proj).x));
+        }
+  }
   return cullkit_test::report("test_camera");
 }

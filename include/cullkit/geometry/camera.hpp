@@ -155,13 +155,20 @@ class PixelRays {
 /// non-finite matrix has no finite centre: the answer is NaN in every component.
 /// Cost: a few dozen flops; no allocation.
 [[nodiscard]] inline glm::vec3 projection_centre(const glm::mat4& view_proj) noexcept {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
   double m[4][4];
+  bool finite = true;
   for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r) m[r][c] = static_cast<double>(view_proj[c][r]);
+    for (int r = 0; r < 4; ++r) {
+      m[r][c] = static_cast<double>(view_proj[c][r]);
+      finite = finite && std::isfinite(m[r][c]);
+    }
+  // The centre does not depend on the depth row, but a matrix with a NaN or an infinity anywhere is
+  // not a usable camera: its depth planes (and so the frustum) are undefined.
+  if (!finite) return glm::vec3(nan);
   double h[4];
   detail::projection_centre(m, h);
   const double scale = std::fabs(h[0]) + std::fabs(h[1]) + std::fabs(h[2]);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
   if (!(std::fabs(h[3]) > 1e-12 * scale) || !std::isfinite(scale)) return glm::vec3(nan);
   const glm::vec3 eye(static_cast<float>(h[0] / h[3]), static_cast<float>(h[1] / h[3]), static_cast<float>(h[2] / h[3]));
   if (!std::isfinite(eye.x) || !std::isfinite(eye.y) || !std::isfinite(eye.z)) return glm::vec3(nan);
