@@ -98,7 +98,7 @@ void cull_with_occlusion(const AdaptiveBinaryTree<Object, Traits>& abt, const Fr
     bool clear;            // the parent was entirely clear of hidden regions
   };
   constexpr int stack_size = 2 * AdaptiveBinaryTree<Object, Traits>::depth_limit + 4;
-  Item stack[stack_size];
+  Item stack[static_cast<std::size_t>(stack_size)];
   int top = 0;
   stack[top++] = Item{0, OcclusionTree::whole_tree, false, false};
 

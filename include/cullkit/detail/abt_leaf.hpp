@@ -19,6 +19,7 @@
 #include <glm/geometric.hpp>
 
 #include "../config.hpp"
+#include "bits.hpp"
 #include "../geometry/aabb.hpp"
 #include "../geometry/plane.hpp"
 #include "../geometry/sphere.hpp"
@@ -27,15 +28,7 @@
 namespace cullkit::detail {
 
 /// Index of the lowest set bit of a non-zero mask.
-[[nodiscard]] CULLKIT_FORCEINLINE int abt_lowest_bit(std::uint32_t m) noexcept {
-#if defined(__GNUC__) || defined(__clang__)
-  return __builtin_ctz(m);
-#else
-  int i = 0;
-  while (!((m >> i) & 1u)) ++i;
-  return i;
-#endif
-}
+[[nodiscard]] CULLKIT_FORCEINLINE int abt_lowest_bit(std::uint32_t m) noexcept { return lowest_bit(m); }
 
 /// Box test against planes[i] for the bits of `mask`, by the rule of `Frustum::classify` term for
 /// term. Clears from `mask` the planes the box is inside of; true when it is outside one.

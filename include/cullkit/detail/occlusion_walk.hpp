@@ -134,7 +134,7 @@ struct OcclusionWalk {
     // Phase 2: one fragment, the box's outline (the cone of every ray into the box), split at planes
     // through the eye; at an occluder's own plane the whole front of the box decides. Only when the
     // front straddles such a plane does the query fall back to the faces themselves (phase 3).
-    Fragment stack[stack_size];
+    Fragment stack[static_cast<std::size_t>(stack_size)];
     glm::vec3 outline[6];
     const auto corners = static_cast<std::uint32_t>(box_silhouette(box, eye, outline));
     if (corners >= 3) {
@@ -161,7 +161,7 @@ struct OcclusionWalk {
     if (start != whole_tree && start >= t.nodes_.size()) start = whole_tree;  // stale or invalid: the root
     result.together = start;
     if (!t.eye_ok_ || polygon.empty() || polygon.overflow()) return result;
-    Fragment stack[stack_size];
+    Fragment stack[static_cast<std::size_t>(stack_size)];
     Fragment& local = stack[0];
     float scale = 0.0f;
     local.size = static_cast<std::uint32_t>(polygon.size());

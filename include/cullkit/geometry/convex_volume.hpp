@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "../detail/bits.hpp"
 #include "aabb.hpp"
 #include "frustum.hpp"
 #include "plane.hpp"
@@ -70,7 +71,7 @@ class ConvexVolume {
     const glm::vec3 e = (box.max - box.min) * 0.5f;
     VolumeMask straddled = mask;
     for (VolumeMask rest = mask; rest != 0; rest &= rest - 1u) {
-      const int i = lowest_bit(rest);
+      const int i = detail::lowest_bit(rest);
       const Plane& p = planes_[i];
       const float dc = glm::dot(p.normal, c) + p.d;
       const float r = std::fabs(p.normal.x) * e.x + std::fabs(p.normal.y) * e.y +
@@ -103,16 +104,6 @@ class ConvexVolume {
   }
 
  private:
-  static int lowest_bit(VolumeMask m) noexcept {
-#if defined(__GNUC__) || defined(__clang__)
-    return __builtin_ctz(m);
-#else
-    int i = 0;
-    while (!((m >> i) & 1u)) ++i;
-    return i;
-#endif
-  }
-
   Plane planes_[max_planes] = {};
   std::size_t count_ = 0;
 };
