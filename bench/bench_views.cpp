@@ -91,6 +91,25 @@ void stereo_and_cascades(const std::string& scene, const std::vector<Aabb>& boxe
   for (float s : {-0.032f, 0.032f})
     stereo.push_back(Frustum::from_matrix(proj * view_matrix(eye + right * s, target + right * s), DepthRange::zero_to_one));
   views_race("stereo_" + scene, boxes, stereo);
+  // A headset's pair as an XR runtime gives it: a pose per eye (the head's pose times the eye's
+  // 32 mm offset, turned and tilted), each eye's view matrix the inverse of its own pose, and
+  // mirrored off-axis tangents (the outer side wider). The eyes' shared planes then agree only up
+  // to rounding, normals included.
+  std::vector<Frustum> headset;
+  const glm::vec3 tilted_up = glm::normalize(glm::vec3(0.15f, 1.0f, 0.05f));
+  const glm::mat4 head_pose = glm::inverse(glm::lookAt(eye, eye + fwd, tilted_up));
+  for (int e = 0; e < 2; ++e) {
+    const float n = 0.1f, l = e == 0 ? -1.25f : -0.85f, r = e == 0 ? 0.85f : 1.25f;
+    const glm::mat4 eye_pose = head_pose * glm::translate(glm::mat4(1.0f), glm::vec3(e == 0 ? -0.032f : 0.032f, 0, 0));
+    const glm::mat4 p = glm::frustumRH_ZO(l * n, r * n, -1.2f * n, 1.0f * n, n, 600.0f);
+    headset.push_back(Frustum::from_matrix(p * glm::inverse(eye_pose), DepthRange::zero_to_one));
+  }
+  {
+    detail::AbtMergedPlanes mp;
+    if (mp.assign(headset.data(), 2))
+      std::fprintf(stderr, "headset_%s: %u distinct planes of 12\n", scene.c_str(), mp.count());
+  }
+  views_race("headset_" + scene, boxes, headset);
   std::vector<Frustum> cascades;
   const float splits[5] = {0.1f, 20.0f, 60.0f, 180.0f, 600.0f};
   for (int c = 0; c < 4; ++c) {

@@ -243,6 +243,58 @@ void views_merged_planes() {
   std::printf("cull_views merged planes: %zu entries over 12 pairs, %zu bits beyond single culls\n", entries, beyond);
 }
 
+// A headset: two eyes 64 mm apart with mirrored off-axis tangents (the outer side wider), each eye's
+// view matrix built on its own (lookAt from its own position), under random head poses. The eyes'
+// top, bottom, near and far planes then agree only up to rounding in their normals too; they must
+// still merge (8 distinct planes, not 12: a merged walk is then cheaper than two culls), and every
+// bit a single cull of either eye reports, or that a box meeting the eye needs, must be set.
+void views_headset_pairs() {
+  support::Rng rng(26);
+  std::vector<Aabb> boxes = abt_test::random_boxes(rng, 20000, 60.0f, 1.5f);
+  const AdaptiveBinaryTree<Aabb> tree(boxes.data(), boxes.size());
+  std::size_t tilted = 0, pairs = 0;
+  for (int k = 0; k < 24; ++k) {
+    const glm::vec3 head(rng.uniform(-40, 40), rng.uniform(0.5f, 3), rng.uniform(-40, 40));
+    const glm::vec3 forward = glm::normalize(glm::vec3(rng.uniform(-1, 1), rng.uniform(-0.4f, 0.4f), rng.uniform(-1, 1)));
+    const glm::vec3 right = glm::normalize(glm::cross(forward, glm::vec3(0, 1, 0)));
+    const float outer = rng.uniform(1.0f, 1.4f), inner = rng.uniform(0.7f, 1.0f), up = rng.uniform(0.9f, 1.3f);
+    const float down = rng.uniform(1.0f, 1.5f), n = 0.05f, f = rng.uniform(100.0f, 400.0f);
+    std::vector<Frustum> fr;
+    std::vector<glm::mat4> vps;
+    for (int eye = 0; eye < 2; ++eye) {
+      const float side = eye == 0 ? -1.0f : 1.0f;
+      const glm::vec3 pos = head + right * (0.032f * side);
+      // Left eye: wider to the left (outer), right eye mirrored.
+      const float l = eye == 0 ? -outer : -inner, r = eye == 0 ? inner : outer;
+      const glm::mat4 proj = glm::frustum(l * n, r * n, -down * n, up * n, n, f);
+      vps.push_back(proj * glm::lookAt(pos, pos + forward, glm::vec3(0, 1, 0)));
+      fr.push_back(Frustum::from_matrix(vps.back(), DepthRange::negative_one_to_one));
+    }
+    detail::AbtMergedPlanes mp;
+    CHECK(mp.assign(fr.data(), 2));
+    CHECK_MSG(mp.count() == 8, "pose %d: %u distinct planes, expected 8", k, mp.count());
+    for (std::uint32_t u = 0; u < mp.count(); ++u) tilted += mp.tilt2()[u] > 0.0f;
+    const abt_test::OracleFrustum o0(vps[0], DepthRange::negative_one_to_one), o1(vps[1], DepthRange::negative_one_to_one);
+    std::vector<std::uint32_t> out, bits, single;
+    tree.cull_views(fr.data(), fr.size(), out, bits);
+    std::vector<std::uint32_t> got(boxes.size(), 0);
+    for (std::size_t j = 0; j < out.size(); ++j) got[out[j]] = bits[j];
+    std::size_t missing = 0, below_single = 0;
+    for (int v = 0; v < 2; ++v) {
+      tree.cull(fr[static_cast<std::size_t>(v)], single);
+      for (std::uint32_t i : single) below_single += !((got[i] >> v) & 1u);
+      const abt_test::OracleFrustum& o = v == 0 ? o0 : o1;
+      for (std::uint32_t i = 0; i < boxes.size(); ++i) missing += o.meets(boxes[i]) && !((got[i] >> v) & 1u);
+    }
+    CHECK_MSG(missing == 0 && below_single == 0, "pose %d: %zu missing bits, %zu bits a single cull has", k, missing,
+              below_single);
+    ++pairs;
+  }
+  // Non-vacuity: some shared planes did differ in their normals' last bits and were merged.
+  CHECK(tilted > 0);
+  std::printf("cull_views headset pairs: %zu poses, %zu merged planes with tilted copies\n", pairs, tilted);
+}
+
 // Views that share normals (the shared-arithmetic path): stereo eyes, cascades, 32 views, views
 // inside which whole subtrees lie, a NaN frustum, objects with bad bounds.
 void views_fast_paths() {
@@ -419,6 +471,7 @@ int main() {
   views_cull();
   views_fast_paths();
   views_merged_planes();
+  views_headset_pairs();
   shadow_casters();
   return cullkit_test::report("test_engine_views");
 }

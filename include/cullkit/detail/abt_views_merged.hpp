@@ -9,13 +9,18 @@
 // A stereo pair then costs about one walk over eight planes instead of two walks over six, and the
 // walk carries one plane mask instead of one per view.
 //
-// Merging. Two planes merge when their normals are equal bit for bit and their offsets differ by at
-// most `merge_tolerance` of the larger one. A merged plane uses its largest offset for the outside
+// Merging. Two planes merge when each component of their (unit) normals differs by at most
+// `merge_tolerance` and their offsets differ by at most `merge_tolerance` of the larger one: two
+// eyes' view matrices are built by separate float products, so their shared planes' normals often
+// differ in the last bits. A merged plane keeps the first copy's normal and records its `tilt`, the
+// largest normal component difference of any copy. It uses its largest offset for the outside
 // verdict (a box outside it is outside every copy), its smallest for the inside verdict (a box
-// inside it is inside every copy), and the largest |d| in the rounding slack. Each verdict is formed
-// with the operations of the single-view rule (Frustum::classify, AbtLeafBoxes::classify_lanes) in
-// the same order, so a view's answer holds every object a single cull of that view reports, and is
-// that answer exactly where the views' copies of a plane are equal.
+// inside it is inside every copy), and the largest |d| in the rounding slack, to which it adds
+// 2 * tilt * (|cx| + |cy| + |cz| + ex + ey + ez): a bound on how far any copy's distance of the box
+// can differ from the kept normal's. Each verdict is otherwise formed with the operations of the
+// single-view rule (Frustum::classify, AbtLeafBoxes::classify_lanes) in the same order, so a view's
+// answer holds every object a single cull of that view reports, and is that answer exactly where
+// the views' copies of a plane are equal (tilt 0).
 #pragma once
 
 #include <cmath>
@@ -49,6 +54,7 @@ class AbtMergedPlanes {
   [[nodiscard]] bool assign(const Frustum* frusta, std::uint32_t views) noexcept {
     count_ = 0;
     all_ = 0;
+    tilted_ = false;
     for (std::uint32_t v = 0; v < views; ++v) {
       planes_of_[v] = 0;
       for (std::uint32_t rest = frusta[v].active_mask(); rest != 0; rest &= rest - 1u) {
@@ -60,7 +66,7 @@ class AbtMergedPlanes {
       all_ |= planes_of_[v];
     }
     for (std::uint32_t u = count_; u % 4 != 0; ++u) {
-      nx_[u] = ny_[u] = nz_[u] = d_out_[u] = d_in_[u] = abs_d_[u] = 0.0f;
+      nx_[u] = ny_[u] = nz_[u] = d_out_[u] = d_in_[u] = abs_d_[u] = tilt_[u] = 0.0f;
     }
     return true;
   }
@@ -91,6 +97,10 @@ class AbtMergedPlanes {
   [[nodiscard]] const float* d_out() const noexcept { return d_out_; }
   [[nodiscard]] const float* d_in() const noexcept { return d_in_; }
   [[nodiscard]] const float* abs_d() const noexcept { return abs_d_; }
+  /// Twice the largest normal component difference between a merged plane's copies (0: all equal).
+  [[nodiscard]] const float* tilt2() const noexcept { return tilt_; }
+  /// Some merged plane has copies whose normals differ (the tests then add the tilt term).
+  [[nodiscard]] bool tilted() const noexcept { return tilted_; }
 
  private:
   static bool close(float a, float b) noexcept {
@@ -99,8 +109,12 @@ class AbtMergedPlanes {
 
   std::uint32_t find_or_add(const Plane& p) noexcept {
     for (std::uint32_t u = 0; u < count_; ++u) {
-      if (nx_[u] != p.normal.x || ny_[u] != p.normal.y || nz_[u] != p.normal.z) continue;
+      const float tilt = std::fmax(std::fabs(nx_[u] - p.normal.x),
+                                   std::fmax(std::fabs(ny_[u] - p.normal.y), std::fabs(nz_[u] - p.normal.z)));
+      if (!(tilt <= merge_tolerance)) continue;
       if (!close(p.d, d_out_[u]) || !close(p.d, d_in_[u])) continue;
+      tilt_[u] = std::fmax(tilt_[u], 2.0f * tilt);
+      tilted_ = tilted_ || tilt > 0.0f;
       d_out_[u] = std::fmax(d_out_[u], p.d);
       d_in_[u] = std::fmin(d_in_[u], p.d);
       abs_d_[u] = std::fmax(abs_d_[u], std::fabs(p.d));
@@ -113,11 +127,13 @@ class AbtMergedPlanes {
     nz_[u] = p.normal.z;
     d_out_[u] = d_in_[u] = p.d;
     abs_d_[u] = std::fabs(p.d);
+    tilt_[u] = 0.0f;
     return u;
   }
 
   std::uint32_t count_ = 0;
   std::uint32_t all_ = 0;
+  bool tilted_ = false;
   std::uint32_t planes_of_[32] = {};
   alignas(16) float nx_[capacity];
   alignas(16) float ny_[capacity];
@@ -125,6 +141,7 @@ class AbtMergedPlanes {
   alignas(16) float d_out_[capacity];
   alignas(16) float d_in_[capacity];
   alignas(16) float abs_d_[capacity];
+  alignas(16) float tilt_[capacity];
 };
 
 /// One pass of the node test (a centre with a radius per plane: the sphere's, or the box's extent
@@ -134,10 +151,18 @@ CULLKIT_FORCEINLINE void abt_merged_pass(const AbtMergedPlanes& mp, std::uint32_
                                          float radius, const glm::vec3* box_extent, std::uint32_t& out,
                                          std::uint32_t& in) noexcept {
   out = in = 0;
+  // What a tilt of one can move a copy's distance by: the centre's and the extent's components.
+  float tilt_reach = 0.0f;
+  if (mp.tilted()) {
+    tilt_reach = std::fabs(c.x) + std::fabs(c.y) + std::fabs(c.z);
+    tilt_reach += box_extent == nullptr ? 0.0f : box_extent->x + box_extent->y + box_extent->z;
+  }
 #if CULLKIT_HAS_SSE2
   const __m128 k = _mm_set1_ps(8.0f * std::numeric_limits<float>::epsilon());
   const __m128 sign = _mm_set1_ps(-0.0f);
   const __m128 cx = _mm_set1_ps(c.x), cy = _mm_set1_ps(c.y), cz = _mm_set1_ps(c.z);
+  const __m128 reach = _mm_set1_ps(tilt_reach);
+  const bool tilted = mp.tilted();
   for (std::uint32_t q = 0; q * 4 < mp.count(); ++q) {
     if (((mask >> (4 * q)) & 0xFu) == 0) continue;
     const __m128 nx = _mm_load_ps(mp.nx() + 4 * q), ny = _mm_load_ps(mp.ny() + 4 * q);
@@ -151,7 +176,8 @@ CULLKIT_FORCEINLINE void abt_merged_pass(const AbtMergedPlanes& mp, std::uint32_
                                 _mm_mul_ps(_mm_andnot_ps(sign, ny), _mm_set1_ps(box_extent->y))),
                      _mm_mul_ps(_mm_andnot_ps(sign, nz), _mm_set1_ps(box_extent->z)));
     }
-    const __m128 slack = _mm_mul_ps(_mm_add_ps(_mm_add_ps(mag, _mm_load_ps(mp.abs_d() + 4 * q)), r), k);
+    __m128 slack = _mm_mul_ps(_mm_add_ps(_mm_add_ps(mag, _mm_load_ps(mp.abs_d() + 4 * q)), r), k);
+    if (tilted) slack = _mm_add_ps(slack, _mm_mul_ps(_mm_load_ps(mp.tilt2() + 4 * q), reach));
     const __m128 far_side = _mm_add_ps(_mm_add_ps(s, _mm_load_ps(mp.d_out() + 4 * q)), r);
     const __m128 near_side = _mm_sub_ps(_mm_add_ps(s, _mm_load_ps(mp.d_in() + 4 * q)), r);
     out |= static_cast<std::uint32_t>(_mm_movemask_ps(_mm_cmplt_ps(far_side, _mm_xor_ps(slack, sign)))) << (4 * q);
@@ -167,7 +193,7 @@ CULLKIT_FORCEINLINE void abt_merged_pass(const AbtMergedPlanes& mp, std::uint32_
     const float r = box_extent == nullptr
                         ? radius
                         : std::fabs(nx) * box_extent->x + std::fabs(ny) * box_extent->y + std::fabs(nz) * box_extent->z;
-    const float slack = (std::fabs(px) + std::fabs(py) + std::fabs(pz) + mp.abs_d()[u] + r) * k;
+    const float slack = (std::fabs(px) + std::fabs(py) + std::fabs(pz) + mp.abs_d()[u] + r) * k + mp.tilt2()[u] * tilt_reach;
     if ((s + mp.d_out()[u]) + r < -slack) out |= std::uint32_t{1} << u;
     if ((s + mp.d_in()[u]) - r >= slack) in |= std::uint32_t{1} << u;
   }
@@ -215,6 +241,12 @@ inline void abt_merged_lanes(const AbtMergedPlanes& mp, const AbtLeafBoxes& boxe
   constexpr std::uint32_t lanes = AbtLeafBoxes::lanes;
   const float* col[6];
   for (int k = 0; k < 6; ++k) col[k] = boxes.column(k) + base;
+  // Per lane, what a tilt of one can move a copy's distance by (see AbtMergedPlanes).
+  alignas(16) float reach[lanes] = {};
+  const bool tilted = mp.tilted();
+  if (tilted)
+    for (std::uint32_t i = 0; i < lanes; ++i)
+      reach[i] = std::fabs(col[0][i]) + std::fabs(col[1][i]) + std::fabs(col[2][i]) + col[3][i] + col[4][i] + col[5][i];
 #if CULLKIT_HAS_SSE2
   const __m128 k = _mm_set1_ps(8.0f * std::numeric_limits<float>::epsilon());
   const __m128 sign = _mm_set1_ps(-0.0f);
@@ -222,7 +254,7 @@ inline void abt_merged_lanes(const AbtMergedPlanes& mp, const AbtLeafBoxes& boxe
     const int u = abt_lowest_bit(planes);
     const __m128 nx = _mm_set1_ps(mp.nx()[u]), ny = _mm_set1_ps(mp.ny()[u]), nz = _mm_set1_ps(mp.nz()[u]);
     const __m128 ax = _mm_andnot_ps(sign, nx), ay = _mm_andnot_ps(sign, ny), az = _mm_andnot_ps(sign, nz);
-    const __m128 d = _mm_set1_ps(mp.d_out()[u]), ad = _mm_set1_ps(mp.abs_d()[u]);
+    const __m128 d = _mm_set1_ps(mp.d_out()[u]), ad = _mm_set1_ps(mp.abs_d()[u]), tilt = _mm_set1_ps(mp.tilt2()[u]);
     std::uint32_t bits = 0;
     for (std::uint32_t q = 0; q < lanes / 4; ++q) {
       const std::uint32_t o = 4 * q;
@@ -232,7 +264,8 @@ inline void abt_merged_lanes(const AbtMergedPlanes& mp, const AbtLeafBoxes& boxe
       const __m128 r = _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, _mm_loadu_ps(col[3] + o)), _mm_mul_ps(ay, _mm_loadu_ps(col[4] + o))),
                                   _mm_mul_ps(az, _mm_loadu_ps(col[5] + o)));
       const __m128 mag = _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, px), _mm_andnot_ps(sign, py)), _mm_andnot_ps(sign, pz));
-      const __m128 slack = _mm_mul_ps(_mm_add_ps(_mm_add_ps(mag, ad), r), k);
+      __m128 slack = _mm_mul_ps(_mm_add_ps(_mm_add_ps(mag, ad), r), k);
+      if (tilted) slack = _mm_add_ps(slack, _mm_mul_ps(tilt, _mm_load_ps(reach + o)));
       bits |= static_cast<std::uint32_t>(_mm_movemask_ps(_mm_cmplt_ps(_mm_add_ps(dc, r), _mm_xor_ps(slack, sign)))) << o;
     }
     plane_out[u] = bits;
@@ -242,12 +275,13 @@ inline void abt_merged_lanes(const AbtMergedPlanes& mp, const AbtLeafBoxes& boxe
   for (; planes != 0; planes &= planes - 1u) {
     const int u = abt_lowest_bit(planes);
     const float nx = mp.nx()[u], ny = mp.ny()[u], nz = mp.nz()[u], d = mp.d_out()[u], ad = mp.abs_d()[u];
+    const float tilt = mp.tilt2()[u];
     std::uint32_t bits = 0;
     for (std::uint32_t i = 0; i < lanes; ++i) {
       const float px = nx * col[0][i], py = ny * col[1][i], pz = nz * col[2][i];
       const float dc = px + py + pz + d;
       const float r = std::fabs(nx) * col[3][i] + std::fabs(ny) * col[4][i] + std::fabs(nz) * col[5][i];
-      const float slack = (std::fabs(px) + std::fabs(py) + std::fabs(pz) + ad + r) * k;
+      const float slack = (std::fabs(px) + std::fabs(py) + std::fabs(pz) + ad + r) * k + tilt * reach[i];
       bits |= static_cast<std::uint32_t>(dc + r < -slack) << i;
     }
     plane_out[u] = bits;
