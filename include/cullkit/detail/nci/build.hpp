@@ -110,8 +110,8 @@ inline void build_class(const IndexData& data, const std::uint32_t* tris, std::s
     coord[i][0] = static_cast<std::uint16_t>(k / nz / ny);
   }
   std::vector<std::uint32_t> order(cells);
-  for (int a = 0; a < 3; ++a) {
-    const int b = (a + 1) % 3, c = (a + 2) % 3;
+  for (std::size_t a = 0; a < 3; ++a) {
+    const std::size_t b = (a + 1) % 3, c = (a + 2) % 3;
     for (std::size_t i = 0; i < cells; ++i) order[i] = static_cast<std::uint32_t>(i);
     if (a != 0) {
       std::sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {

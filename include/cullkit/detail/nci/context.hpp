@@ -70,13 +70,13 @@ struct Worker {
   // the merge reads only the words a frame wrote instead of all of them (their count grows with
   // the index, the written ones with the frame).
   std::vector<std::uint64_t> touched;
-  void mark_tested(std::uint32_t tri) noexcept {
-    tested_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
-    touched[tri / 4096] |= std::uint64_t{1} << (tri / 64 % 64);
+  void mark_tested(std::uint32_t t) noexcept {
+    tested_bits[t / 64] |= std::uint64_t{1} << (t % 64);
+    touched[t / 4096] |= std::uint64_t{1} << (t / 64 % 64);
   }
-  void mark_shown(std::uint32_t tri) noexcept {
-    shown_bits[tri / 64] |= std::uint64_t{1} << (tri % 64);
-    touched[tri / 4096] |= std::uint64_t{1} << (tri / 64 % 64);
+  void mark_shown(std::uint32_t t) noexcept {
+    shown_bits[t / 64] |= std::uint64_t{1} << (t % 64);
+    touched[t / 4096] |= std::uint64_t{1} << (t / 64 % 64);
   }
   std::uint32_t tested_count = 0;  // ray-tested (triangle, tile) pairs so far in this call
   std::vector<EdgeBandHit> edge_hits;

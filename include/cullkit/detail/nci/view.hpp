@@ -108,7 +108,6 @@ struct ViewSetup {
 // points when every point is in front of the eye: the conditions checked are linear in the
 // point, so they hold on the whole hull), `full` when the projection cannot be trusted.
 [[nodiscard]] inline Rect project_rect(const ViewSetup& f, const glm::vec3* p, int count) noexcept {
-  using Rect = Rect;
   if (!f.use_rect) return Rect{Rect::full, 0, 0, 0};
   double mnx = std::numeric_limits<double>::infinity(), mny = mnx, mxx = -mnx, mxy = -mnx;
   for (int k = 0; k < count; ++k) {
