@@ -63,14 +63,16 @@ cmd_test() {
   deps
   cmd_fuzz "${FUZZ_SECONDS:-20}"
   say "strict: clang++, C++20, -fno-exceptions -fno-rtti"
-  run_tests strict --no-tests=error
-  run_tests asan --no-tests=error
+  # Tests labelled heavy (real scenes at full size) run in the release preset only: under the
+  # sanitizers they take minutes each and check nothing the lighter tests do not also reach.
+  run_tests strict --no-tests=error -LE heavy
+  run_tests asan --no-tests=error -LE heavy
   run_tests release --no-tests=error
 }
 
 cmd_matrix() {
   deps
-  for p in clang cxx20 noexcept strict; do run_tests "$p" -LE bench; done
+  for p in clang cxx20 noexcept strict portable; do run_tests "$p" -LE bench; done
 }
 
 cmd_bench() {
@@ -108,7 +110,7 @@ usage: ./dev.sh <verb> [args]
   bench [args]   build and run every benchmark at full size; CSV to out/bench/
   fuzz [seconds] build the libFuzzer targets with clang and run each for that long (default 120)
   asan [args]    only the ASan+UBSan suite (args go to ctest, e.g. -R abt)
-  matrix         every compiler/standard/flag preset: clang, cxx20, noexcept, strict
+  matrix         every compiler/standard/flag preset: clang, cxx20, noexcept, strict, portable
   deps           install the Debian packages the project needs (apt-get, as root or via sudo)
   clean          remove build/ and out/
 Any verb installs missing Debian packages first. JOBS sets build parallelism.
