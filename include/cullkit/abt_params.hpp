@@ -10,6 +10,7 @@
 
 #include "geometry/aabb.hpp"
 #include "geometry/sphere.hpp"
+#include "task_runner.hpp"
 
 namespace cullkit {
 
@@ -52,11 +53,14 @@ struct AbtParams {
   std::uint32_t score_sample_limit = 8192;
   /// Seed of the sampling generator (unused by binning). Default 0x5eed.
   std::uint64_t seed = 0x5eedu;
-  /// Worker threads for the build: 0 uses all hardware threads, 1 builds on the calling thread
-  /// only (the default: a build takes no other thread unless asked to). With N > 1,
-  /// subtrees are built by up to N threads (the caller included) of the library's persistent
-  /// worker pool. The tree is identical either way.
-  unsigned threads = 1;
+  /// Worker threads for the build, as everywhere in cullkit: 0 (the default) uses all hardware
+  /// threads, 1 builds on the calling thread only, N > 1 up to N tasks. Builds of fewer than
+  /// 2 * `parallel_grain` objects always run on the calling thread. The tasks run on
+  /// `task_runner` when it is set, else on the library's persistent worker pool. The tree is
+  /// identical either way.
+  unsigned threads = 0;
+  /// The caller's job system for the build's tasks (see TaskRunner); default: the library's pool.
+  TaskRunner task_runner{};
   /// Subtrees smaller than this are never handed to another thread. Default 4096 objects.
   std::uint32_t parallel_grain = 4096;
   /// `cull` tests the objects of a straddling subtree of at most this many objects directly

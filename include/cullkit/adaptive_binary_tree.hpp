@@ -671,6 +671,7 @@ class AdaptiveBinaryTree {
 
     detail::AbtBuildContext ctx = build_context_;
     ctx.items = items.data();
+    ctx.runner = params.task_runner;
     std::atomic<std::uint32_t> done{0};
     std::mutex progress_mutex;
     float progress_last = 0.0f;

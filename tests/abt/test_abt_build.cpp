@@ -198,6 +198,7 @@ void determinism() {
   for (AbtCandidates cand : {AbtCandidates::binning, AbtCandidates::sampling}) {
     AbtParams p;
     p.candidates = cand;
+    p.threads = 1;
     const Tree serial(boxes.data(), boxes.size(), p);
     p.threads = 4;
     p.parallel_grain = 100;
@@ -207,6 +208,23 @@ void determinism() {
     const Tree par2(boxes.data(), boxes.size(), p);
     CHECK(serial.validate() && par4.validate() && par2.validate());
     CHECK_MSG(same_tree(serial, par4) && same_tree(serial, par2), "threads change the tree (candidates %d)", int(cand));
+    // The caller's job system: every task handed to it, run here in reverse order on this thread.
+    struct Jobs {
+      std::size_t calls = 0, tasks = 0;
+    } jobs;
+    p.threads = 3;
+    p.parallel_grain = 300;
+    p.task_runner.context = &jobs;
+    p.task_runner.dispatch = [](void* context, std::size_t count, void (*run)(void*, std::size_t), void* job) {
+      Jobs& j = *static_cast<Jobs*>(context);
+      ++j.calls;
+      j.tasks += count;
+      for (std::size_t i = count; i-- > 0;) run(job, i);
+    };
+    const Tree hooked(boxes.data(), boxes.size(), p);
+    CHECK_MSG(jobs.calls == 1 && jobs.tasks == 3, "the build's tasks did not go to the task runner (%zu calls, %zu tasks)",
+              jobs.calls, jobs.tasks);
+    CHECK_MSG(same_tree(serial, hooked), "the task runner changes the tree (candidates %d)", int(cand));
   }
   AbtParams a, b;
   a.candidates = b.candidates = AbtCandidates::sampling;

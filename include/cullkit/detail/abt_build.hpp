@@ -43,6 +43,7 @@ struct AbtBuildContext {
   std::uint32_t max_depth = 48;
   std::uint32_t grain = 0;  // > 0: defer subtrees below this size as tasks (top-level pass)
   std::vector<AbtBuildTask>* tasks = nullptr;
+  TaskRunner runner{};  // where the deferred subtrees are built (AbtParams::task_runner)
   // progress
   const std::function<void(float)>* progress = nullptr;
   std::atomic<std::uint32_t>* done = nullptr;
@@ -72,8 +73,8 @@ CULLKIT_CORE_FN void abt_stitch(std::vector<AbtNode>& raw, std::uint32_t at, con
 
 /// Builds a raw node array (root at 0) over items [begin, end), the root at `depth`. `threads`
 /// follows AbtParams::threads (0: all hardware threads, 1: the calling thread only); with more
-/// than one and enough items, subtrees below `grain` items are deferred as tasks and built on the
-/// shared WorkerPool. Split choices depend only on a node's own items and key, and each task
+/// than one and enough items, subtrees below `grain` items are deferred as tasks and built on
+/// `ctx.runner` (the caller's job system, or the shared WorkerPool). Split choices depend only on a node's own items and key, and each task
 /// writes its own array, stitched in task order, so the tree is the same for every thread count.
 CULLKIT_CORE_FN std::vector<AbtNode> abt_build_raw(AbtBuildContext ctx, std::uint32_t begin, std::uint32_t end,
                                                    std::uint32_t depth, unsigned threads, std::uint32_t grain);
@@ -215,8 +216,8 @@ CULLKIT_CORE_FN std::vector<AbtNode> abt_build_raw(AbtBuildContext ctx, std::uin
     std::atomic<std::size_t> next{0};
   } job{&ctx, &tasks, std::vector<std::vector<AbtNode>>(tasks.size()), {}};
   const std::size_t count = std::min<std::size_t>(workers, tasks.size());
-  detail::run_on_pool(
-      count,
+  detail::run_tasks(
+      ctx.runner, count,
       [](void* p, std::size_t) {
         Job& j = *static_cast<Job*>(p);
         AbtSplitScratch s;

@@ -223,7 +223,7 @@ inline void build_class_grids(const IndexData& data, const std::vector<std::uint
   parts.resize(classes);
   std::atomic<std::size_t> next{0}, done{0};
   const unsigned build_threads = detail::resolve_threads(data.params.build_threads, std::min<std::size_t>(classes, 64));
-  // Task 0 runs on the building thread (WorkerPool::run): the one that reports progress.
+  // Task 0 reports progress (on the building thread unless the caller's task runner puts it elsewhere).
   auto work = [&](bool reporter) {
     for (;;) {
       const std::size_t c = next.fetch_add(1, std::memory_order_relaxed);
@@ -234,8 +234,8 @@ inline void build_class_grids(const IndexData& data, const std::vector<std::uint
     }
   };
   using Work = decltype(work);
-  detail::run_on_pool(build_threads, [](void* job, std::size_t task) { (*static_cast<Work*>(job))(task == 0); },
-                                   &work);
+  detail::run_tasks(data.params.task_runner, build_threads,
+                    [](void* job, std::size_t task) { (*static_cast<Work*>(job))(task == 0); }, &work);
 }
 
 // Internal numbering (memory locality of the select walk): class by class, each class's
@@ -440,7 +440,7 @@ inline void make_frame_hierarchy(IndexData& data) {
       items[i].hi[k] = std::max({a[k], b[k], c[k]});
     }
   }
-  FrameBvhBuilder builder(items, detail::resolve_threads(data.params.build_threads, 16));
+  FrameBvhBuilder builder(items, detail::resolve_threads(data.params.build_threads, 16), data.params.task_runner);
   builder.traversal_cost = frame_traversal_cost;
   data.frame = builder.build();
   data.frame.nodes.shrink_to_fit();

@@ -60,7 +60,8 @@ struct FrameBvhItem {
 // `threads` threads and spliced in subtree order, so the tree does not depend on the thread count.
 class FrameBvhBuilder {
  public:
-  FrameBvhBuilder(const std::vector<FrameBvhItem>& items, unsigned threads) : items_(items), threads_(threads) {}
+  FrameBvhBuilder(const std::vector<FrameBvhItem>& items, unsigned threads, const TaskRunner& runner)
+      : items_(items), threads_(threads), runner_(runner) {}
 
   // The cost of a traversal step against one triangle test, for the leaf / split choice.
   float traversal_cost = 1.0f;
@@ -90,7 +91,7 @@ class FrameBvhBuilder {
       std::vector<std::uint32_t>* sub_root;
       std::size_t workers;
     } job{this, &tops, &sub, &sub_root, std::max<std::size_t>(1, std::min<std::size_t>(threads_, tops.size()))};
-    detail::run_on_pool(job.workers, [](void* j, std::size_t k) {
+    detail::run_tasks(runner_, job.workers, [](void* j, std::size_t k) {
       Job& b = *static_cast<Job*>(j);
       for (std::size_t t = k; t < b.tops->size(); t += b.workers) (*b.sub_root)[t] = b.self->make((*b.tops)[t], (*b.sub)[t]);
     }, &job);
@@ -109,6 +110,7 @@ class FrameBvhBuilder {
   static constexpr int bins = 16;
   const std::vector<FrameBvhItem>& items_;
   unsigned threads_;
+  TaskRunner runner_;
   std::uint32_t* ids_ = nullptr;
 
   static float area(const float lo[3], const float hi[3]) noexcept {

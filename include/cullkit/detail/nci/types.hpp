@@ -40,13 +40,14 @@ struct NciParams {
   /// threads come from the library's persistent pool (started on first use, never per call) or,
   /// with `task_runner`, from the caller's job system; 1 runs on the calling thread only.
   unsigned threads = 0;
-  /// Worker threads for the build (per class, from the same persistent pool); 0: all hardware
+  /// Worker threads for the build (per class, and the hierarchy's subtrees); 0: all hardware
   /// threads, 1: the calling thread only. Never changes the index.
   unsigned build_threads = 0;
-  /// Where select_visible's parallel work runs: `threads` tasks (0: as many as hardware threads,
-  /// at most one per screen tile) handed to `task_runner.dispatch` when it is set, else to the
-  /// library's pool. Each task owns one worker's scratch in the NciContext and pulls screen tiles
-  /// from a shared counter, so the answer is the same however the tasks are run.
+  /// Where the parallel work runs, the build's and select_visible's: the tasks (select_visible:
+  /// `threads` of them, 0 as many as hardware threads, at most one per screen tile) are handed to
+  /// `task_runner.dispatch` when it is set, else to the library's pool. Each select task owns one
+  /// worker's scratch in the NciContext and pulls screen tiles from a shared counter, so the
+  /// answer (and the index) is the same however the tasks are run.
   TaskRunner task_runner{};
   /// Screen tile edge in pixels, clamped to [2, 64]; 0 (the default): 64 for screens of at least
   /// 640x480 pixels, 32 below. Each tile walks the slices on its own and pays the per-triangle work
@@ -63,8 +64,9 @@ struct NciParams {
   int tile_size = 0;
   /// Seed of the k-means (sampling and re-seeding of empty classes). Same seed, same index.
   std::uint64_t seed = 0x6e63692d6b6dULL;
-  /// Optional build progress report, called from the building thread with a fraction in [0, 1]
-  /// (monotone, 1 at the end). `progress_user` is passed through. nullptr: no reports.
+  /// Optional build progress report, called with a fraction in [0, 1] (monotone, 1 at the end),
+  /// from one thread at a time: the building thread, unless `task_runner` runs the build's first
+  /// task on another. `progress_user` is passed through. nullptr: no reports.
   void (*progress)(float fraction, void* user) = nullptr;
   /// Passed to `progress` unchanged.
   void* progress_user = nullptr;
