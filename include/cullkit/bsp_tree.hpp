@@ -17,12 +17,15 @@
 // faces simply skips them while painting: the remaining order is still correct, since removing
 // surfaces from a correct painter's order keeps it correct.
 //
-// Rounding: planes are computed in double from the float corners; a corner within
-// BspStats::epsilon of a plane is on it. Errors are therefore limited to surfaces closer than that
-// tolerance to each other (coplanar overlaps, and near-coincident surfaces), and to eyes within it of
-// a splitting plane, where the surfaces concerned are seen edge-on.
+// Rounding: planes are computed in double from the float corners; a corner within a tolerance of a
+// plane is on it, the tolerance being BspParams::epsilon times the largest coordinate magnitude of
+// the two triangles concerned (the splitter's and the one tested). Errors are therefore limited to
+// surfaces closer than that tolerance to each other (coplanar overlaps, and near-coincident
+// surfaces), and to eyes within it of a splitting plane, where the surfaces concerned are seen
+// edge-on. Cuts are made exactly where a polygon crosses the plane, so a triangle's fragments tile it.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -51,8 +54,9 @@ class BspTree {
 
  public:
   /// Builds the tree over every usable triangle of `mesh`. Triangles with an index out of range,
-  /// a NaN or infinite corner, or zero area are dropped and counted in `stats()`; they have no
-  /// fragments. Empty input gives an empty tree. Uses `params.threads` worker threads for large
+  /// a NaN or infinite corner, or zero area (no plane: see BspStats::dropped_degenerate) are dropped
+  /// and counted in `stats()`; they have no fragments. Every other triangle, however small or thin,
+  /// is covered exactly once by its fragments. Empty input gives an empty tree. Uses `params.threads` worker threads for large
   /// inputs (the result does not depend on them) and reports through `params.progress`.
   /// pre: mesh.vertices != nullptr when vertex_count > 0, mesh.indices likewise (asserted in debug
   /// builds; a null pointer is read as an empty buffer in release builds).
@@ -115,12 +119,28 @@ class BspTree {
   }
 
   /// Checks the tree's invariants: every fragment is listed by exactly one node, has 3 or more
-  /// corners within epsilon of its node's plane, every corner of the subtree in front of (behind) a
-  /// node is at distance >= -epsilon (<= epsilon) from its plane, and links are consistent.
+  /// corners within the tolerance of its node's plane, every corner of the subtree in front of
+  /// (behind) a node is at distance >= -tolerance (<= tolerance) from its plane, and links are
+  /// consistent. The tolerance of a fragment against a node is BspParams::epsilon times the largest
+  /// coordinate magnitude of its triangle's fragments and of the node's fragments' triangles (an
+  /// upper bound of what the build used, since fragments tile their triangles).
   /// Cost: O(corners x depth). For tests.
   [[nodiscard]] bool validate() const {
     const auto& nodes = data_.nodes;
-    const double eps = data_.stats.epsilon * 1.0001 + 1e-30;
+    const auto& frags = data_.fragments;
+    std::vector<double> triangle_scale(data_.stats.triangles, 0.0), node_scale(nodes.size(), 0.0);
+    for (const BspFragment& frag : frags) {
+      if (frag.triangle >= triangle_scale.size() || frag.first_corner + std::size_t(frag.corner_count) > data_.corners.size())
+        return false;
+      for (std::uint32_t c = frag.first_corner; c < frag.first_corner + frag.corner_count; ++c)
+        for (int a = 0; a < 3; ++a)
+          triangle_scale[frag.triangle] = std::max(triangle_scale[frag.triangle], double(std::fabs(data_.corners[c][a])));
+    }
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      if (nodes[i].first_fragment + std::size_t(nodes[i].fragment_count) > frags.size()) return false;
+      for (std::uint32_t f = nodes[i].first_fragment; f < nodes[i].first_fragment + nodes[i].fragment_count; ++f)
+        node_scale[i] = std::max(node_scale[i], triangle_scale[frags[f].triangle]);
+    }
     std::vector<std::uint8_t> seen(data_.fragments.size(), 0);
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       const BspNode& n = nodes[i];
@@ -135,6 +155,8 @@ class BspTree {
         for (std::uint32_t a = static_cast<std::uint32_t>(i); a != kBspNone; child = a, a = nodes[a].parent) {
           const BspNode& an = nodes[a];
           const int want = a == i ? 0 : (an.front == child ? 1 : -1);
+          const double eps =
+              data_.relative_epsilon * std::max(node_scale[a], triangle_scale[frag.triangle]) * 1.0001 + 1e-30;
           for (std::uint32_t c = frag.first_corner; c < frag.first_corner + frag.corner_count; ++c) {
             const double s = glm::dot(an.normal, glm::dvec3(data_.corners[c])) + an.d;
             // Corners are stored in float: allow their rounding on top of the tolerance.

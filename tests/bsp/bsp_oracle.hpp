@@ -154,4 +154,104 @@ inline cullkit::support::Scene cyclic_scene() {
   return s;
 }
 
+// Small triangles (0.05 to 0.3 across) interpenetrating in a 4 m box far from the origin (its
+// centre at (3000, 1000, -2000)): the triangles are small next to their coordinates' magnitude.
+inline cullkit::support::Scene small_far_cloud(std::uint64_t seed, int count) {
+  cullkit::support::Rng rng(seed);
+  const glm::vec3 centre(3000.0f, 1000.0f, -2000.0f);
+  std::vector<glm::vec3> corners;
+  for (int i = 0; i < count; ++i) {
+    const glm::vec3 c = centre + glm::vec3(rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(-2, 2));
+    const float size = rng.uniform(0.05f, 0.3f);
+    for (int k = 0; k < 3; ++k)
+      corners.push_back(c + size * glm::vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)));
+  }
+  cullkit::support::Scene s;
+  s.add_triangles(corners, "small_far");
+  return s;
+}
+
+// Slivers: long triangles (2 to 8 long) whose apex stands 1e-5 to 1e-2 of their length off the
+// long edge, crossing each other and a few ordinary triangles in a 6 m box, plus one far triangle
+// that makes the largest coordinate 1000 (so that a tolerance tied to it is large next to them).
+inline cullkit::support::Scene sliver_soup(std::uint64_t seed, int count) {
+  cullkit::support::Rng rng(seed);
+  std::vector<glm::vec3> corners;
+  const auto random_unit = [&rng] {
+    for (;;) {
+      const glm::vec3 v(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+      const float l = glm::length(v);
+      if (l > 0.1f && l < 1.0f) return v / l;
+    }
+  };
+  for (int i = 0; i < count; ++i) {
+    const glm::vec3 a(rng.uniform(-3, 3), rng.uniform(-3, 3), rng.uniform(-3, 3));
+    const glm::vec3 dir = random_unit();
+    const float length = rng.uniform(2, 8);
+    glm::vec3 up = glm::cross(dir, random_unit());
+    up /= glm::length(up);
+    const float thin = i % 8 == 0 ? 0.3f : std::pow(10.0f, rng.uniform(-5, -2));  // a few ordinary ones
+    const glm::vec3 b = a + dir * length;
+    corners.push_back(a);
+    corners.push_back(b);
+    corners.push_back(a + dir * (length * rng.uniform(0.2f, 0.8f)) + up * (thin * length));
+  }
+  corners.push_back({1000, 0, 0});
+  corners.push_back({1000, 1, 0});
+  corners.push_back({1000, 0, 1});
+  cullkit::support::Scene s;
+  s.add_triangles(corners, "slivers");
+  return s;
+}
+
+// Fans of nearly coplanar triangles: each fan is a disc of `spokes` triangles around a centre whose
+// rim corners leave the disc's plane by up to `bend` of its radius (a gently curved cap), and the
+// fans lie in planes tilted 1e-4 to 1e-2 radians from each other through nearby centres, so they
+// cross at grazing angles.
+inline cullkit::support::Scene near_coplanar_fans(std::uint64_t seed, int fans, int spokes, float bend) {
+  cullkit::support::Rng rng(seed);
+  std::vector<glm::vec3> corners;
+  for (int f = 0; f < fans; ++f) {
+    const glm::vec3 centre(rng.uniform(-0.5f, 0.5f), rng.uniform(-0.02f, 0.02f), rng.uniform(-0.5f, 0.5f));
+    const float tilt_x = std::pow(10.0f, rng.uniform(-4, -2)) * (rng.uniform() < 0.5f ? -1.0f : 1.0f);
+    const float tilt_z = std::pow(10.0f, rng.uniform(-4, -2)) * (rng.uniform() < 0.5f ? -1.0f : 1.0f);
+    const float radius = rng.uniform(0.5f, 1.5f);
+    std::vector<glm::vec3> rim;
+    for (int k = 0; k < spokes; ++k) {
+      const float a = 6.2831853f * (float(k) + rng.uniform(-0.2f, 0.2f)) / float(spokes);
+      const float x = radius * std::cos(a), z = radius * std::sin(a);
+      const float y = tilt_x * x + tilt_z * z + bend * radius * rng.uniform(-1, 1);
+      rim.push_back(centre + glm::vec3(x, y, z));
+    }
+    for (int k = 0; k < spokes; ++k) {
+      corners.push_back(centre);
+      corners.push_back(rim[std::size_t((k + 1) % spokes)]);
+      corners.push_back(rim[std::size_t(k)]);
+    }
+  }
+  cullkit::support::Scene s;
+  s.add_triangles(corners, "fans");
+  return s;
+}
+
+// `scene` with every position multiplied by `factor`.
+inline cullkit::support::Scene scaled(const cullkit::support::Scene& scene, float factor, const char* name) {
+  cullkit::support::Scene s;
+  std::vector<glm::vec3> positions = scene.positions;
+  for (glm::vec3& p : positions) p *= factor;
+  s.add_mesh(positions, scene.indices, name);
+  s.name = name;
+  return s;
+}
+
+// Eyes that lie on the mesh: exactly on a corner of triangle `t`, at the midpoint of its first
+// edge, and in its plane beyond its first edge (the node planes the walk tests them against pass
+// through them, within rounding).
+inline std::vector<glm::vec3> eyes_on_mesh(const cullkit::support::Scene& s, std::size_t t) {
+  const glm::vec3 a = s.positions[s.indices[3 * t]], b = s.positions[s.indices[3 * t + 1]],
+                  c = s.positions[s.indices[3 * t + 2]];
+  const glm::vec3 mid = (a + b) * 0.5f;
+  return {a, mid, mid + (mid - c) * 2.0f};
+}
+
 }  // namespace bsp_test

@@ -79,6 +79,20 @@ void test_orders() {
   }
   const Scene office = cullkit::support::make_office(3, 2, 2);  // boxes: many coplanar faces
   check_scene("office", office, {{3, 1.6f, 2.5f}, {-4, 8, -4}}, 300, mutant, sorted);
+  // Scenes that stress the on-plane tolerance, from eyes inside, outside and on the mesh (a corner,
+  // an edge, a triangle's plane).
+  const Scene stress[] = {bsp_test::small_far_cloud(11, 600), bsp_test::sliver_soup(12, 150),
+                          bsp_test::near_coplanar_fans(13, 10, 16, 1e-4f),
+                          bsp_test::scaled(cullkit::support::make_office(4, 2, 1), 1e-3f, "office_x1e-3"),
+                          bsp_test::scaled(bsp_test::random_soup(14, 120, 4.0f, 2.0f), 1e3f, "soup_x1e3")};
+  const char* stress_names[] = {"small_far", "slivers", "fans", "office_x1e-3", "soup_x1e3"};
+  for (std::size_t i = 0; i < sizeof(stress) / sizeof(stress[0]); ++i) {
+    const Scene& s = stress[i];
+    const glm::vec3 lo = s.bounds.min, hi = s.bounds.max, size = hi - lo;
+    std::vector<glm::vec3> eyes = {lo + size * glm::vec3(0.45f, 0.55f, 0.5f), hi + size * 0.7f};
+    for (const glm::vec3& e : bsp_test::eyes_on_mesh(s, s.triangle_count() / 3)) eyes.push_back(e);
+    check_scene(stress_names[i], s, eyes, 200, mutant, sorted);
+  }
   std::printf("reversed order: %zu violations, centroid sort: %zu violations\n", mutant, sorted);
   CHECK(mutant > 100);  // the oracle sees wrong orders
   CHECK(sorted > 0);    // and a depth sort is not enough on these scenes
@@ -149,12 +163,25 @@ void test_bad_input() {
   const Tree one(cullkit::MeshView<glm::vec3>{v.data(), v.size(), idx.data(), 3});
   one.back_to_front(glm::vec3(5, 5, 5), out);
   CHECK(out.size() == 1 && one.nodes().size() == 1);
-  // A sliver thinner than the tolerance (1e-6 of the largest coordinate) has no trustworthy plane:
-  // dropped as degenerate, beside a normal triangle that is kept.
-  const std::vector<glm::vec3> sv = {{0, 0, 0}, {1e6f, 0, 0}, {5e5f, 1e-2f, 0}, {0, 1e5f, 0}};
-  const std::vector<std::uint32_t> si3 = {0, 1, 2, 0, 1, 3};
-  const Tree sliver(cullkit::MeshView<glm::vec3>{sv.data(), sv.size(), si3.data(), si3.size()});
-  CHECK(sliver.stats().dropped_degenerate == 1 && sliver.fragments().size() == 1 && sliver.validate());
+  // A sliver far thinner than the tolerance (1e-8 of its length) still has a plane through its
+  // corners: kept whole, beside a normal triangle; a crossing triangle cuts it exactly.
+  const std::vector<glm::vec3> sv = {{0, 0, 0}, {1e6f, 0, 0}, {5e5f, 1e-2f, 0}, {0, 1e5f, 0},
+                                     {4e5f, -1, -1}, {4e5f, 5, 1}, {4e5f, -1, 1}};
+  const std::vector<std::uint32_t> si3 = {0, 1, 2, 0, 1, 3, 4, 5, 6};
+  const Tree sliver(cullkit::MeshView<glm::vec3>{sv.data(), sv.size(), si3.data(), si3.size() - 3});
+  CHECK(sliver.stats().dropped_degenerate == 0 && sliver.fragments().size() == 2 && sliver.validate());
+  const Tree crossed(cullkit::MeshView<glm::vec3>{sv.data(), sv.size(), si3.data(), si3.size()});
+  double sliver_area = 0;
+  for (const auto& fr : crossed.fragments()) {
+    if (fr.triangle != 0) continue;
+    for (std::uint32_t i = 1; i + 1 < fr.corner_count; ++i) {
+      const glm::dvec3 o(crossed.corners()[fr.first_corner]);
+      sliver_area += 0.5 * glm::length(glm::cross(glm::dvec3(crossed.corners()[fr.first_corner + i]) - o,
+                                                  glm::dvec3(crossed.corners()[fr.first_corner + i + 1]) - o));
+    }
+  }
+  CHECK_MSG(std::fabs(sliver_area / 5e3 - 1) < 1e-4, "sliver covered %.6f", sliver_area / 5e3);
+  CHECK(crossed.stats().dropped_degenerate == 0 && crossed.validate());
   // Signed 16-bit indices and a vertex type read through custom traits.
   struct MyVertex {
     float xyz[3];

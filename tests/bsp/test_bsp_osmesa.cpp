@@ -46,7 +46,7 @@ constexpr double kTieDepth = 4e-6;          // window depth in [0, 1]
 
 struct View {
   glm::vec3 eye;
-  glm::mat4 view_proj;
+  glm::mat4 view_proj;  // of positions relative to the eye (p - eye, taken in double): exact far from the origin
 };
 
 // Immediate-mode drawing of triangle ids (id + 1 in RGB; 0 is the background).
@@ -97,8 +97,8 @@ std::vector<std::uint32_t> draw_depth_tested(const Scene& s, const View& v, bool
   for (std::size_t t = 0; t < s.triangle_count(); ++t) {
     set_id_color(static_cast<std::uint32_t>(t));
     for (int k = 0; k < 3; ++k) {
-      const glm::vec3& p = s.positions[s.indices[3 * t + std::size_t(k)]];
-      glVertex3f(p.x, p.y, p.z);
+      const glm::dvec3 p = glm::dvec3(s.positions[s.indices[3 * t + std::size_t(k)]]) - glm::dvec3(v.eye);
+      glVertex3d(p.x, p.y, p.z);
     }
   }
   glEnd();
@@ -113,8 +113,8 @@ std::vector<std::uint32_t> draw_in_order(const Tree& tree, const std::vector<std
     set_id_color(fr.triangle);
     glBegin(GL_TRIANGLE_FAN);
     for (std::uint32_t i = 0; i < fr.corner_count; ++i) {
-      const glm::vec3& p = tree.corners()[fr.first_corner + i];
-      glVertex3f(p.x, p.y, p.z);
+      const glm::dvec3 p = glm::dvec3(tree.corners()[fr.first_corner + i]) - glm::dvec3(v.eye);
+      glVertex3d(p.x, p.y, p.z);
     }
     glEnd();
   }
@@ -134,7 +134,7 @@ class RayOracle {
   // beyond the near plane; front faces only when `cull`.
   std::vector<Hit> hits(double px, double py, bool cull) const {
     const glm::dvec4 far_h = inv_ * glm::dvec4(2.0 * px / kWidth - 1.0, 2.0 * py / kHeight - 1.0, 1.0, 1.0);
-    const glm::dvec3 dir = glm::dvec3(far_h) / far_h.w - eye_;
+    const glm::dvec3 dir = glm::dvec3(far_h) / far_h.w;  // the view's frame has the eye at its origin
     std::vector<Hit> out;
     for (std::size_t t = 0; t < scene_.triangle_count(); ++t) {
       const glm::dvec3 a(scene_.positions[scene_.indices[3 * t]]), b(scene_.positions[scene_.indices[3 * t + 1]]),
@@ -150,7 +150,7 @@ class RayOracle {
       const double w = glm::dot(dir, qv) / det;
       const double t_hit = glm::dot(e2, qv) / det;
       if (u < 0 || w < 0 || u + w > 1 || !(t_hit > 0)) continue;
-      const glm::dvec4 clip = glm::dmat4(vp_) * glm::dvec4(eye_ + dir * t_hit, 1.0);
+      const glm::dvec4 clip = glm::dmat4(vp_) * glm::dvec4(dir * t_hit, 1.0);
       const double z = clip.z / clip.w;
       if (!(clip.w > 0) || z < -1 || z > 1) continue;  // clipped by the near or far plane
       out.push_back({0.5 * z + 0.5, static_cast<std::uint32_t>(t)});
@@ -190,16 +190,16 @@ struct Compare {
 // either triangle (ids are triangle + 1). Cuts leave T-junctions inside a triangle (a later cut adds
 // a corner on one side of an earlier cut only); its rounded corner lets a pixel centre lying exactly
 // on the cut fall between the fragments.
-bool cut_edge(const Tree& tree, std::uint32_t id_a, std::uint32_t id_b, int x, int row, const glm::mat4& vp) {
+bool cut_edge(const Tree& tree, std::uint32_t id_a, std::uint32_t id_b, int x, int row, const View& v) {
   const glm::dvec2 centre(x + 0.5, row + 0.5);
-  const glm::dmat4 m(vp);
+  const glm::dmat4 m(v.view_proj);
   for (const auto& fr : tree.fragments()) {
     if (fr.triangle + 1 != id_a && fr.triangle + 1 != id_b) continue;
     glm::dvec2 w[64];
     const std::uint32_t n = std::min<std::uint32_t>(fr.corner_count, 64);
     bool visible = true;
     for (std::uint32_t i = 0; i < n; ++i) {
-      const glm::dvec4 q = m * glm::dvec4(glm::dvec3(tree.corners()[fr.first_corner + i]), 1.0);
+      const glm::dvec4 q = m * glm::dvec4(glm::dvec3(tree.corners()[fr.first_corner + i]) - glm::dvec3(v.eye), 1.0);
       visible = visible && q.w > 0;
       w[i] = glm::dvec2((q.x / q.w * 0.5 + 0.5) * kWidth, (q.y / q.w * 0.5 + 0.5) * kHeight);
     }
@@ -215,7 +215,7 @@ bool cut_edge(const Tree& tree, std::uint32_t id_a, std::uint32_t id_b, int x, i
 }
 
 Compare compare(const std::vector<std::uint32_t>& truth, const std::vector<std::uint32_t>& painted,
-                const RayOracle& oracle, const Tree& tree, const glm::mat4& vp, bool cull, std::size_t max_examined) {
+                const RayOracle& oracle, const Tree& tree, const View& v, bool cull, std::size_t max_examined) {
   Compare c;
   for (int row = 0; row < kHeight; ++row) {
     for (int x = 0; x < kWidth; ++x) {
@@ -228,7 +228,7 @@ Compare compare(const std::vector<std::uint32_t>& truth, const std::vector<std::
         case RayOracle::Verdict::edge: ++c.edge; break;
         case RayOracle::Verdict::tie: ++c.tie; break;
         case RayOracle::Verdict::clear:
-          if (cut_edge(tree, truth[i], painted[i], x, row, vp)) {
+          if (cut_edge(tree, truth[i], painted[i], x, row, v)) {
             ++c.cut_edge;
           } else if (++c.wrong <= 3 && max_examined > 1000000) {
             std::fprintf(stderr, "    pixel (%d, %d from the bottom): depth-tested %u, painted %u\n", x, row, truth[i],
@@ -263,7 +263,7 @@ View make_view(const glm::vec3& eye, const glm::vec3& target, float near_plane, 
   const glm::vec3 dir = glm::normalize(target - eye);
   const glm::vec3 up = std::fabs(dir.y) > 0.95f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
   const glm::mat4 proj = glm::perspectiveRH_NO(glm::radians(70.0f), float(kWidth) / float(kHeight), near_plane, far_plane);
-  return View{eye, proj * glm::lookAtRH(eye, target, up)};
+  return View{eye, proj * glm::lookAtRH(glm::vec3(0.0f), target - eye, up)};
 }
 
 void check_scene(const std::string& name, const Scene& scene, const std::vector<View>& views,
@@ -278,7 +278,7 @@ void check_scene(const std::string& name, const Scene& scene, const std::vector<
     for (int cull = 0; cull < 2; ++cull) {
       const auto truth = draw_depth_tested(scene, v, cull != 0, buf);
       const auto painted = draw_in_order(tree, order, v, cull != 0, buf);
-      const Compare c = compare(truth, painted, oracle, tree, v.view_proj, cull != 0, ~std::size_t(0) >> 1);
+      const Compare c = compare(truth, painted, oracle, tree, v, cull != 0, ~std::size_t(0) >> 1);
       CHECK_MSG(c.wrong == 0, "%s view %zu cull %d: %zu unexcused pixels (%zu differ: %zu on edges, %zu ties, %zu on cuts)",
                 name.c_str(), vi, cull, c.wrong, c.differing, c.edge, c.tie, c.cut_edge);
       totals.pixels_compared += truth.size();
@@ -296,9 +296,9 @@ void check_scene(const std::string& name, const Scene& scene, const std::vector<
       }
       // Mutants: front to back, and a centroid depth sort, painted the same way.
       std::vector<std::uint32_t> reversed(order.rbegin(), order.rend());
-      totals.mutant_wrong += compare(truth, draw_in_order(tree, reversed, v, cull != 0, buf), oracle, tree, v.view_proj, cull != 0, 200).wrong;
+      totals.mutant_wrong += compare(truth, draw_in_order(tree, reversed, v, cull != 0, buf), oracle, tree, v, cull != 0, 200).wrong;
       totals.centroid_wrong +=
-          compare(truth, draw_in_order(tree, centroid_order(tree, v.eye), v, cull != 0, buf), oracle, tree, v.view_proj,
+          compare(truth, draw_in_order(tree, centroid_order(tree, v.eye), v, cull != 0, buf), oracle, tree, v,
                   cull != 0, 200).wrong;
     }
   }
@@ -326,13 +326,20 @@ Scene chunk(const Scene& s, const glm::vec3& centre, std::size_t count) {
   return out;
 }
 
-// Views of a scene: one eye inside its box, looking across it, and two outside.
-std::vector<View> views_of(const Scene& s) {
+// Views of a scene: one eye inside its box, looking across it, and two outside; with `on_mesh`,
+// three more from eyes on the mesh (a triangle's corner, an edge's midpoint, a point in its plane)
+// looking at the centre.
+std::vector<View> views_of(const Scene& s, bool on_mesh = false) {
   const glm::vec3 lo = s.bounds.min, hi = s.bounds.max, c = (lo + hi) * 0.5f, size = hi - lo;
   const float diag = glm::length(size);
-  return {make_view(c + size * glm::vec3(0.13f, 0.07f, -0.11f), c + size * glm::vec3(-0.4f, -0.1f, 0.3f), diag * 0.002f, diag * 3),
-          make_view(c + size * glm::vec3(1.1f, 0.6f, 0.9f), c, diag * 0.05f, diag * 4),
-          make_view(c + size * glm::vec3(-0.7f, -0.4f, -1.2f), c, diag * 0.05f, diag * 4)};
+  std::vector<View> views = {
+      make_view(c + size * glm::vec3(0.13f, 0.07f, -0.11f), c + size * glm::vec3(-0.4f, -0.1f, 0.3f), diag * 0.002f, diag * 3),
+      make_view(c + size * glm::vec3(1.1f, 0.6f, 0.9f), c, diag * 0.05f, diag * 4),
+      make_view(c + size * glm::vec3(-0.7f, -0.4f, -1.2f), c, diag * 0.05f, diag * 4)};
+  if (on_mesh)
+    for (const glm::vec3& eye : bsp_test::eyes_on_mesh(s, s.triangle_count() / 2))
+      if (glm::length(c - eye) > diag * 0.01f) views.push_back(make_view(eye, c, diag * 0.002f, diag * 3));
+  return views;
 }
 
 }  // namespace
@@ -359,13 +366,29 @@ int main() {
                 buf, totals);
   }
   const Scene office = cullkit::support::make_office(2, 3, 2);
-  check_scene("office", office, views_of(office), buf, totals);
+  check_scene("office", office, views_of(office, true), buf, totals);
+  // Scenes that stress the on-plane tolerance.
+  const Scene small_far = bsp_test::small_far_cloud(21, 800);
+  check_scene("small_far", small_far, views_of(small_far, true), buf, totals);
+  const Scene slivers = bsp_test::sliver_soup(22, 200);
+  {
+    // Its far triangle (at x = 1000) only sets the largest coordinate: look at the slivers' box.
+    std::vector<View> views = {make_view({0.3f, 0.2f, 0.1f}, {3, 1, 2}, 0.01f, 50), make_view({12, 7, 9}, {0, 0, 0}, 0.5f, 60)};
+    for (const glm::vec3& eye : bsp_test::eyes_on_mesh(slivers, 101)) views.push_back(make_view(eye, {0, 0, 0}, 0.01f, 50));
+    check_scene("slivers", slivers, views, buf, totals);
+  }
+  const Scene fans = bsp_test::near_coplanar_fans(23, 12, 16, 1e-4f);
+  check_scene("fans", fans, views_of(fans, true), buf, totals);
+  const Scene tiny_office = bsp_test::scaled(cullkit::support::make_office(3, 2, 2), 1e-3f, "office_x1e-3");
+  check_scene("office_x1e-3", tiny_office, views_of(tiny_office, true), buf, totals);
+  const Scene big_soup = bsp_test::scaled(bsp_test::random_soup(24, 150, 4.0f, 2.0f), 1e3f, "soup_x1e3");
+  check_scene("soup_x1e3", big_soup, views_of(big_soup, true), buf, totals);
   for (const auto& file : cullkit::support::real_scene_files()) {
     const auto loaded = cullkit::support::load_obj(cullkit::support::scenes_dir() + "/" + file);
     if (!loaded) continue;
     const glm::vec3 centre = (loaded->bounds.min + loaded->bounds.max) * 0.5f;
     const Scene part = chunk(*loaded, centre, 4000);
-    check_scene(file, part, views_of(part), buf, totals);
+    check_scene(file, part, views_of(part, true), buf, totals);
   }
   std::printf("pixels %zu, covered %zu, differing %zu (edge %zu, tie %zu, cut %zu); oracle agrees with Mesa at %zu of %zu "
               "sampled pixels; unexcused pixels with the reversed order %zu, with a centroid sort %zu\n",

@@ -16,3 +16,6 @@ if(CULLKIT_OSMESA_FOUND)
 else()
   message(STATUS "cullkit: skipping test_bsp_osmesa (OSMesa not found: install libosmesa6-dev)")
 endif()
+# Coverage of every triangle by its fragments, on stress scenes and every real scene present.
+cullkit_add_test(test_bsp_coverage SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_bsp_coverage.cpp
+                 LIBS Threads::Threads TIMEOUT 600)

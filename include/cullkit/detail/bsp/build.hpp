@@ -37,11 +37,15 @@ struct BspProgress {
 /// Options of `BspTree`. Every field has a default that suits scenes from a few triangles to
 /// millions; the trade-offs are measured in docs/bsp.md.
 struct BspParams {
-  /// On-plane tolerance, relative to the input's largest coordinate magnitude (the absolute
-  /// tolerance is epsilon * max(1, max |coordinate|)). A corner within it of a splitting plane is on
-  /// the plane: polygons are never cut for corners that are only on the plane, and a polygon with
-  /// every corner on it is stored at that node. Larger merges more near-coplanar surfaces (fewer
-  /// cuts) at the price of ordering errors of that size; default 1e-6, about 16 float ulps.
+  /// On-plane tolerance, relative to the coordinates of the two triangles concerned (the
+  /// splitter's and the tested polygon's source triangle): epsilon times the largest coordinate
+  /// magnitude m among their corners, since float input is only that exact there; but no more
+  /// than 1e-3 of the shorter of their longest edges (a tolerance must stay small next to the
+  /// triangles it decides about) and no less than min(epsilon, 2^-22) m (a few float ulps). A
+  /// corner within it of a splitting plane is on the plane: polygons are never cut for corners
+  /// that are only on the plane, and a polygon with every corner on it is stored at that node.
+  /// Larger merges more near-coplanar surfaces (fewer cuts) at the price of ordering errors of that
+  /// size; default 1e-6, about 8 to 16 float ulps.
   float epsilon = 1e-6f;
   /// Splitter candidates scored per node (spread evenly over the node's polygons). 1 takes the
   /// first polygon's plane (fastest build, most fragments). Default 16.
@@ -70,12 +74,12 @@ struct BspStats {
   std::size_t triangles = 0;            ///< triangles in the mesh (index_count / 3)
   std::size_t dropped_bad_index = 0;    ///< a corner index out of range (or negative)
   std::size_t dropped_non_finite = 0;   ///< a NaN or infinite corner coordinate
-  std::size_t dropped_degenerate = 0;   ///< zero area, or thinner than `epsilon` (no usable plane)
+  std::size_t dropped_degenerate = 0;   ///< zero area: its edges' cross product is 0 in double (no plane)
   std::size_t cuts = 0;                 ///< polygons cut in two by a splitting plane
   std::size_t fragments = 0;            ///< fragments stored (kept triangles + cuts)
   std::size_t nodes = 0;
   std::size_t depth = 0;                ///< nodes on the longest root-to-leaf path
-  double epsilon = 0;                   ///< the absolute on-plane tolerance used
+  double epsilon = 0;                   ///< the largest absolute on-plane tolerance used (see BspParams)
   double seconds = 0;                   ///< wall time of the build
 };
 
@@ -137,16 +141,40 @@ struct Data {
   std::vector<glm::vec3> corners;
   std::vector<glm::vec2> barycentrics;
   BspStats stats;
+  double relative_epsilon = 0;  // BspParams::epsilon, for validate()
+};
+
+/// What the on-plane tolerance of a triangle depends on.
+struct TriangleScale {
+  double magnitude;     // largest coordinate magnitude of its corners
+  double longest_edge;
 };
 
 struct Context {
-  const std::vector<DPlane>* planes;  // per input triangle
-  double eps;
+  const std::vector<DPlane>* planes;         // per input triangle
+  const std::vector<TriangleScale>* scales;  // per input triangle
+  double relative;                           // BspParams::epsilon
   const BspParams* params;
   std::atomic<std::size_t> placed{0}, pending{0};
 };
 
 enum class Side { front, back, on, straddle };
+
+/// Smallest relative tolerance: about two float ulps of the coordinates.
+inline constexpr double kToleranceFloor = 0x1p-22;
+/// Largest tolerance, relative to the shorter longest edge of the two triangles.
+inline constexpr double kToleranceSizeCap = 1e-3;
+
+/// The on-plane tolerance between two triangles of the given scales (see BspParams::epsilon).
+inline double tolerance(const TriangleScale& a, const TriangleScale& b, double relative) {
+  const double m = std::max(a.magnitude, b.magnitude);
+  const double cap = kToleranceSizeCap * std::min(a.longest_edge, b.longest_edge);
+  return std::max(std::min(relative, kToleranceFloor) * m, std::min(relative * m, cap));
+}
+/// The on-plane tolerance between a polygon of triangle `tested` and the plane of `splitter`.
+inline double tolerance(const Context& ctx, std::uint32_t splitter, std::uint32_t tested) {
+  return tolerance((*ctx.scales)[splitter], (*ctx.scales)[tested], ctx.relative);
+}
 
 inline Side classify(const Corner* c, std::uint32_t count, const DPlane& plane, double eps) {
   bool f = false, b = false;
@@ -163,17 +191,21 @@ inline void append_poly(Item& to, std::uint32_t triangle, const Corner* c, std::
   to.corners.insert(to.corners.end(), c, c + count);
 }
 
-/// Cuts a straddling polygon: corners within eps of the plane go to both pieces, clear crossings
-/// get a new corner (position and barycentrics interpolated alike) on both.
-inline void cut(const Poly& poly, const Corner* c, const DPlane& plane, double eps, Item& front, Item& back) {
+/// Cuts a polygon that straddles the plane (some corner beyond the tolerance on each side) exactly
+/// where it crosses: corners go by the sign of their distance, a corner at distance 0 to both
+/// pieces, and each edge whose ends have opposite signs gets a new corner (position and
+/// barycentrics interpolated alike) on both. The two pieces tile the polygon. (Sending every corner
+/// within the tolerance to both pieces would not: two or more such corners in a row make the pieces
+/// overlap.)
+inline void cut(const Poly& poly, const Corner* c, const DPlane& plane, Item& front, Item& back) {
   const std::uint32_t f0 = static_cast<std::uint32_t>(front.corners.size());
   const std::uint32_t b0 = static_cast<std::uint32_t>(back.corners.size());
   for (std::uint32_t i = 0; i < poly.count; ++i) {
     const std::uint32_t j = i + 1 == poly.count ? 0 : i + 1;
     const double di = glm::dot(plane.normal, c[i].p) + plane.d;
     const double dj = glm::dot(plane.normal, c[j].p) + plane.d;
-    const int si = di > eps ? 1 : (di < -eps ? -1 : 0);
-    const int sj = dj > eps ? 1 : (dj < -eps ? -1 : 0);
+    const int si = di > 0 ? 1 : (di < 0 ? -1 : 0);
+    const int sj = dj > 0 ? 1 : (dj < 0 ? -1 : 0);
     if (si >= 0) front.corners.push_back(c[i]);
     if (si <= 0) back.corners.push_back(c[i]);
     if (si * sj < 0) {
@@ -198,11 +230,12 @@ inline std::size_t choose_splitter(const Item& item, const Context& ctx) {
   double best_score = 0;
   for (std::size_t k = 0; k < cand; ++k) {
     const std::size_t pi = k * n / cand;
-    const DPlane& plane = (*ctx.planes)[item.polys[pi].triangle];
+    const std::uint32_t splitter = item.polys[pi].triangle;
+    const DPlane& plane = (*ctx.planes)[splitter];
     std::size_t front = 0, back = 0, on = 0, cuts = 0;
     for (std::size_t s = 0; s < sample; ++s) {
       const Poly& q = item.polys[s * n / sample];
-      switch (classify(item.corners.data() + q.first, q.count, plane, ctx.eps)) {
+      switch (classify(item.corners.data() + q.first, q.count, plane, tolerance(ctx, splitter, q.triangle))) {
         case Side::front: ++front; break;
         case Side::back: ++back; break;
         case Side::on: ++on; break;
@@ -238,7 +271,9 @@ inline void process(Item& item, Output& out, std::vector<Item>& stack, Context& 
     const Corner* c = item.corners.data() + poly.first;
     // Pieces of the splitter's own triangle lie in its plane by construction; saying so explicitly
     // guarantees progress whatever the tolerance.
-    const Side side = poly.triangle == splitter_triangle ? Side::on : classify(c, poly.count, plane, ctx.eps);
+    const Side side = poly.triangle == splitter_triangle
+                          ? Side::on
+                          : classify(c, poly.count, plane, tolerance(ctx, splitter_triangle, poly.triangle));
     if (side == Side::on) {
       out.fragments.push_back(BspFragment{poly.triangle, static_cast<std::uint32_t>(out.corners.size()), poly.count});
       for (std::uint32_t i = 0; i < poly.count; ++i) {
@@ -251,7 +286,7 @@ inline void process(Item& item, Output& out, std::vector<Item>& stack, Context& 
     } else if (side == Side::back) {
       append_poly(back, poly.triangle, c, poly.count);
     } else {
-      cut(poly, c, plane, ctx.eps, front, back);
+      cut(poly, c, plane, front, back);
       ++cuts;
     }
   }
@@ -278,40 +313,38 @@ inline void build_subtree(Item root, Output& out, Context& ctx, bool report) {
   }
 }
 
-/// Triangle planes in double, and the first work item holding every usable triangle.
+/// Triangle planes in double, what each triangle's on-plane tolerance depends on, and the first
+/// work item holding every usable triangle.
 template <class Positions>
 Item gather(std::size_t triangle_count, const Positions& triangle_corners, const BspParams& params,
-            std::vector<DPlane>& planes, BspStats& stats) {
-  // The tolerance scales with the largest coordinate: float input is only that exact.
-  double magnitude = 1.0;
+            std::vector<DPlane>& planes, std::vector<TriangleScale>& scales, BspStats& stats) {
   glm::vec3 t[3];
-  std::vector<std::uint8_t> usable(triangle_count, 0);
+  planes.assign(triangle_count, DPlane{glm::dvec3(0.0), 0.0});
+  scales.assign(triangle_count, TriangleScale{0.0, 0.0});
+  Item item;
   for (std::size_t i = 0; i < triangle_count; ++i) {
     if (!triangle_corners(i, t)) {
       ++stats.dropped_bad_index;
       continue;
     }
     bool finite = true;
+    double magnitude = 0;
     for (int k = 0; k < 3; ++k)
-      for (int a = 0; a < 3; ++a) finite = finite && std::isfinite(t[k][a]);
+      for (int a = 0; a < 3; ++a) {
+        finite = finite && std::isfinite(t[k][a]);
+        magnitude = std::max(magnitude, double(std::fabs(t[k][a])));
+      }
     if (!finite) {
       ++stats.dropped_non_finite;
       continue;
     }
-    usable[i] = 1;
-    for (int k = 0; k < 3; ++k)
-      for (int a = 0; a < 3; ++a) magnitude = std::max(magnitude, double(std::fabs(t[k][a])));
-  }
-  stats.epsilon = double(params.epsilon) * magnitude;
-  planes.assign(triangle_count, DPlane{glm::dvec3(0.0), 0.0});
-  Item item;
-  for (std::size_t i = 0; i < triangle_count; ++i) {
-    if (!usable[i] || !triangle_corners(i, t)) continue;
     const glm::dvec3 a(t[0]), b(t[1]), c(t[2]);
     const glm::dvec3 p[3] = {a, b, c};
-    // The normal from the two shorter edges (the better-conditioned cross product), then a check
-    // that every corner lies within a fraction of the tolerance of the plane: a sliver thinner than
-    // the tolerance has no trustworthy plane and is dropped with the zero-area triangles.
+    // The normal from the two shorter edges (the better-conditioned cross product). Float corners
+    // are exact in double and so are their differences, so the normal is accurate for any triangle
+    // whose cross product is not 0, slivers included: only a triangle whose plane misses its own
+    // corners by more than an eighth of the smallest tolerance it can meet (thinner than about 1e-9
+    // of its length) has no usable plane and is dropped with the zero-area triangles.
     int apex = 0;  // the corner opposite the longest edge
     double longest = -1;
     for (int k = 0; k < 3; ++k) {
@@ -323,19 +356,22 @@ Item gather(std::size_t triangle_count, const Positions& triangle_corners, const
     }
     const glm::dvec3 n = glm::cross(p[(apex + 1) % 3] - p[apex], p[(apex + 2) % 3] - p[apex]);
     const double len = glm::length(n);
-    const double height = len / longest;  // of the apex above the longest edge
-    if (!(len > 0.0) || !std::isfinite(len) || !(height > stats.epsilon)) {
+    if (!(len > 0.0) || !std::isfinite(len)) {
       ++stats.dropped_degenerate;
       continue;
     }
     const glm::dvec3 unit = n / len;
     const DPlane plane{unit, -glm::dot(unit, (a + b + c) / 3.0)};
     bool flat = true;
-    for (int k = 0; k < 3; ++k) flat = flat && std::fabs(glm::dot(unit, p[k]) + plane.d) <= 0.125 * stats.epsilon;
+    const double smallest_tolerance = std::min(double(params.epsilon), kToleranceFloor) * magnitude;
+    for (int k = 0; k < 3; ++k)
+      flat = flat && std::fabs(glm::dot(unit, p[k]) + plane.d) <= 0.125 * smallest_tolerance;
     if (!flat) {
       ++stats.dropped_degenerate;
       continue;
     }
+    scales[i] = TriangleScale{magnitude, longest};
+    stats.epsilon = std::max(stats.epsilon, tolerance(scales[i], scales[i], double(params.epsilon)));
     planes[i] = plane;
     const Corner corners[3] = {{a, glm::dvec2(0, 0)}, {b, glm::dvec2(1, 0)}, {c, glm::dvec2(0, 1)}};
     append_poly(item, static_cast<std::uint32_t>(i), corners, 3);
@@ -441,13 +477,16 @@ inline std::vector<Output> build_parallel(std::vector<Item>& items, unsigned thr
 
 /// The tree over the work item `root` (every usable triangle, from `gather`) and the triangles'
 /// planes: cuts, merges the parallel parts and lays the result out canonically in `data`.
-CULLKIT_CORE_FN void build_tree(Data& data, Item root, const std::vector<DPlane>& planes, const BspParams& params);
+CULLKIT_CORE_FN void build_tree(Data& data, Item root, const std::vector<DPlane>& planes,
+                                const std::vector<TriangleScale>& scales, const BspParams& params);
 
 #if CULLKIT_CORE_BODIES
-CULLKIT_CORE_FN void build_tree(Data& data, Item root, const std::vector<DPlane>& planes, const BspParams& params) {
+CULLKIT_CORE_FN void build_tree(Data& data, Item root, const std::vector<DPlane>& planes,
+                                const std::vector<TriangleScale>& scales, const BspParams& params) {
   Context ctx;
   ctx.planes = &planes;
-  ctx.eps = data.stats.epsilon;
+  ctx.scales = &scales;
+  ctx.relative = double(params.epsilon);
   ctx.params = &params;
   ctx.pending = root.polys.size();
   unsigned threads = resolve_threads(params.threads, std::numeric_limits<unsigned>::max());
@@ -509,7 +548,10 @@ void build(std::size_t triangle_count, const Positions& triangle_corners, const 
   data = Data();
   data.stats.triangles = triangle_count;
   std::vector<DPlane> planes;
-  build_tree(data, gather(triangle_count, triangle_corners, params, planes, data.stats), planes, params);
+  std::vector<TriangleScale> scales;
+  Item root = gather(triangle_count, triangle_corners, params, planes, scales, data.stats);
+  build_tree(data, std::move(root), planes, scales, params);
+  data.relative_epsilon = double(params.epsilon);
   data.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
