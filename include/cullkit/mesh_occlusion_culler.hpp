@@ -110,6 +110,19 @@ class MeshOcclusionCuller {
     detail::mesh_occlusion::cull(index_, params_, camera, context.scratch_, out);
   }
 
+  /// Switches object `object`'s part as an occluder for the culls that follow (a door of the level
+  /// that opens, a wall that breaks), with no rebuild: a non-occluding object is culled like any
+  /// other and hides nothing. An object number out of range is ignored. O(1).
+  /// Thread safety: not concurrent with `cull` (or any other call) on this culler.
+  void set_occludes(std::uint32_t object, bool occludes) noexcept {
+    if (object < index_.objects.size()) index_.objects[object].occludes = occludes;
+  }
+  /// Whether object `object` hides anything (MeshObject::occludes, or the last `set_occludes`);
+  /// false for an object number out of range.
+  [[nodiscard]] bool occludes(std::uint32_t object) const noexcept {
+    return object < index_.objects.size() && index_.objects[object].occludes;
+  }
+
   /// What the constructor found.
   [[nodiscard]] const MeshOcclusionBuildStats& build_stats() const noexcept { return index_.build_stats; }
   /// Objects given to the constructor.

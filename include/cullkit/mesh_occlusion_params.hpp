@@ -14,6 +14,9 @@ namespace cullkit {
 struct MeshObject {
   std::uint32_t first_triangle;
   std::uint32_t triangle_count;
+  /// false: the object is culled like any other but hides nothing (glass, force fields, grates and
+  /// foliage cards drawn with alpha test, decals, water). `MeshObject{first, count}` occludes.
+  bool occludes = true;
 };
 
 /// Parameters of `MeshOcclusionCuller`. Every field has a documented default; `{}` is a sound choice.

@@ -254,7 +254,7 @@ inline void insert_box_occluders(const MeshIndex& index, const MeshOcclusionPara
   s.box_candidates.clear();
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
     const std::uint32_t o = s.in_frustum[i];
-    if (!index.solid_box[o]) continue;
+    if (!index.solid_box[o] || !index.objects[o].occludes) continue;
     const double cells = screen_cells(s.boxes[i], s.grid);
     if (cells >= min_cells) s.box_candidates.emplace_back(static_cast<float>(cells), o);
   }
