@@ -9,3 +9,6 @@ cullkit_add_test(test_mesh_occlusion_see_through SOURCES ${CMAKE_CURRENT_LIST_DI
 # against Embree truth.
 cullkit_add_test(test_mesh_occlusion_box_query SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_box_query.cpp EMBREE
                  LIBS Threads::Threads TIMEOUT 600 LABELS mesh_occlusion)
+# Moving occluders (walls, vehicles, doors; mirrored, scaled) against Embree truth.
+cullkit_add_test(test_mesh_occlusion_moving SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_moving.cpp EMBREE
+                 TIMEOUT 600 LABELS mesh_occlusion)
