@@ -37,6 +37,10 @@
 // culler's parameters (grid size, occluder triangle budget, depth band ratio, occluder size floor,
 // patch size, triangle-test patch size, T-junction cuts 0/1) in every mode, for measuring alternatives without rebuilding;
 // --grid, given too, wins over GW and GH.
+//   --engine       an engine frame's parts instead (see `engine_frame`): see-through objects (the
+//                  generated scenes with glass panes, fences and foliage cards added; oacmpdm9 with its
+//                  own flags), the cost of a moving occluder per triangle against the same wall static,
+//                  moving occluders along the walk, and is_hidden per box (median and 99th percentile).
 // CULLKIT_BENCH_SMOKE=1: the small generated city, 2 cameras, 320x180, 1 rep.
 #include <algorithm>
 #include <array>
@@ -49,11 +53,14 @@
 #include <string>
 #include <vector>
 
+#include <glm/ext/matrix_clip_space.hpp>
+#include <glm/ext/matrix_transform.hpp>
 #include <glm/geometric.hpp>
 
 #include <cullkit/occlusion_culling.hpp>
 
 #include "../tests/mesh_occlusion/embree_truth.hpp"
+#include "../tests/mesh_occlusion/frame_truth.hpp"
 #include "../tests/mesh_occlusion/walk_cameras.hpp"
 #include "../tests/occlusion/scene_cull.hpp"
 #include "race.hpp"
@@ -523,7 +530,7 @@ double thread_ms() {
 }
 
 struct Flags {
-  bool reasons = false, hash = false, phases = false;
+  bool reasons = false, hash = false, phases = false, engine = false;
   std::string scene;
   int grid_width = 0, grid_height = 0;
   float split_edges = 0.0f;
@@ -585,6 +592,193 @@ void culler_only(const std::string& name, const CullScene& cs, const std::vector
   }
 }
 
+
+// ---- --engine: the parts of an engine frame ----
+
+/// A panel x in [-0.5, 0.5], y in [0, 1], z = 0, facing +z, cut into n x n quads.
+void engine_panel(int n, std::vector<glm::vec3>& positions, std::vector<std::uint32_t>& indices) {
+  positions.clear();
+  indices.clear();
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) positions.emplace_back(float(i) / float(n) - 0.5f, float(j) / float(n), 0.0f);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const auto a = std::uint32_t(j * (n + 1) + i), b = a + 1, c = a + std::uint32_t(n + 2), d = a + std::uint32_t(n + 1);
+      for (std::uint32_t v : {a, b, c, a, c, d}) indices.push_back(v);
+    }
+}
+
+StridedMesh strided(const std::vector<glm::vec3>& positions, const std::vector<std::uint32_t>& indices) {
+  return StridedMesh{{reinterpret_cast<const unsigned char*>(positions.data()), sizeof(glm::vec3), 0}, positions.size(),
+                     {indices.data(), indices.size(), IndexFormat::uint32}};
+}
+
+/// The frame time of `cull` for each camera: the fastest of `reps`, in this thread's CPU time.
+template <class Cull>
+std::vector<double> frame_times(const std::vector<Camera>& cams, int reps, Cull&& cull) {
+  std::vector<double> ms;
+  for (const Camera& cam : cams) {
+    double best = 1e300;
+    for (int r = 0; r < reps; ++r) {
+      const double t0 = thread_ms();
+      cull(cam);
+      best = std::min(best, thread_ms() - t0);
+    }
+    ms.push_back(best);
+  }
+  return ms;
+}
+
+/// A wall of 2,048 triangles 6 m before a camera, static in one culler and moving in another (the
+/// rest alike: a crate behind it and one beside it): the frame times and their difference per wall
+/// triangle. Printed once.
+void moving_against_static(int reps) {
+  std::vector<glm::vec3> wall;
+  std::vector<std::uint32_t> wall_indices;
+  engine_panel(32, wall, wall_indices);
+  const glm::mat4 model = glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0, -3, -6)), glm::vec3(8, 6, 1));
+  std::vector<glm::vec3> positions;
+  std::vector<std::uint32_t> indices;
+  const auto add_quad = [&](glm::vec3 c, float h) {
+    const auto b = static_cast<std::uint32_t>(positions.size());
+    for (glm::vec3 p : {c + glm::vec3(-h, -h, 0), c + glm::vec3(h, -h, 0), c + glm::vec3(h, h, 0), c + glm::vec3(-h, h, 0)})
+      positions.push_back(p);
+    for (std::uint32_t v : {0u, 1u, 2u, 0u, 2u, 3u}) indices.push_back(b + v);
+  };
+  add_quad({0, 0, -20}, 1.0f);
+  add_quad({30, 0, -20}, 1.0f);
+  const std::vector<MeshObject> two = {{0, 2}, {2, 2}};
+  std::vector<glm::vec3> with_wall = positions;
+  std::vector<std::uint32_t> with_indices = indices;
+  for (const glm::vec3& p : wall) with_wall.push_back(glm::vec3(model * glm::vec4(p, 1.0f)));
+  for (std::uint32_t v : wall_indices) with_indices.push_back(v + static_cast<std::uint32_t>(positions.size()));
+  const std::vector<MeshObject> three = {{0, 2}, {2, 2}, {4, static_cast<std::uint32_t>(wall_indices.size() / 3)}};
+  const MeshOcclusionCuller<glm::vec3> static_culler(MeshView<glm::vec3>{with_wall.data(), with_wall.size(), with_indices.data(), with_indices.size()},
+                                                     three.data(), three.size());
+  const MeshOcclusionCuller<glm::vec3> moving_culler(MeshView<glm::vec3>{positions.data(), positions.size(), indices.data(), indices.size()},
+                                                     two.data(), two.size());
+  std::vector<Camera> cams;
+  for (int k = 0; k < 16; ++k) {
+    Camera cam;
+    cam.eye = glm::vec3(0.1f * float(k) - 0.8f, 0.05f * float(k % 4), 2.0f);
+    cam.width = 1920;
+    cam.height = 1080;
+    cam.view_proj = glm::perspective(glm::radians(60.0f), 16.0f / 9.0f, 0.1f, 500.0f) *
+                    glm::lookAt(cam.eye, cam.eye + glm::vec3(0.02f * float(k % 3), 0, -1), glm::vec3(0, 1, 0));
+    cams.push_back(cam);
+  }
+  const MovingOccluder moving{strided(wall, wall_indices), model};
+  MeshOcclusionContext a, b;
+  std::vector<std::uint32_t> out;
+  std::vector<double> st, mv, st2, mv2;
+  // Alternated twice.
+  st = frame_times(cams, reps, [&](const Camera& c) { static_culler.cull(c, a, out); });
+  mv = frame_times(cams, reps, [&](const Camera& c) { moving_culler.cull(c, b, out, &moving, 1); });
+  st2 = frame_times(cams, reps, [&](const Camera& c) { static_culler.cull(c, a, out); });
+  mv2 = frame_times(cams, reps, [&](const Camera& c) { moving_culler.cull(c, b, out, &moving, 1); });
+  const double wall_triangles = double(wall_indices.size() / 3);
+  std::printf("engine,wall_static_vs_moving,triangles=%.0f,static_inserted=%zu,moving_inserted=%zu,static_ms=%s / %s,"
+              "moving_ms=%s / %s,moving_over_static=%.2f / %.2f,ns_per_triangle_static=%.1f,ns_per_triangle_moving=%.1f\n",
+              wall_triangles, a.stats().occluder_triangles, b.stats().moving_triangles, ms_text(st).c_str(),
+              ms_text(st2).c_str(), ms_text(mv).c_str(), ms_text(mv2).c_str(), ratio(mv, st), ratio(mv2, st2),
+              1e6 * spread(st2).median / wall_triangles, 1e6 * spread(mv2).median / wall_triangles);
+}
+
+/// One scene's engine frame: see-through objects (`see_through`: per object), moving occluders
+/// along the walk (6 walls, vehicles and doors per frame), is_hidden on random boxes.
+void engine_frame(const std::string& name, const CullScene& cs, const std::vector<std::uint8_t>& see_through,
+                  const WalkSpec& spec, const std::vector<Camera>& cams, int reps, const MeshOcclusionParams& params) {
+  ObjectMap map(cs.scene);
+  std::vector<MeshObject> flagged = map.objects;
+  std::size_t glass = 0;
+  for (std::size_t o = 0; o < flagged.size() && o < see_through.size(); ++o) {
+    flagged[o].occludes = !see_through[o];
+    glass += see_through[o];
+  }
+  const MeshOcclusionCuller<glm::vec3> opaque(cs.scene.mesh(), map.objects.data(), map.objects.size(), params);
+  const MeshOcclusionCuller<glm::vec3> culler(cs.scene.mesh(), flagged.data(), flagged.size(), params);
+  const double total = static_cast<double>(std::max<std::size_t>(cs.scene.triangle_count(), 1));
+  MeshOcclusionContext context;
+  std::vector<std::uint32_t> out;
+  double kept_opaque = 0, kept_flagged = 0;
+  const auto ms_opaque = frame_times(cams, reps, [&](const Camera& c) { opaque.cull(c, context, out); });
+  for (const Camera& c : cams) {
+    opaque.cull(c, context, out);
+    kept_opaque += triangles_of(map, out) / total;
+    culler.cull(c, context, out);
+    kept_flagged += triangles_of(map, out) / total;
+  }
+  const auto ms_flagged = frame_times(cams, reps, [&](const Camera& c) { culler.cull(c, context, out); });
+  const double n = static_cast<double>(std::max<std::size_t>(cams.size(), 1));
+  std::printf("engine,%s,see_through_objects=%zu,kept_pct_all_occluding=%.3f,kept_pct_flagged=%.3f,ms_all_occluding=%s,"
+              "ms_flagged=%s\n",
+              name.c_str(), glass, 100 * kept_opaque / n, 100 * kept_flagged / n, ms_text(ms_opaque).c_str(),
+              ms_text(ms_flagged).c_str());
+  // Moving occluders along the walk: 6 per frame, as test_mesh_occlusion_moving places them.
+  std::vector<glm::vec3> wall, door;
+  std::vector<std::uint32_t> wall_indices, door_indices;
+  engine_panel(4, wall, wall_indices);
+  engine_panel(1, door, door_indices);
+  support::Rng rng(7);
+  std::vector<std::vector<MovingOccluder>> per_camera;
+  for (const Camera& cam : cams) {
+    const PixelRays rays(cam);
+    std::vector<MovingOccluder> moving;
+    for (int i = 0; i < 6; ++i) {
+      const glm::vec3 dir = rays.ray_at(double(rng.uniform()) * cam.width, double(rng.uniform()) * cam.height).direction;
+      const glm::vec3 at = cam.eye + dir * (spec.metre * rng.uniform(1.5f, 15.0f)) - glm::vec3(0, spec.eye_height * 0.6f, 0);
+      glm::mat4 model = glm::rotate(glm::translate(glm::mat4(1.0f), at), rng.uniform(0.0f, 6.2831853f), glm::vec3(0, 1, 0));
+      const bool is_wall = i % 2 == 0;
+      glm::vec3 scale = spec.metre * (is_wall ? glm::vec3(rng.uniform(2, 8), rng.uniform(2, 4), 1) : glm::vec3(1, 2.1f, 1));
+      if (rng.range(0, 2) == 0) scale.x = -scale.x;
+      moving.push_back({is_wall ? strided(wall, wall_indices) : strided(door, door_indices), glm::scale(model, scale)});
+    }
+    per_camera.push_back(moving);
+  }
+  std::size_t camera = 0;
+  double kept_moving = 0, moving_triangles = 0;
+  for (const Camera& c : cams) {
+    const auto& m = per_camera[camera++];
+    culler.cull(c, context, out, m.data(), m.size());
+    kept_moving += triangles_of(map, out) / total;
+    moving_triangles += double(context.stats().moving_triangles);
+  }
+  camera = 0;
+  const auto ms_moving = frame_times(cams, reps, [&](const Camera& c) {
+    const auto& m = per_camera[camera++ % per_camera.size()];
+    culler.cull(c, context, out, m.data(), m.size());
+  });
+  std::printf("engine,%s,moving_occluders=6,moving_triangles_inserted=%.1f,kept_pct_with_moving=%.3f,ms_with_moving=%s,"
+              "ms_without=%s\n",
+              name.c_str(), moving_triangles / n, 100 * kept_moving / n, ms_text(ms_moving).c_str(), ms_text(ms_flagged).c_str());
+  // is_hidden: 2,000 random boxes per camera inside the view, after the flagged cull.
+  std::vector<double> ns;
+  std::size_t hidden = 0, asked = 0;
+  for (const Camera& cam : cams) {
+    culler.cull(cam, context, out);
+    const PixelRays rays(cam);
+    std::vector<Aabb> boxes;
+    for (int i = 0; i < 2000; ++i) {
+      const glm::vec3 dir = rays.ray_at(double(rng.uniform()) * cam.width, double(rng.uniform()) * cam.height).direction;
+      const glm::vec3 c = cam.eye + dir * (spec.near_plane + spec.metre * 60.0f * rng.uniform() * rng.uniform());
+      const glm::vec3 h = spec.metre * glm::vec3(rng.uniform(0.05f, 3.0f), rng.uniform(0.05f, 3.0f), rng.uniform(0.05f, 3.0f));
+      boxes.push_back(Aabb{c - h, c + h});
+    }
+    for (const Aabb& b : boxes) {
+      const auto t0 = Clock::now();
+      const bool h = context.is_hidden(b);
+      ns.push_back(std::chrono::duration<double, std::nano>(Clock::now() - t0).count());
+      hidden += h;
+      ++asked;
+    }
+  }
+  std::sort(ns.begin(), ns.end());
+  const auto at = [&](double q) { return ns.empty() ? 0.0 : ns[std::min(ns.size() - 1, std::size_t(q * double(ns.size())))]; };
+  std::printf("engine,%s,is_hidden_boxes=%zu,hidden_pct=%.1f,ns_median=%.0f,ns_p99=%.0f,ns_max=%.0f (clock read included)\n",
+              name.c_str(), asked, 100.0 * double(hidden) / double(std::max<std::size_t>(asked, 1)), at(0.5), at(0.99),
+              ns.empty() ? 0.0 : ns.back());
+  std::fflush(stdout);
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -599,6 +793,7 @@ int main(int argc, char** argv) {
       if (arg == "--reasons") flags.reasons = true;
       else if (arg == "--hash") flags.hash = true;
       else if (arg == "--phases") flags.hash = flags.phases = true;
+      else if (arg == "--engine") flags.engine = true;
       else if (arg.rfind("--scene=", 0) == 0) flags.scene = arg.substr(8);
       else if (arg.rfind("--split-edges=", 0) == 0 && (flags.split_edges = std::strtof(arg.c_str() + 14, nullptr)) > 0.0f) {
       }
@@ -614,7 +809,7 @@ int main(int argc, char** argv) {
     if (v <= 0 || positional >= 4) {
       std::fprintf(stderr,
                    "usage: %s [cameras=60] [width=1920] [height=1080] [reps=3] [--reasons] [--hash] [--phases] "
-                   "[--scene=TEXT] [--grid=WxH] [--split-edges=LEN]\n",
+                   "[--scene=TEXT] [--grid=WxH] [--split-edges=LEN] [--engine]\n",
                    argv[0]);
       return 2;
     }
@@ -633,6 +828,18 @@ int main(int argc, char** argv) {
   const auto wanted = [&](const std::string& name) { return name.find(flags.scene) != std::string::npos; };
   const auto run = [&](const std::string& name, support::Scene scene, std::uint64_t seed) {
     if (!wanted(name)) return;
+    if (flags.engine) {
+      std::vector<std::uint8_t> see_through;
+      if (name == "city" || name == "office")
+        see_through = add_see_through(scene, 200, name == "city" ? 6.0f : 1.5f, 5);
+      else if (name.find("oacmpdm9") != std::string::npos)
+        see_through = quake_see_through(scene, support::scenes_dir() + "/oacmpdm9.json");
+      const CullScene cs(std::move(scene));
+      const WalkSpec spec = walk_spec(name, cs.scene, cs.embree, seed);
+      const auto cams = walk(spec, cs.scene, cs.embree, cameras, 4, width, height, seed + 1);
+      engine_frame(name, cs, see_through, spec, cams, reps, params);
+      return;
+    }
     if (flags.hash) {
       const CullScene cs(std::move(scene));
       const auto cams = walk(walk_spec(name, cs.scene, cs.embree, seed), cs.scene, cs.embree, cameras, 4, width, height,
@@ -655,6 +862,7 @@ int main(int argc, char** argv) {
     }
     rows.back().has_reasons = flags.reasons;
   };
+  if (flags.engine) moving_against_static(reps);
   if (smoke) {
     run("city", support::make_city(1, 3), 11);
   } else {
@@ -672,7 +880,7 @@ int main(int argc, char** argv) {
       run(file, flags.split_edges > 0.0f ? split_edges(*s, flags.split_edges) : std::move(*s), scene_seed);
     }
   }
-  if (flags.hash) return 0;
+  if (flags.hash || flags.engine) return 0;
   print(rows);
   if (flags.reasons) print_reasons(rows, reasons);
   long false_culls = 0;

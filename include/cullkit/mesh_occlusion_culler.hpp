@@ -29,6 +29,7 @@
 #include "traits.hpp"
 #include "mesh_occlusion_params.hpp"
 // The index and the query are plain functions on flat arrays, compiled once whatever the vertex type.
+#include "detail/mesh_occlusion/box_test.hpp"
 #include "detail/mesh_occlusion/index.hpp"
 #include "detail/mesh_occlusion/query.hpp"
 
@@ -43,10 +44,34 @@ class MeshOcclusionContext {
   /// Statistics of the last `cull` that used this context.
   [[nodiscard]] const MeshOcclusionStats& stats() const noexcept { return scratch_.stats; }
 
+  /// After a `cull` with this context, until the next one: true only if every point of `box` beyond
+  /// the near plane and inside the frustum lies behind a front face of an occluder that cull used
+  /// (static or moving) along the ray from the eye, so nothing of the box can be seen. It is the
+  /// culler's own test of an object's box, for any box (a moving object, a particle system's or a
+  /// light's bounds, a decal). A box wholly outside the frustum may answer either way; a box
+  /// reaching the near plane, a box with NaN, infinite or inverted bounds, and any box before the
+  /// first cull or after a cull that filled no grid (no occlusion that frame, or fewer than two
+  /// objects in the frustum and no moving occluder) answer false.
+  /// Cost: the box's corners projected, then its screen rectangle's tiles (a few hundred ns).
+  /// Thread safety: const, safe from several threads at once (not during a cull with this context).
+  [[nodiscard]] bool is_hidden(const Aabb& box) const noexcept {
+    return detail::mesh_occlusion::query_box_hidden(scratch_, ready_, box);
+  }
+
+  /// As above for the box `local_box` placed in the world by `model` (affine: a rotated, scaled or
+  /// mirrored box), tested through the world bounds of its 8 corners (conservative: hidden only if
+  /// that larger box is). A non-affine or non-finite matrix answers false.
+  [[nodiscard]] bool is_hidden(const Aabb& local_box, const glm::mat4& model) const noexcept {
+    Aabb world;
+    return detail::mesh_occlusion::oriented_bounds(local_box, model, world) && is_hidden(world);
+  }
+
  private:
   template <class, class, class>
   friend class MeshOcclusionCuller;
   detail::mesh_occlusion::Scratch scratch_;
+  detail::mesh_occlusion::MovingScratch moving_;
+  bool ready_ = false;  // the last cull filled and finished scratch_'s grid
 };
 
 /// Occlusion culling of the objects of a triangle mesh by the mesh's own front faces.
@@ -107,7 +132,38 @@ class MeshOcclusionCuller {
   /// As above, with caller-owned working memory: no allocation once `context` and `out` have grown
   /// to this scene's needs. `context.stats()` then describes this call.
   void cull(const Camera& camera, MeshOcclusionContext& context, std::vector<std::uint32_t>& out) const {
-    detail::mesh_occlusion::cull(index_, params_, camera, context.scratch_, out);
+    cull(camera, context, out, nullptr, 0);
+  }
+
+  /// As above, with `moving[0, moving_count)` also hiding what lies behind them in this frame
+  /// (doors, vehicles, characters, lifts, destructible walls): each is placed by its matrix (in
+  /// double precision), clipped and projected like the static occluders and rasterized into the
+  /// same coverage grid after them, so it fuses with them where the grid allows. Moving occluders
+  /// are not objects: they are never written to `out`. A triangle with an index out of range, a
+  /// non-finite corner or zero area hides nothing; an occluder whose matrix is not affine, is
+  /// singular or places a corner at a non-finite point hides nothing. `moving` may be null when the
+  /// count is 0. `context.is_hidden` then also sees the moving occluders.
+  /// Cost: as above plus O(moving triangles) (their corners welded, edges paired, triangles
+  /// rasterized). Allocates when moving occluders are given.
+  void cull(const Camera& camera, MeshOcclusionContext& context, std::vector<std::uint32_t>& out,
+            const MovingOccluder* moving, std::size_t moving_count) const {
+    CULLKIT_ASSERT(moving != nullptr || moving_count == 0, "moving points to moving_count occluders");
+    context.ready_ = false;
+    context.ready_ = detail::mesh_occlusion::cull(index_, params_, camera, context.scratch_, out, moving, moving_count,
+                                                  &context.moving_);
+  }
+
+  /// Switches object `object`'s part as an occluder for the culls that follow (a door of the level
+  /// that opens, a wall that breaks), with no rebuild: a non-occluding object is culled like any
+  /// other and hides nothing. An object number out of range is ignored. O(1).
+  /// Thread safety: not concurrent with `cull` (or any other call) on this culler.
+  void set_occludes(std::uint32_t object, bool occludes) noexcept {
+    if (object < index_.objects.size()) index_.objects[object].occludes = occludes;
+  }
+  /// Whether object `object` hides anything (MeshObject::occludes, or the last `set_occludes`);
+  /// false for an object number out of range.
+  [[nodiscard]] bool occludes(std::uint32_t object) const noexcept {
+    return object < index_.objects.size() && index_.objects[object].occludes;
   }
 
   /// What the constructor found.

@@ -5,7 +5,10 @@
 #include <cstddef>
 #include <cstdint>
 
+#include <glm/mat4x4.hpp>
+
 #include "adaptive_binary_tree.hpp"
+#include "mesh_buffers.hpp"
 
 namespace cullkit {
 
@@ -14,6 +17,20 @@ namespace cullkit {
 struct MeshObject {
   std::uint32_t first_triangle;
   std::uint32_t triangle_count;
+  /// false: the object is culled like any other but hides nothing (glass, force fields, grates and
+  /// foliage cards drawn with alpha test, decals, water). `MeshObject{first, count}` occludes.
+  bool occludes = true;
+};
+
+/// Geometry that moves, given each frame to `MeshOcclusionCuller::cull`: a mesh in its own space
+/// (front faces counter-clockwise there, as everywhere) and its world matrix (affine, any scale). A
+/// mirroring matrix (negative determinant) reverses the apparent winding; the culler compensates, so
+/// the faces that are front faces in the mesh's own space stay front faces in the world. Like a
+/// static occluder it must be a real, opaque surface where it is drawn (see docs/mesh_occlusion.md,
+/// "What may occlude").
+struct MovingOccluder {
+  StridedMesh mesh;
+  glm::mat4 model;
 };
 
 /// Parameters of `MeshOcclusionCuller`. Every field has a documented default; `{}` is a sound choice.
@@ -100,6 +117,7 @@ struct MeshOcclusionStats {
   std::size_t objects_in_frustum = 0;          ///< usable objects whose box may meet the frustum
   std::size_t occluders_used = 0;              ///< occluder patches rasterized
   std::size_t occluder_triangles = 0;          ///< occluder triangles rasterized (front-facing, beyond the near plane)
+  std::size_t moving_triangles = 0;            ///< of which moving occluders' triangles
   std::size_t objects_hidden = 0;              ///< objects in the frustum left out as hidden
   std::size_t objects_unusable_visible = 0;    ///< objects with unusable bounds, reported visible
   std::size_t cells_covered = 0;               ///< coverage cells covered at the end

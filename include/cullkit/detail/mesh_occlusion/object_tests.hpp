@@ -1,6 +1,6 @@
 // cullkit/detail/mesh_occlusion/object_tests.hpp: whether an object is hidden once the grid is
-// filled: its box, its patches' boxes, their triangles (also those through the near plane), and the
-// solid boxes' occlusion tree.
+// filled: its box (the box test of box_test.hpp), its patches' boxes, their triangles (also those
+// through the near plane); and the choice of the solid boxes that fill the occlusion tree.
 #pragma once
 
 #include <algorithm>
@@ -14,6 +14,7 @@
 
 #include "../../geometry/camera.hpp"
 #include "../../occlusion_tree.hpp"
+#include "box_test.hpp"
 #include "coverage.hpp"
 #include "frame.hpp"
 #include "index.hpp"
@@ -21,15 +22,6 @@
 namespace cullkit {
 namespace detail {
 namespace mesh_occlusion {
-
-/// True when every cell the box view's rectangle touches is covered nearer than the box.
-inline bool rect_hidden(const CoverageGrid& grid, const BoxView& b) {
-  if (!b.usable) return false;
-  const CellRect r = grid.cells_of(b.x0, b.y0, b.x1, b.y1);
-  // A rectangle that misses the grid meets no ray through the frustum.
-  const float threshold = static_cast<float>((1.0 / b.w_min) * (1.0 + 0x1p-20));
-  return r.empty() || (std::isfinite(threshold) && grid.all_nearer(r, threshold));
-}
 
 /// The object test of a triangle with a corner not clearly beyond the near plane (which cannot be
 /// projected whole). True when no ray through the frustum can see it unhidden: it lies outside the
@@ -254,7 +246,7 @@ inline void insert_box_occluders(const MeshIndex& index, const MeshOcclusionPara
   s.box_candidates.clear();
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
     const std::uint32_t o = s.in_frustum[i];
-    if (!index.solid_box[o]) continue;
+    if (!index.solid_box[o] || !index.objects[o].occludes) continue;
     const double cells = screen_cells(s.boxes[i], s.grid);
     if (cells >= min_cells) s.box_candidates.emplace_back(static_cast<float>(cells), o);
   }
@@ -279,10 +271,8 @@ inline void insert_box_occluders(const MeshIndex& index, const MeshOcclusionPara
 /// its triangles. Every triangle that can be seen is in some patch, so the object is hidden when all
 /// of its patches are. An object with no patch (only degenerate triangles) rests on its box.
 inline bool object_hidden(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, std::size_t i) {
-  const BoxView& b = s.boxes[i];
-  if (rect_hidden(s.grid, b)) return true;
   const std::uint32_t o = s.in_frustum[i];
-  if (!s.box_occluders.empty() && b.usable && s.box_tree.is_occluded(index.bounds[o])) return true;
+  if (box_hidden(s, s.boxes[i], index.bounds[o])) return true;
   const PatchSet& ps = index.patches;
   const std::uint32_t p0 = ps.object_first[o], p1 = ps.object_first[o + 1];
   if (p0 == p1) return false;

@@ -89,6 +89,7 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
     const std::uint32_t o = s.in_frustum[i];
     const std::uint32_t p0 = ps.object_first[o], p1 = ps.object_first[o + 1];
     if (p0 == p1) continue;
+    if (!index.objects[o].occludes) continue;  // see-through: culled, never an occluder
     const double object_cells = screen_cells(s.boxes[i], s.grid);
     if (object_cells < min_cells) continue;
     if (p1 - p0 == 1) {

@@ -1,9 +1,10 @@
 // cullkit/detail/mesh_occlusion/query.hpp: one frame of MeshOcclusionCuller::cull, as named steps:
 // frustum walk, object boxes on screen, occluder choice, occluder bands into the coverage grid
-// (occluders.hpp), object tests (object_tests.hpp). The steps are compiled only where the frame's
+// (occluders.hpp), moving occluders into the same grid (moving.hpp), object tests (object_tests.hpp). The steps are compiled only where the frame's
 // definition is (CULLKIT_SEPARATE_CORE, config.hpp).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -11,6 +12,7 @@
 #include "../../geometry/camera.hpp"
 #include "frame.hpp"
 #include "index.hpp"
+#include "moving.hpp"
 #if CULLKIT_CORE_BODIES
 #include "object_tests.hpp"
 #include "occluders.hpp"
@@ -22,16 +24,28 @@ namespace detail {
 namespace mesh_occlusion {
 
 /// One frame of MeshOcclusionCuller::cull: clears `out`, then writes every object that may be
-/// visible from `camera`. A core entry point (CULLKIT_SEPARATE_CORE, config.hpp): the steps below
-/// are compiled only where its definition is.
-CULLKIT_CORE_FN void cull(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera, Scratch& s,
-                          std::vector<std::uint32_t>& out);
+/// visible from `camera`, with `moving[0, moving_count)` occluding too (`m`: their working memory,
+/// needed only when there are some).
+/// Returns true when the frame's grid was filled and finished (box queries may then read `s`). A
+/// core entry point (CULLKIT_SEPARATE_CORE, config.hpp): the steps below are compiled only where its
+/// definition is.
+CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera, Scratch& s,
+                          std::vector<std::uint32_t>& out, const MovingOccluder* moving, std::size_t moving_count,
+                          MovingScratch* m);
+
+/// The frame with the static occluders alone.
+inline void cull(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera, Scratch& s,
+                 std::vector<std::uint32_t>& out) {
+  cull(index, params, camera, s, out, nullptr, 0, nullptr);
+}
 
 
 #if CULLKIT_CORE_BODIES
-CULLKIT_CORE_FN void cull(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera, Scratch& s,
-                          std::vector<std::uint32_t>& out) {
+CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera, Scratch& s,
+                          std::vector<std::uint32_t>& out, const MovingOccluder* moving, std::size_t moving_count,
+                          MovingScratch* m) {
   out.clear();
+  if (moving == nullptr || m == nullptr) moving_count = 0;
   PhaseProbe probe;
   if (probe.on()) ++phase_times().calls;
   MeshOcclusionStats& stats = s.stats;
@@ -45,17 +59,22 @@ CULLKIT_CORE_FN void cull(const MeshIndex& index, const MeshOcclusionParams& par
 
   s.view.setup(camera, params.grid_width, params.grid_height);
   stats.occlusion_enabled = s.view.enabled;
-  // One object alone in the frustum has nothing to hide it: an object never hides itself.
-  if (!s.view.enabled || s.in_frustum.size() < 2) {
+  // One object alone in the frustum has nothing to hide it but moving occluders: an object never
+  // hides itself.
+  if (!s.view.enabled || (s.in_frustum.size() < 2 && moving_count == 0)) {
     out.insert(out.end(), s.in_frustum.begin(), s.in_frustum.end());
     probe.next(phase_frustum);
-    return;
+    return false;
   }
   probe.next(phase_frustum);
   // Occluders are clipped beyond a level set by the extent of the usable objects (the tree's root).
-  const Aabb& all = index.tree.nodes().front().bounds;
-  const double lo[3] = {all.min.x, all.min.y, all.min.z}, hi[3] = {all.max.x, all.max.y, all.max.z};
-  s.view.set_clip_level(lo, hi);
+  if (!index.tree.nodes().empty()) {
+    const Aabb& all = index.tree.nodes().front().bounds;
+    const double lo[3] = {all.min.x, all.min.y, all.min.z}, hi[3] = {all.max.x, all.max.y, all.max.z};
+    s.view.set_clip_level(lo, hi);
+  } else {
+    s.view.clip_level = s.view.drawable_level = HUGE_VAL;  // no static occluder, no object to test
+  }
   begin_frame(index, s);
   s.grid.reset(params.grid_width, params.grid_height);
   s.boxes.resize(s.in_frustum.size());
@@ -68,6 +87,10 @@ CULLKIT_CORE_FN void cull(const MeshIndex& index, const MeshOcclusionParams& par
   stats.occluders_used = s.occluders.size();
   stats.cells_covered = insert_patches(index, params, s);
   probe.restart();  // insert_patches charged its own steps
+  if (moving_count > 0) {
+    stats.cells_covered += insert_moving(params, moving, moving_count, s, *m);
+    probe.restart();  // insert_run charged its own steps
+  }
   s.grid.finish();
   probe.next(phase_finish);
   s.view_eye = camera.eye;
@@ -79,6 +102,7 @@ CULLKIT_CORE_FN void cull(const MeshIndex& index, const MeshOcclusionParams& par
     else out.push_back(s.in_frustum[i]);
   }
   probe.next(phase_tests);
+  return true;
 }
 
 #endif  // CULLKIT_CORE_BODIES
