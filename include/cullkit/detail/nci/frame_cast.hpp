@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "../bits.hpp"
 #include "../../config.hpp"
 #include "frame_bvh.hpp"
 #include "tile_state.hpp"
@@ -110,7 +111,7 @@ CULLKIT_FORCEINLINE void frame_node_test(const FrameBvhNode& node, const float e
   hx = _mm_add_ps(hx, grow), hy = _mm_add_ps(hy, grow), hz = _mm_add_ps(hz, grow);
   __m128 nearest = inf;
   for (std::uint64_t m = mask; m; m &= m - 1) {
-    const int k = __builtin_ctzll(m);
+    const int k = detail::lowest_bit(m);
     const __m128 rx = _mm_set1_ps(p.ix[k]), ry = _mm_set1_ps(p.iy[k]), rz = _mm_set1_ps(p.iz[k]);
     const __m128 ax = _mm_mul_ps(lx, rx), bx = _mm_mul_ps(hx, rx);
     const __m128 ay = _mm_mul_ps(ly, ry), by = _mm_mul_ps(hy, ry);
@@ -144,7 +145,7 @@ CULLKIT_FORCEINLINE void frame_node_test(const FrameBvhNode& node, const float e
     nv[j] = std::numeric_limits<float>::infinity();
   }
   for (std::uint64_t m = mask; m; m &= m - 1) {
-    const int k = __builtin_ctzll(m);
+    const int k = detail::lowest_bit(m);
     const float r[3] = {p.ix[k], p.iy[k], p.iz[k]};
     for (int j = 0; j < 4; ++j) {
       float tn = 0.0f, tf = p.t[k];
@@ -187,7 +188,7 @@ CULLKIT_FORCEINLINE void frame_node_test(const FrameBvhNode& node, const float e
   const __m128 lo_scale = _mm_set1_ps(1.0f - frame_t_slack), hi_scale = _mm_set1_ps(1.0f + frame_t_slack);
   const float* inv[3] = {p.ix, p.iy, p.iz};
   for (std::uint64_t m = mask; m;) {
-    const int g = __builtin_ctzll(m) & ~3;  // the first lane of the group of four
+    const int g = detail::lowest_bit(m) & ~3;  // the first lane of the group of four
     m &= ~(std::uint64_t{0xF} << g);
     __m128 tn = _mm_setzero_ps(), tf = _mm_load_ps(p.t + g);
     for (int a = 0; a < 3; ++a) {
@@ -202,7 +203,7 @@ CULLKIT_FORCEINLINE void frame_node_test(const FrameBvhNode& node, const float e
   return out & mask;
 #else
   for (std::uint64_t m = mask; m; m &= m - 1) {
-    const int k = __builtin_ctzll(m);
+    const int k = detail::lowest_bit(m);
     if (frame_ray_meets(p, k, lo, hi)) out |= std::uint64_t{1} << k;
   }
   return out;
@@ -230,7 +231,7 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const FrameBvh& bvh, const float eye[
     const __m128 near = _mm_set1_ps(e.near), scale = _mm_set1_ps(1.0f + frame_t_slack);
     std::uint64_t drop = 0;
     for (std::uint64_t m = mask; m;) {
-      const int g = __builtin_ctzll(m) & ~3;
+      const int g = detail::lowest_bit(m) & ~3;
       m &= ~(std::uint64_t{0xF} << g);
       const __m128 before = _mm_cmplt_ps(_mm_mul_ps(_mm_load_ps(p.t + g), scale), near);
       drop |= static_cast<std::uint64_t>(_mm_movemask_ps(before)) << g;
@@ -239,7 +240,7 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const FrameBvh& bvh, const float eye[
   }
 #else
   for (std::uint64_t m = cut ? mask : 0; m; m &= m - 1) {
-    const int k = __builtin_ctzll(m);
+    const int k = detail::lowest_bit(m);
     if (p.t[k] * (1.0f + frame_t_slack) < e.near) mask &= ~(std::uint64_t{1} << k);
   }
 #endif
@@ -275,8 +276,8 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const FrameBvh& bvh, const float eye[
     if (FrameBvhNode::is_leaf(code)) {
       leaf.prefetch(FrameBvhNode::leaf_first(code), FrameBvhNode::leaf_count(code));
     } else {
-      __builtin_prefetch(reinterpret_cast<const char*>(bvh.nodes.data() + code));
-      __builtin_prefetch(reinterpret_cast<const char*>(bvh.nodes.data() + code) + 64);
+      detail::prefetch(reinterpret_cast<const char*>(bvh.nodes.data() + code));
+      detail::prefetch(reinterpret_cast<const char*>(bvh.nodes.data() + code) + 64);
     }
     c.stack[c.top++] = FrameCursor::Entry{code, 0u, cm[order[q]], nv[order[q]] * (1.0f - frame_t_slack), 0u};
   }

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "../bits.hpp"
 #include "frame_cast.hpp"
 #include "slice_walk.hpp"
 
@@ -61,7 +62,7 @@ struct FrameLeaf {
     return run_on;
   }
 
-  void prefetch(std::uint32_t first, std::uint32_t) const { __builtin_prefetch(data.frame.tris.data() + first); }
+  void prefetch(std::uint32_t first, std::uint32_t) const { detail::prefetch(data.frame.tris.data() + first); }
 
   // Phase 0 finds the triangles of active classes (bit q of the carry: triangle first + q) and
   // prefetches their vertex ids; phase 1 prefetches their corners.
@@ -73,10 +74,10 @@ struct FrameLeaf {
       if (phase == 0) {
         if (!active(tri)) continue;
         carry |= 1u << q;
-        if (data.tri_vertices.empty()) __builtin_prefetch(&data.tri_vertices16[v]);
-        else __builtin_prefetch(&data.tri_vertices[v]);
+        if (data.tri_vertices.empty()) detail::prefetch(&data.tri_vertices16[v]);
+        else detail::prefetch(&data.tri_vertices[v]);
       } else if (carry >> q & 1u) {
-        for (int k = 0; k < 3; ++k) __builtin_prefetch(&data.corner(tri, k));
+        for (int k = 0; k < 3; ++k) detail::prefetch(&data.corner(tri, k));
       }
     }
     return carry;
@@ -89,7 +90,7 @@ struct FrameLeaf {
                                            std::uint64_t rays) const {
     TileState::Mask rows[TileState::max_tile], inside[TileState::max_tile];
     const int by = slot->by, bx = slot->bx;
-    const int ry0 = by + __builtin_ctzll(rays) / 8, ry1 = by + (63 - __builtin_clzll(rays)) / 8;
+    const int ry0 = by + detail::lowest_bit(rays) / 8, ry1 = by + (detail::highest_bit(rays)) / 8;
     for (int y = ry0; y <= ry1; ++y)
       rows[y] = static_cast<TileState::Mask>((rays >> (8 * (y - by))) & 0xFFu) << bx;
     if (!footprint_mask(f, p0, p1, p2, x0, y0, ry0, ry1, rows, inside, f.tile - 1)) return rays;
@@ -184,21 +185,21 @@ struct FrameLeaf {
       }
       std::uint64_t rays = 0;
       for (std::uint64_t m = it.meet; m; m &= m - 1) {
-        const int k = __builtin_ctzll(m);
+        const int k = detail::lowest_bit(m);
         if (ray_behind(r, pixel(k), it.qlo, it.qhi)) continue;
         rays |= std::uint64_t{1} << k;
       }
       if (f.footprint && at_least_footprint_rays(rays)) rays = in_footprint(p0, p1, p2, rays);
       if (!rays) continue;
       for (std::uint64_t m = rays; m; m &= m - 1)
-        test_ray(data, r, worker, pixel(__builtin_ctzll(m)), tri, it.c[0], it.c[1], it.c[2], it.mag);
+        test_ray(data, r, worker, pixel(detail::lowest_bit(m)), tri, it.c[0], it.c[1], it.c[2], it.mag);
       worker.mark_tested(tri);
       ++worker.tested_count;  // (triangle, packet) pairs: a triangle is met once per packet
       tested |= rays;
     }
     // Only a tested ray's solid hit can have moved (a pixel belongs to one packet of the tile).
     for (std::uint64_t m = tested; m; m &= m - 1) {
-      const int k = __builtin_ctzll(m);
+      const int k = detail::lowest_bit(m);
       p.t[k] = r.solid_t[pixel(k)];
     }
   }

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 
+#include "../bits.hpp"
 #include "frame_tile.hpp"
 #include "slice_walk.hpp"
 
@@ -28,7 +29,7 @@ inline void process_tile_mixed(const IndexData& data, const ViewSetup& f, int x0
                                Worker& worker, Scratch& scratch) {
   drive_tile(data, f, x0, y0, x1, y1, r, worker, scratch, [&](int tw, int th, TileMasks& m, const glm::dvec3& cone_sum) {
     int live_rays = 0;
-    for (int y = 0; y < th; ++y) live_rays += __builtin_popcountll(m.live[y]);
+    for (int y = 0; y < th; ++y) live_rays += detail::popcount(m.live[y]);
     if (!walk_tile(data, f, x0, y0, tw, th, r, worker, m, cone_sum, tile_cast_budget(live_rays)))
       cast_live_rays(data, f, x0, y0, tw, th, m.live, r, worker);
   });

@@ -10,6 +10,7 @@
 #include <limits>
 #include <atomic>
 
+#include "../bits.hpp"
 #include "../parallel.hpp"
 #include "context.hpp"
 #include "core.hpp"
@@ -178,15 +179,15 @@ inline void merge_workers(const IndexData& data, NciContext& context, Scratch& s
     std::uint64_t any = 0;
     for (unsigned i = 0; i < count; ++i) any |= scratch.workers[i].touched[b];
     for (; any; any &= any - 1) {
-      const std::size_t w = 64 * b + static_cast<std::size_t>(__builtin_ctzll(any));
+      const std::size_t w = 64 * b + static_cast<std::size_t>(detail::lowest_bit(any));
       std::uint64_t tested = 0, shown = 0;
       for (unsigned i = 0; i < count; ++i) {
         tested |= scratch.workers[i].tested_bits[w];
         shown |= scratch.workers[i].shown_bits[w];
       }
-      out.triangles_tested += static_cast<std::size_t>(__builtin_popcountll(tested));
+      out.triangles_tested += static_cast<std::size_t>(detail::popcount(tested));
       while (shown) {
-        const std::uint32_t m = data.original(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(__builtin_ctzll(shown)));
+        const std::uint32_t m = data.original(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(detail::lowest_bit(shown)));
         shown &= shown - 1;
         mesh_bits[m / 64] |= std::uint64_t{1} << (m % 64);
         mesh_touched[m / 4096] |= std::uint64_t{1} << (m / 64 % 64);
@@ -195,9 +196,9 @@ inline void merge_workers(const IndexData& data, NciContext& context, Scratch& s
   }
   for (std::size_t b = 0; b < mesh_touched.size(); ++b) {
     for (std::uint64_t any = mesh_touched[b]; any; any &= any - 1) {
-      const std::size_t w = 64 * b + static_cast<std::size_t>(__builtin_ctzll(any));
+      const std::size_t w = 64 * b + static_cast<std::size_t>(detail::lowest_bit(any));
       for (std::uint64_t bits = mesh_bits[w]; bits; bits &= bits - 1)
-        out.triangles.push_back(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(__builtin_ctzll(bits)));
+        out.triangles.push_back(static_cast<std::uint32_t>(64 * w) + static_cast<std::uint32_t>(detail::lowest_bit(bits)));
     }
   }
 }

@@ -7,6 +7,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "../bits.hpp"
 #include "watertight.hpp"
 
 namespace cullkit::detail::nci {
@@ -32,8 +33,8 @@ struct TileState {
   using Mask = std::conditional_t<(max_tile > 32), std::uint64_t, std::uint32_t>;
   static constexpr int mask_bits = 8 * static_cast<int>(sizeof(Mask));
   // Lowest and highest set bit of a non-empty mask.
-  [[nodiscard]] static int low_bit(Mask m) noexcept { return __builtin_ctzll(m); }
-  [[nodiscard]] static int high_bit(Mask m) noexcept { return 63 - __builtin_clzll(m); }
+  [[nodiscard]] static int low_bit(Mask m) noexcept { return detail::lowest_bit(m); }
+  [[nodiscard]] static int high_bit(Mask m) noexcept { return detail::highest_bit(m); }
   [[nodiscard]] static Mask bit(int x) noexcept { return Mask{1} << x; }
   // Columns x0..x1 (0 <= x0 <= x1 < max_tile): no shift by the mask's width.
   [[nodiscard]] static Mask columns(int x0, int x1) noexcept {
