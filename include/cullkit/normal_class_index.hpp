@@ -87,7 +87,7 @@
 #include "detail/nci/degenerate_camera.hpp"
 #include "detail/nci/index_data.hpp"
 #include "detail/nci/moving.hpp"
-#include "detail/nci/types.hpp"
+#include "nci_params.hpp"
 
 namespace cullkit {
 

@@ -8,7 +8,7 @@
 
 #include "frame_cast.hpp"
 #include "tile_state.hpp"
-#include "types.hpp"
+#include "../../nci_params.hpp"
 
 namespace cullkit {
 class NciContext;

@@ -12,7 +12,7 @@
 #include "../../geometry/camera.hpp"
 #include "context.hpp"
 #include "index_data.hpp"
-#include "types.hpp"
+#include "../../nci_params.hpp"
 
 namespace cullkit::detail::nci {
 

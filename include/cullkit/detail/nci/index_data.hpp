@@ -20,7 +20,7 @@
 #include "../../geometry/aabb.hpp"
 #include "frame_bvh.hpp"
 #include "watertight.hpp"
-#include "types.hpp"
+#include "../../nci_params.hpp"
 
 namespace cullkit::detail::nci {
 

@@ -27,7 +27,7 @@
 #include "degenerate_camera.hpp"
 #include "index_data.hpp"
 #include "core.hpp"
-#include "types.hpp"
+#include "../../nci_params.hpp"
 
 namespace cullkit::detail::nci {
 

@@ -1,5 +1,5 @@
-// cullkit/detail/nci/types.hpp: the value types of NormalClassIndex's interface (options, results,
-// statistics, moving objects). Users include cullkit/normal_class_index.hpp, which includes this.
+// cullkit/nci_params.hpp: the value types of NormalClassIndex's interface: its parameters, results,
+// statistics and moving objects. cullkit/normal_class_index.hpp includes this.
 #pragma once
 
 #include <cstddef>
@@ -8,7 +8,7 @@
 
 #include <glm/mat4x4.hpp>
 
-#include "../../task_runner.hpp"
+#include "task_runner.hpp"
 
 namespace cullkit {
 
@@ -31,10 +31,7 @@ struct NciParams {
   int classes = 32;
   /// Cells along the scene box's longest axis (cubic cells). Finer: fewer triangles met per tile
   /// (not fewer tested: the screen rectangles already keep the tests down), more memory, and more
-  /// cells and slices to walk. Clamped to [1, 4096]. Why 32: against 64, bench_nci at 2 threads on
-  /// six scenes x two views x 640x480 and 1024x768, minimum of three alternating runs, the time
-  /// ratio is 0.96 in geometric mean (0.85-1.07; sportsCar from outside at 640x480 is the one loss
-  /// above 3 %), with 1-37 % less memory and the same precision within 0.06.
+  /// cells and slices to walk. Clamped to [1, 4096]. The trade-off is measured in docs/nci.md.
   int grid = 32;
   /// Worker threads for select_visible; 0: all hardware threads. Never changes the result. The
   /// threads come from the library's persistent pool (started on first use, never per call) or,
@@ -53,14 +50,7 @@ struct NciParams {
   /// 640x480 pixels, 32 below. Each tile walks the slices on its own and pays the per-triangle work
   /// (cell entry visits, screen-rectangle tests) once, so bigger tiles amortize it over more pixels;
   /// the answer (per-pixel triangle and depth, selected set) does not depend on it, the count of
-  /// ray-tested triangles does (bigger tiles test a few more). Measured on six scenes, both views,
-  /// 2 threads, 2-core machine:
-  ///  * with a grid of 64 cells, 32 against 16 is 4.5-15 % faster on one thread at 640x480;
-  ///    64 against 32 is 0.97 (geometric mean of the time ratio) at 640x480 and 0.91 at 1024x768;
-  ///  * with the grid of 32 cells, 64 against 32 at 640x480 is 0.95 (48: 0.955), one loss (fzk_haus
-  ///    from outside, +8 %), and tests 0-12 % more triangles (fzk_haus 2.49 -> 2.78 tested per
-  ///    visible triangle). Below 640x480 nothing was measured, so 32 stays there (more tiles to share
-  ///    between threads). Many threads on a small screen may prefer smaller tiles than the default.
+  /// ray-tested triangles does. The trade-off is measured in docs/nci.md.
   int tile_size = 0;
   /// Seed of the k-means (sampling and re-seeding of empty classes). Same seed, same index.
   std::uint64_t seed = 0x6e63692d6b6dULL;
