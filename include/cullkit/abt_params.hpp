@@ -28,9 +28,8 @@ enum class AbtCandidates : std::uint8_t {
 struct AbtParams {
   /// A node with at most this many objects becomes a leaf. Default 16. Culling answers per object
   /// whatever the leaf size; smaller leaves give finer draw ranges and traversals but more nodes
-  /// (about 2n / max_leaf_size, 60 bytes each) and a slower build. Measured on 60k boxes at 38%
-  /// visible (time over the SoA scan's): leaves of 4: 0.47, 8: 0.34, 16: 0.25 without `scan_below`;
-  /// 16 with scans below 64: 0.20. 0 is treated as 1.
+  /// (about 2n / max_leaf_size, 60 bytes each) and a slower build; docs/abt.md has the measured
+  /// trade-off. 0 is treated as 1.
   std::uint32_t max_leaf_size = 16;
   /// Deepest level (the root is level 0); a node there becomes a leaf whatever its size.
   /// Default 48; values above `AdaptiveBinaryTree::depth_limit` (64) are clamped to it.
@@ -97,11 +96,9 @@ struct AbtRefitParams {
   /// An inner node's split ratio is (area of its two children) / (its own area): about 1.3 for a
   /// good split of evenly spread objects, 2 when the children have spread to cover the whole node.
   /// A node's subtree is rebuilt once its ratio has gone this fraction of the way from its value
-  /// when it was built towards 2. Default 0.2. Measured on 20,000 objects moving 1 unit per frame
-  /// in a 200-unit cube for 300 frames (tests/engine/test_engine_refit, docs/engine_fit.md):
-  /// 0.1 kept the total node area within 1.02-1.12 of a fresh build rebuilding 44% of the objects
-  /// per frame, 0.2 within 1.13-1.42 rebuilding 27%, 0.5 within 1.9-2.3 rebuilding 11%; the plain
-  /// refit reached 51. Values outside (0, 1), or NaN, turn the repair off (plain refit).
+  /// when it was built towards 2. Default 0.2: the trade-off between tree quality and the objects
+  /// rebuilt per frame is measured in docs/engine_fit.md. Values outside (0, 1), or NaN, turn the
+  /// repair off (plain refit).
   double rebuild_threshold = 0.2;
 };
 
