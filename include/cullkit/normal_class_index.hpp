@@ -192,9 +192,9 @@ class NormalClassIndex {
   /// the faces an engine draws when it flips its cull mode for such a transform, so a mirrored
   /// closed mesh still shows its outside.
   /// Transforms that cannot be used (a NaN or infinite entry, a bottom row other than (0, 0, 0, 1),
-  /// a singular linear part or one with condition number above 1e6) are rejected: the object is
-  /// reported whole (every triangle its index kept), hides nothing, and is counted in
-  /// `context.stats.moving_objects_rejected`. A degenerate camera (see select_visible) reports the
+  /// a singular linear part or one with condition number above 1e6, or one that takes the eye
+  /// beyond float range in the object's frame) are rejected: the object is reported whole (every
+  /// triangle its index kept), hides nothing, and is counted in `context.stats.moving_objects_rejected`. A degenerate camera (see select_visible) reports the
   /// static scene and every object whole.
   /// pre: every `objects[k].index` is not null. Allocates a second context inside `context`.
   template <class ObjectIndex>
