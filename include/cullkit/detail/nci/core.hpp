@@ -28,7 +28,7 @@ CULLKIT_CORE_FN void build(IndexData& data, std::vector<glm::vec3>& normals);
 
 /// NormalClassIndex::select_visible for the static scene. `initial_depth` and `initial_solid`
 /// (per pixel, or null): the depths the pixels start from (moving objects selected before).
-/// `camera`: a camera with pixels is not degenerate (see degenerate_camera).
+/// pre: `camera` is not degenerate (see degenerate_camera) unless it has no pixel.
 CULLKIT_CORE_FN void select_frame(const IndexData& data, const FrameCamera& camera, NciContext& context, VisibleSet& out,
                                   NciPixels* pixels, const float* initial_depth, const float* initial_solid);
 

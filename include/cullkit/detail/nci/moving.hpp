@@ -1,7 +1,8 @@
 // cullkit/detail/nci/moving.hpp: NormalClassIndex::select_visible with moving objects. Each object
 // has its own index in its local frame and an affine local-to-world transform; the camera is taken
-// into the object's frame, the object selected there, and its per-pixel depths brought back to the
-// world before the static scene is searched in front of them.
+// into the object's frame (its pixel rays mapped there in double, see object_camera), the object
+// selected there, and its per-pixel depths brought back to the world before the static scene is
+// searched in front of them.
 //
 // Why depths need bringing back: the object's pixel rays are the world pixel rays mapped by the
 // inverse transform, and the index measures t along their *unit* local directions. Under an affine
