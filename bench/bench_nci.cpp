@@ -7,13 +7,15 @@
 //     as visible (fzk_haus, both views: 421 against the oracle's 374), which flattered the ratio.
 //  2. time of select_visible against Embree casting one ray per pixel (rtcIntersect1) and 4x4
 //     packets (rtcIntersect16), at 640x480 and 1024x768, 1 and 2 threads (both sides on the same
-//     count), on real scenes and a generated one of >= 10M triangles (full runs only; `--no-big`
-//     skips it). The racing peer is a plain Embree scene (default flags: not robust, two-sided): the
+//     count), on real scenes and two generated ones of >= 10M triangles (full runs only; `--no-big`
+//     skips them): the 10.1M-triangle city (outside and inside views) and crowded foliage
+//     (support::make_foliage, 10.1M triangles, mostly leaves of 0.12-0.24 m; seen whole from outside
+//     and straight down from high above). The racing peer is a plain Embree scene (default flags: not robust, two-sided): the
 //     fast configuration a user would pick. After each race, one `nci_cells` line per crowded path:
 //     the (tile, cell) pairs it walked and the tiles it cast through the frame hierarchy, and its
 //     tested count; with two or more paths, one `nci_path_ratio` line per path: its median over the
 //     first path's; and one `nci_crowding` line: triangles per pixel of the scene box's rectangle.
-// Flags: --no-big, --only-big, --no-precision, --quick (precision at the default parameters only,
+// Flags: --no-big, --only-big (both big scenes), --only-foliage, --no-precision, --quick (precision at the default parameters only,
 // timing at 640x480 only), --hash (only a hash of the per-pixel triangle and depth of both views at
 // 640x480 and 1024x768 per scene, to check that a change keeps every answer; env CULLKIT_NCI_TILE sets
 // NciParams::tile_size for it). --path LIST: the crowded-cell paths raced (comma-separated walk, rays,
@@ -194,13 +196,22 @@ struct Embree {
   }
 };
 
-std::vector<Camera> views(const Scene& s, int w, int h) {
+// The views of a scene: view 0 outside, seeing it whole; view 1 inside (the walk-through view) or,
+// for scenes seen `from_above` (the foliage), straight down from high above with the whole scene in
+// the frame.
+std::vector<Camera> views(const Scene& s, int w, int h, bool from_above = false) {
   const Aabb b = s.bounds;
   const glm::vec3 c = b.center(), e = b.extent();
   std::vector<Camera> cams;
   // Outside, looking at the centre from a raised diagonal.
   cams.push_back(support::make_camera(c + glm::vec3(0.8f, 0.5f, 0.9f) * glm::length(e) * 0.6f, c, 60, w, h,
                                       0.1f, 0.0f));
+  if (from_above) {
+    // 60 degrees vertical: the larger ground side spans the shorter screen side.
+    const float height = 0.5f * std::max(e.x, e.z) / std::tan(0.5235988f)  /* 30 degrees */;
+    cams.push_back(support::make_camera(c + glm::vec3(0.0f, 0.5f * e.y + height, 0.0f), c, 60, w, h, 0.1f, 0.0f));
+    return cams;
+  }
   // Inside the box near the floor, looking across (the walk-through view).
   cams.push_back(support::make_camera(b.min + e * glm::vec3(0.3f, 0.08f, 0.35f),
                                       b.min + e * glm::vec3(0.8f, 0.05f, 0.7f), 70, w, h, 0.1f, 0.0f));
@@ -271,12 +282,12 @@ bool parse_threads(const char* list, std::vector<unsigned>& out) {
   return !out.empty();
 }
 
-void precision_table(const std::string& name, const Scene& s, unsigned threads, bool smoke) {
+void precision_table(const std::string& name, const Scene& s, unsigned threads, bool smoke, bool from_above = false) {
   const Embree embree(s, threads);
   std::printf("embree_build,%s,%zu,%.3f,%.1f\n", name.c_str(), s.triangle_count(), embree.build_seconds,
               double(embree.bytes) / double(s.triangle_count()));
   const int w = smoke ? 64 : 640, h = smoke ? 48 : 480;
-  const auto cams = views(s, w, h);
+  const auto cams = views(s, w, h, from_above);
   std::vector<std::vector<std::uint32_t>> truth;
   {
     oracle::EmbreeScene robust;
@@ -325,7 +336,7 @@ std::vector<std::unique_ptr<NormalClassIndex<glm::vec3>>> indices_per_path(const
 
 // One race per size x view x thread count: Embree single rays, Embree packets, then select_visible
 // on each path of --path (an index per path and thread count: both are fixed at build).
-void speed(const std::string& name, const Scene& s, unsigned build_threads, bool smoke) {
+void speed(const std::string& name, const Scene& s, unsigned build_threads, bool smoke, bool from_above = false) {
   const Embree embree(s, build_threads);
   const std::vector<std::pair<int, int>> sizes =
       smoke     ? std::vector<std::pair<int, int>>{{64, 48}}
@@ -334,7 +345,7 @@ void speed(const std::string& name, const Scene& s, unsigned build_threads, bool
   for (const unsigned threads : g_threads) {
     const auto index = indices_per_path(s, threads, build_threads);
     for (auto [w, h] : sizes) {
-      const auto cams = views(s, w, h);
+      const auto cams = views(s, w, h, from_above);
       for (std::size_t ci = 0; ci < cams.size(); ++ci) {
         const Camera cam = cams[ci];
         std::vector<NciContext> ctx(g_paths.size());
@@ -373,7 +384,7 @@ void speed(const std::string& name, const Scene& s, unsigned build_threads, bool
 
 // FNV-1a over every pixel's triangle and depth bits of both views at 640x480 and 1024x768, plus
 // tested counts (printed apart: a precision change keeps the pixels).
-void pixel_hash(const std::string& name, const Scene& s, unsigned threads) {
+void pixel_hash(const std::string& name, const Scene& s, unsigned threads, bool from_above = false) {
   NciParams p;
   p.threads = threads;
   p.build_threads = threads;
@@ -381,7 +392,7 @@ void pixel_hash(const std::string& name, const Scene& s, unsigned threads) {
   p.crowded_path = g_paths.front().path;  // neither must they
   const NormalClassIndex<glm::vec3> index(s.mesh(), p);
   for (auto [w, h] : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}}) {
-    const auto cams = views(s, w, h);
+    const auto cams = views(s, w, h, from_above);
     for (std::size_t ci = 0; ci < cams.size(); ++ci) {
       NciContext ctx;
       VisibleSet out;
@@ -672,6 +683,7 @@ int main(int argc, char** argv) {
   }
   const bool smoke = cullkit_bench::smoke();
   bool big = !smoke, small = true, precision = true, timing = true, hash = false, no_precision = false;
+  bool foliage = !smoke;
   if (std::getenv("CULLKIT_NCI_PATH")) {  // the environment's path, unless --path says otherwise
     NciParams env;
     path_from_env(env);
@@ -680,8 +692,9 @@ int main(int argc, char** argv) {
                                                                                    : "auto"}};
   }
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--no-big")) big = false;
+    if (!std::strcmp(argv[i], "--no-big")) big = foliage = false;
     if (!std::strcmp(argv[i], "--only-big")) small = precision = timing = false;
+    if (!std::strcmp(argv[i], "--only-foliage")) small = precision = timing = big = false, foliage = true;
     if (!std::strcmp(argv[i], "--no-precision")) precision = false, no_precision = true;
     if (!std::strcmp(argv[i], "--quick")) g_quick = true;
     if (!std::strcmp(argv[i], "--hash")) hash = true;
@@ -726,10 +739,21 @@ int main(int argc, char** argv) {
     std::printf("# big scene: %zu triangles\n", s.triangle_count());
     if (hash) {
       pixel_hash("bigcity", s, threads);
-      return 0;
+    } else {
+      if (!no_precision) precision_table("bigcity", s, threads, smoke);
+      speed("bigcity", s, threads, smoke);
     }
-    if (!no_precision) precision_table("bigcity", s, threads, smoke);
-    speed("bigcity", s, threads, smoke);
+  }
+  if (big || foliage) {
+    // >= 10M triangles of crowded foliage: trees of small leaves, seen whole and from above.
+    Scene s = support::make_foliage(1, 70, 2280);
+    std::printf("# foliage scene: %zu triangles\n", s.triangle_count());
+    if (hash) {
+      pixel_hash("foliage", s, threads, true);
+    } else {
+      if (!no_precision) precision_table("foliage", s, threads, smoke, true);
+      speed("foliage", s, threads, smoke, true);
+    }
   }
   return 0;
 }

@@ -172,7 +172,7 @@ class NormalClassIndex {
   void select_visible(const Camera& camera, NciContext& context, VisibleSet& out, NciPixels* pixels) const {
     if (camera.width > 0 && camera.height > 0 && detail::nci::degenerate_camera(camera))
       return detail::nci::select_everything(data_, camera, context, out, pixels);
-    detail::nci::select_frame(data_, camera, context, out, pixels, nullptr, nullptr);
+    detail::nci::select_frame(data_, detail::nci::frame_camera(camera), context, out, pixels, nullptr, nullptr);
   }
 
   /// With moving objects: each object has its own index, built in its local frame, and an affine
@@ -192,16 +192,19 @@ class NormalClassIndex {
   /// the faces an engine draws when it flips its cull mode for such a transform, so a mirrored
   /// closed mesh still shows its outside.
   /// Transforms that cannot be used (a NaN or infinite entry, a bottom row other than (0, 0, 0, 1),
-  /// a singular linear part or one with condition number above 1e6) are rejected: the object is
-  /// reported whole (every triangle its index kept), hides nothing, and is counted in
-  /// `context.stats.moving_objects_rejected`. A degenerate camera (see select_visible) reports the
+  /// a singular linear part or one with condition number above 1e6, or one that takes the eye
+  /// beyond float range in the object's frame) are rejected: the object is reported whole (every
+  /// triangle its index kept), hides nothing, and is counted in `context.stats.moving_objects_rejected`. A degenerate camera (see select_visible) reports the
   /// static scene and every object whole.
   /// pre: every `objects[k].index` is not null. Allocates a second context inside `context`.
   template <class ObjectIndex>
   void select_visible(const Camera& camera, const NciMovingObject<ObjectIndex>* objects, std::size_t object_count,
                       NciContext& context, VisibleSet& out, std::vector<NciObjectTriangle>& object_triangles,
                       NciPixels* pixels = nullptr) const {
-    detail::nci::select_with_objects(data_, camera, objects, object_count, context, out, object_triangles, pixels);
+    // An object's index is selected in its own frame through its data (another NormalClassIndex).
+    const auto object_data = [](const ObjectIndex& index) -> const detail::nci::IndexData& { return index.data_; };
+    detail::nci::select_with_objects(data_, camera, objects, object_count, object_data, context, out, object_triangles,
+                                     pixels);
   }
 
  public:
@@ -225,6 +228,9 @@ class NormalClassIndex {
   [[nodiscard]] Aabb bounds() const noexcept { return data_.box; }
 
  private:
+  template <class, class, class>
+  friend class NormalClassIndex;  // for the moving objects' indexes
+
   // Clamps the parameters, gathers the triangles and builds; times the whole.
   // An index as an unsigned 64-bit value; a negative one (signed Index) becomes out of range.
   template <class I>

@@ -11,10 +11,10 @@
 // object is the world t (within 1e-4 relative of the oracle's: both sides round, the oracle its
 // moved corners, the index its rays, and a grazing ray turns that into depth). One more
 // allowance, counted and bounded (under 1 in 200 object pixels): on the oracle's edge pixels, a
-// depth within 1e-3 relative. The object's pixel rays are the world rays taken into its frame
-// through a float matrix (Camera holds one), which moves them by the matrix's rounding, more than
-// the ray test's edge band covers where a ray grazes an edge (clang builds show up to 12 in
-// 155,000 object pixels at scale 4, g++ builds 4). Each reported object triangle is
+// depth within 1e-3 relative. The object's pixel rays are the world rays mapped into its frame in
+// double and the oracle's are Embree's on corners rounded to float in the world: the two round a
+// ray grazing an edge differently (g++ builds show 4 edge ties in 155,000 object pixels at scale
+// 4). Each reported object triangle is
 // some pixel's first hit or tie. Rejected transforms (singular, NaN, projective): the object is
 // reported whole, hides nothing (the static answer is the one without the object), and is counted.
 #include <algorithm>
@@ -86,8 +86,8 @@ void check_view(const Index& city_index, const std::vector<Mover>& movers, const
   };
   int shown = 0;
   // A pixel on an edge of the oracle's image (a neighbour sees another triangle): the ray passes
-  // near that edge, where the object's rays, taken into its frame through a float matrix, may
-  // round to the other side (see the file comment).
+  // near that edge, where the object's rays and the oracle's may round to different sides (see
+  // the file comment).
   const auto on_edge = [&hits](std::size_t p) {
     const int x = static_cast<int>(p % static_cast<std::size_t>(hits.width)), y = static_cast<int>(p / static_cast<std::size_t>(hits.width));
     for (int dy = -1; dy <= 1; ++dy)

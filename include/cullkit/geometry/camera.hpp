@@ -48,13 +48,21 @@ struct Ray {
 class PixelRays {
  public:
   explicit PixelRays(const Camera& camera) noexcept
-      : eye_(camera.eye), width_(camera.width), height_(camera.height) {
-    const glm::dmat4 inv = glm::inverse(glm::dmat4(camera.view_proj));
+      : PixelRays(glm::inverse(glm::dmat4(camera.view_proj)), camera.eye, camera.width, camera.height, camera.depth) {}
+
+  /// The same rule for a camera known in double precision: `inverse_view_proj` is the inverse of
+  /// its matrix (clip to world). For a camera taken into another frame (the world pixel rays mapped
+  /// into an object's local frame by an affine map A: A * inverse(view_proj), with `eye` the mapped
+  /// eye), whose matrix rounded to float could move its far plane through infinity.
+  PixelRays(const glm::dmat4& inverse_view_proj, const glm::vec3& eye, int width, int height,
+            DepthRange depth) noexcept
+      : eye_(eye), width_(width), height_(height) {
+    const glm::dmat4& inv = inverse_view_proj;
     // Homogeneous point for ndc (u, v, z): inv * (u, v, z, 1) = u*c0 + v*c1 + z*c2 + c3.
     col_x_ = inv[0];
     col_y_ = inv[1];
     far_ = inv[2] + inv[3];  // z = 1
-    const double near_z = camera.depth == DepthRange::zero_to_one ? 0.0 : -1.0;
+    const double near_z = depth == DepthRange::zero_to_one ? 0.0 : -1.0;
     near_ = inv[2] * near_z + inv[3];
   }
 

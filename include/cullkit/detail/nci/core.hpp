@@ -11,6 +11,7 @@
 #include "../../config.hpp"
 #include "../../geometry/camera.hpp"
 #include "context.hpp"
+#include "frame_camera.hpp"
 #include "index_data.hpp"
 #include "../../nci_params.hpp"
 
@@ -27,7 +28,8 @@ CULLKIT_CORE_FN void build(IndexData& data, std::vector<glm::vec3>& normals);
 
 /// NormalClassIndex::select_visible for the static scene. `initial_depth` and `initial_solid`
 /// (per pixel, or null): the depths the pixels start from (moving objects selected before).
-CULLKIT_CORE_FN void select_frame(const IndexData& data, const Camera& camera, NciContext& context, VisibleSet& out,
+/// pre: `camera` is not degenerate (see degenerate_camera) unless it has no pixel.
+CULLKIT_CORE_FN void select_frame(const IndexData& data, const FrameCamera& camera, NciContext& context, VisibleSet& out,
                                   NciPixels* pixels, const float* initial_depth, const float* initial_solid);
 
 }  // namespace cullkit::detail::nci

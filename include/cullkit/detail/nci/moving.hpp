@@ -1,7 +1,8 @@
 // cullkit/detail/nci/moving.hpp: NormalClassIndex::select_visible with moving objects. Each object
 // has its own index in its local frame and an affine local-to-world transform; the camera is taken
-// into the object's frame, the object selected there, and its per-pixel depths brought back to the
-// world before the static scene is searched in front of them.
+// into the object's frame (its pixel rays mapped there in double, see object_camera), the object
+// selected there, and its per-pixel depths brought back to the world before the static scene is
+// searched in front of them.
 //
 // Why depths need bringing back: the object's pixel rays are the world pixel rays mapped by the
 // inverse transform, and the index measures t along their *unit* local directions. Under an affine
@@ -25,6 +26,7 @@
 #include "../../geometry/camera.hpp"
 #include "context.hpp"
 #include "degenerate_camera.hpp"
+#include "frame_camera.hpp"
 #include "index_data.hpp"
 #include "core.hpp"
 #include "../../nci_params.hpp"
@@ -82,15 +84,43 @@ void report_whole(const ObjectIndex& index, std::uint32_t id, std::vector<NciObj
     if (index.triangle_class(static_cast<std::uint32_t>(t)) >= 0) out.push_back(NciObjectTriangle{id, static_cast<std::uint32_t>(t)});
 }
 
-template <class ObjectIndex>
+// The camera taken into an object's frame: the world pixel rays mapped by world_to_local in double
+// (their target points, and the eye, which is rounded to float once there), never a float matrix.
+// `eye_error`: the largest coordinate of that rounding of the eye (0 when it is exact). False when
+// the mapped eye is not a finite float (the object cannot be selected in its frame).
+[[nodiscard]] inline bool object_camera(const Camera& camera, const ObjectFrame& frame, FrameCamera& local,
+                                        double& eye_error) noexcept {
+  const FrameCamera world = frame_camera(camera);
+  local = world;
+  local.view_proj = world.view_proj * frame.local_to_world;
+  local.inverse = frame.world_to_local * world.inverse;
+  const glm::dvec3 eye(frame.world_to_local * glm::dvec4(glm::dvec3(camera.eye), 1.0));
+  local.eye = glm::vec3(eye);
+  const glm::dvec3 off = glm::abs(glm::dvec3(local.eye) - eye);
+  eye_error = std::max({off.x, off.y, off.z});
+  return std::isfinite(local.eye.x) && std::isfinite(local.eye.y) && std::isfinite(local.eye.z);
+}
+
+// An object's pixel rays start from its eye rounded to float in its frame (object_camera), up to
+// `eye_error` beside the true rays in each coordinate. Where that is at most one float rounding
+// of the hit depth, the ray test's edge band (8 roundings of the corners' offsets from the eye,
+// of which 2 were measured to cover other float tracers) still covers it; elsewhere (the frame's
+// origin more than about twice as far from the eye as the hit) the object's solid depth is not
+// trusted to hide the static scene: it hides nothing there.
+[[nodiscard]] inline bool solid_trusted(float local_t, double eye_error) noexcept {
+  return eye_error <= 0x1p-24 * double(local_t);
+}
+
+// `object_data(index)` is an object's IndexData (its index's own frame).
+template <class ObjectIndex, class ObjectData>
 void select_with_objects(const IndexData& data, const Camera& camera, const NciMovingObject<ObjectIndex>* objects,
-                         std::size_t object_count, NciContext& context, VisibleSet& out,
+                         std::size_t object_count, const ObjectData& object_data, NciContext& context, VisibleSet& out,
                          std::vector<NciObjectTriangle>& object_triangles, NciPixels* pixels) {
   object_triangles.clear();
   const int width = camera.width, height = camera.height;
   if (width <= 0 || height <= 0 || object_count == 0) {
     if (width > 0 && height > 0 && degenerate_camera(camera)) select_everything(data, camera, context, out, pixels);
-    else select_frame(data, camera, context, out, pixels, nullptr, nullptr);
+    else select_frame(data, frame_camera(camera), context, out, pixels, nullptr, nullptr);
     return;
   }
   if (degenerate_camera(camera)) {
@@ -117,16 +147,15 @@ void select_with_objects(const IndexData& data, const Camera& camera, const NciM
     if (!objects[k].index) continue;
     const std::uint32_t id = objects[k].object_id;
     const ObjectFrame frame = object_frame(objects[k].local_to_world);
-    if (!frame.usable) {
+    FrameCamera local;
+    double eye_error = 0.0;
+    if (!frame.usable || !object_camera(camera, frame, local, eye_error)) {
       // Conservative: the object may be anywhere, so all of it may be seen and it hides nothing.
       ++rejected;
       report_whole(*objects[k].index, id, object_triangles);
       continue;
     }
-    Camera local = camera;
-    local.eye = glm::vec3(frame.world_to_local * glm::dvec4(glm::dvec3(camera.eye), 1.0));
-    local.view_proj = glm::mat4(glm::dmat4(camera.view_proj) * frame.local_to_world);
-    objects[k].index->select_visible(local, o.context, o.set, &o.pixels);
+    select_frame(object_data(*objects[k].index), local, o.context, o.set, &o.pixels, nullptr, nullptr);
     const auto& object_scratch = ContextAccess::scratch(o.context);
     const auto& solid = object_scratch.pixel_solid_t;
     // World depth of local depth t at pixel p (see the file comment).
@@ -139,7 +168,8 @@ void select_with_objects(const IndexData& data, const Camera& camera, const NciM
     };
     for (std::size_t p = 0; p < pixel_count; ++p) {
       const std::uint32_t tri = o.pixels.triangle[p];
-      const bool has_solid = solid.size() == pixel_count && solid[p] < std::numeric_limits<float>::infinity();
+      const bool has_solid = solid.size() == pixel_count && solid[p] < std::numeric_limits<float>::infinity() &&
+                             solid_trusted(solid[p], eye_error);
       if (tri == NciPixels::miss && !has_solid) continue;
       if (has_solid) o.solid[p] = std::min(o.solid[p], to_world(solid[p], p));
       if (tri == NciPixels::miss) continue;
@@ -157,7 +187,7 @@ void select_with_objects(const IndexData& data, const Camera& camera, const NciM
       if (t <= o.solid[e.pixel]) o.candidates.push_back(MovingScratch::Candidate{id, e.tri, t, e.pixel});
     }
   }
-  select_frame(data, camera, context, out, pixels, o.depth.data(), o.solid.data());
+  select_frame(data, frame_camera(camera), context, out, pixels, o.depth.data(), o.solid.data());
   context.stats.moving_objects_rejected = rejected;
   // An object's triangle is reported where it lies no farther than the pixel's solid depth after
   // the static scene (then nothing certain hides it); the pixels keep the objects' first hits

@@ -216,7 +216,7 @@ inline void write_pixels(const IndexData& data, const Scratch& scratch, std::siz
 
 #if CULLKIT_CORE_BODIES
 // Declared in core.hpp.
-CULLKIT_CORE_FN void select_frame(const IndexData& data, const Camera& camera, NciContext& context, VisibleSet& out,
+CULLKIT_CORE_FN void select_frame(const IndexData& data, const FrameCamera& camera, NciContext& context, VisibleSet& out,
                          NciPixels* pixels, const float* initial_depth, const float* initial_solid) {
   Scratch& scratch = ContextAccess::scratch(context);
   out.triangles.clear();

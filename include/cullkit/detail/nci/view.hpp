@@ -15,6 +15,7 @@
 #include <glm/vec4.hpp>
 
 #include "../../geometry/camera.hpp"
+#include "frame_camera.hpp"
 #include "watertight.hpp"
 #include "context.hpp"
 #include "index_data.hpp"
@@ -131,8 +132,8 @@ struct ViewSetup {
   return project_rect(f, p, 3);
 }
 
-[[nodiscard]] inline ViewSetup make_frame(const IndexData& data, const Camera& camera) {
-  ViewSetup f{PixelRays(camera), glm::dvec3(camera.eye), camera.eye, 2, glm::dmat4(camera.view_proj), false,
+[[nodiscard]] inline ViewSetup make_frame(const IndexData& data, const FrameCamera& camera) {
+  ViewSetup f{camera.rays(), glm::dvec3(camera.eye), camera.eye, 2, camera.view_proj, false,
           glm::dvec4(0.0), nullptr, nullptr, camera.width, camera.height};
   const Ray center = f.rays.ray_at(0.5 * camera.width, 0.5 * camera.height);
   const glm::vec3 d = center.direction;
@@ -143,7 +144,7 @@ struct ViewSetup {
   // found by projecting X from the eye onto that plane and reading the plane point's pixel. This
   // holds even when `eye` is not exactly the matrix's centre of projection (float matrices).
   // Used only when the same plane serves the whole screen, as PixelRays decides it.
-  const glm::dmat4 inv = glm::inverse(f.view_proj);
+  const glm::dmat4& inv = camera.inverse;
   const glm::dvec4 far_h = inv[2] + inv[3];
   const double near_z = camera.depth == DepthRange::zero_to_one ? 0.0 : -1.0;
   int uses_far = 0, uses_near = 0;
