@@ -66,10 +66,6 @@
 #include <memory>
 #include <type_traits>
 #include <vector>
-#ifdef CULLKIT_NCI_CROWDED_PATH_FROM_ENV
-#include <cstdlib>
-#include <string>
-#endif
 
 #include <glm/geometric.hpp>
 #include <glm/mat4x4.hpp>
@@ -248,16 +244,6 @@ class NormalClassIndex {
     p.classes = std::clamp(p.classes, 1, 4096);
     p.grid = std::clamp(p.grid, 1, 4096);
     if (p.tile_size != 0) p.tile_size = std::clamp(p.tile_size, 2, detail::nci::TileState::max_tile);
-#ifdef CULLKIT_NCI_CROWDED_PATH_FROM_ENV
-    // Test builds only: env CULLKIT_NCI_CROWDED_PATH (walk, rays, auto) overrides crowded_path, so
-    // the tests run every path without a copy per path.
-    if (const char* v = std::getenv("CULLKIT_NCI_CROWDED_PATH")) {
-      const std::string path(v);
-      if (path == "walk") p.crowded_path = NciCrowdedPath::walk_only;
-      if (path == "rays") p.crowded_path = NciCrowdedPath::rays_only;
-      if (path == "auto") p.crowded_path = NciCrowdedPath::automatic;
-    }
-#endif
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<glm::vec3> normals;
     gather(position, vertex_count, index_at, index_count, normals);

@@ -6,6 +6,7 @@
 
 #include "check.hpp"
 #include "nci_test_util.hpp"
+#include "nci_index.hpp"
 
 using namespace cullkit;
 using cullkit::support::Scene;
@@ -18,7 +19,7 @@ int g_ties = 0;
 // with the double brute force (misses must be ties).
 void compare(const char* label, const Scene& scene, const NciParams& params, const std::vector<Camera>& cams,
              std::uint64_t seed) {
-  const NormalClassIndex<glm::vec3> index(scene.mesh(), params);
+  const nci_test::TestIndex<glm::vec3> index(scene.mesh(), params);
   NciContext ctx;
   for (std::size_t ci = 0; ci < cams.size(); ++ci) {
     const Camera& cam = cams[ci];

@@ -12,6 +12,7 @@
 
 #include "check.hpp"
 #include "nci_test_util.hpp"
+#include "nci_index.hpp"
 
 using namespace cullkit;
 using cullkit::support::Scene;
@@ -34,8 +35,8 @@ void run_scene(const std::string& label, const Scene& scene, const std::vector<N
     NciParams one = base, many = base;
     one.threads = 1;
     many.threads = 3;
-    const NormalClassIndex<glm::vec3> index(scene.mesh(), one);
-    const NormalClassIndex<glm::vec3> index_many(scene.mesh(), many);
+    const nci_test::TestIndex<glm::vec3> index(scene.mesh(), one);
+    const nci_test::TestIndex<glm::vec3> index_many(scene.mesh(), many);
     Totals tot;
     NciContext ctx;
     for (std::size_t ci = 0; ci < cams.size(); ++ci) {

@@ -8,6 +8,7 @@
 
 #include "check.hpp"
 #include "nci_test_util.hpp"
+#include "nci_index.hpp"
 
 using namespace cullkit;
 using cullkit::support::Scene;
@@ -33,7 +34,7 @@ void push_facing(std::vector<glm::vec3>& out, const Camera& cam, glm::vec3 a, gl
 // Pixel-exact comparison with the float brute force; returns triangles_tested.
 std::size_t compare(const char* label, const Scene& scene, const NciParams& params, const Camera& cam,
                     std::uint64_t seed) {
-  const NormalClassIndex<glm::vec3> index(scene.mesh(), params);
+  const nci_test::TestIndex<glm::vec3> index(scene.mesh(), params);
   NciContext ctx;
   VisibleSet set;
   NciPixels px;

@@ -10,6 +10,7 @@
 #include "check.hpp"
 #include "nci_test_util.hpp"
 #include "nci_touches_eye.hpp"
+#include "nci_index.hpp"
 
 using namespace cullkit;
 
@@ -34,7 +35,7 @@ Camera front_camera(int w, int h) { return support::make_camera({0, 0, 10}, {0, 
 void test_empty() {
   const std::vector<glm::vec3> none;
   const std::vector<std::uint32_t> no_idx;
-  const NormalClassIndex<glm::vec3> index(MeshView<glm::vec3>{none.data(), 0, no_idx.data(), 0});
+  const nci_test::TestIndex<glm::vec3> index(MeshView<glm::vec3>{none.data(), 0, no_idx.data(), 0});
   CHECK(index.triangle_count() == 0);
   CHECK(index.stats().triangles_input == 0);
   const VisibleSet s = index.select_visible(front_camera(32, 24));
@@ -67,7 +68,7 @@ void test_bad_triangles() {
                                    4, 5, 6,                // good big one in front: 9
                                    0, 1};                  // trailing partial triangle: ignored
   const MeshView<glm::vec3, std::int32_t> mesh{v.data(), v.size(), idx.data(), idx.size()};
-  const NormalClassIndex<glm::vec3, std::int32_t> index(mesh);
+  const nci_test::TestIndex<glm::vec3, std::int32_t> index(mesh);
   const NciStats& st = index.stats();
   CHECK(st.triangles_input == 10);
   CHECK(st.skipped_out_of_range == 2);
@@ -85,7 +86,7 @@ void test_bad_triangles() {
 void test_custom_vertex() {
   std::vector<MyVertex> v = {{{-1, -1, 0}, {0, 0}}, {{1, -1, 0}, {1, 0}}, {{1, 1, 0}, {1, 1}}, {{-1, 1, 0}, {0, 1}}};
   std::vector<std::uint16_t> idx = {0, 1, 2, 0, 2, 3, 0, 2, 1};  // last one faces away
-  const NormalClassIndex<MyVertex, std::uint16_t> index(MeshView<MyVertex, std::uint16_t>{v.data(), v.size(), idx.data(), idx.size()});
+  const nci_test::TestIndex<MyVertex, std::uint16_t> index(MeshView<MyVertex, std::uint16_t>{v.data(), v.size(), idx.data(), idx.size()});
   const VisibleSet s = index.select_visible(front_camera(64, 48));
   CHECK(s.triangles == std::vector<std::uint32_t>({0, 1}));
   // Seen from behind: nothing (back faces are never hits).
@@ -95,7 +96,7 @@ void test_custom_vertex() {
 
 void test_cameras() {
   const auto city = support::make_city(31, 2);
-  const NormalClassIndex<glm::vec3> index(city.mesh());
+  const nci_test::TestIndex<glm::vec3> index(city.mesh());
   Camera c = front_camera(0, 10);
   CHECK(index.select_visible(c).triangles.empty());
   c = front_camera(-5, -5);
@@ -135,7 +136,7 @@ void test_determinism_and_progress() {
   NciParams b;
   b.build_threads = 4;
   b.classes = 32;
-  const NormalClassIndex<glm::vec3> ia(office.mesh(), a), ib(office.mesh(), b);
+  const nci_test::TestIndex<glm::vec3> ia(office.mesh(), a), ib(office.mesh(), b);
   CHECK(calls >= 2);
   CHECK(!g_progress.empty() && g_progress.front() == 0.0f && g_progress.back() == 1.0f);
   CHECK(std::is_sorted(g_progress.begin(), g_progress.end()));
@@ -159,7 +160,7 @@ void test_select_stats() {
   NciParams one, two;
   one.threads = 1;
   two.threads = 2;
-  const NormalClassIndex<glm::vec3> i1(office.mesh(), one), i2(office.mesh(), two);
+  const nci_test::TestIndex<glm::vec3> i1(office.mesh(), one), i2(office.mesh(), two);
   std::size_t met = 0;
   for (const auto& cam : nci_test::cameras_for(office.bounds, 6, 64, 48, 303)) {
     NciContext c1, c2;
@@ -186,7 +187,7 @@ void test_select_stats() {
   }
   support::Scene field;
   field.add_mesh(v, idx, "specks");
-  const NormalClassIndex<glm::vec3> specks(field.mesh());
+  const nci_test::TestIndex<glm::vec3> specks(field.mesh());
   const Camera cam = front_camera(64, 48);
   NciContext ctx;
   VisibleSet out;
@@ -206,7 +207,7 @@ void test_select_stats() {
   // One quad over the whole screen: every met triangle covers pixel centres.
   const std::vector<glm::vec3> qv = {{-50, -50, 0}, {50, -50, 0}, {50, 50, 0}, {-50, 50, 0}};
   const std::vector<std::uint32_t> qi = {0, 1, 2, 0, 2, 3};
-  const NormalClassIndex<glm::vec3> quad(MeshView<glm::vec3>{qv.data(), qv.size(), qi.data(), qi.size()});
+  const nci_test::TestIndex<glm::vec3> quad(MeshView<glm::vec3>{qv.data(), qv.size(), qi.data(), qi.size()});
   NciContext qc;
   VisibleSet qs;
   quad.select_visible(cam, qc, qs, nullptr);
@@ -237,7 +238,7 @@ void test_eye_at_corner() {
     params.grid = tile == 2 ? 46 : 1 + tile % 7;
     params.tile_size = tile;
     params.threads = 1;
-    const NormalClassIndex<glm::vec3> index(scene.mesh(), params);
+    const nci_test::TestIndex<glm::vec3> index(scene.mesh(), params);
     for (float off : offsets) {
       for (int axis = 0; axis < 3; ++axis) {
         glm::vec3 eye = corner;
@@ -312,9 +313,9 @@ void test_eye_touching_triangle() {
     params.grid = rng.range(1, 40);
     params.tile_size = rng.range(2, 20);
     params.threads = 1;
-    const NormalClassIndex<glm::vec3> index(scene.mesh(), params);
+    const nci_test::TestIndex<glm::vec3> index(scene.mesh(), params);
     params.threads = 2;
-    const NormalClassIndex<glm::vec3> index2(scene.mesh(), params);
+    const nci_test::TestIndex<glm::vec3> index2(scene.mesh(), params);
     const float fov = rng.uniform(5.0f, 150.0f);
     const Camera cam = support::make_camera(eye, target, fov, w, h, 0.01f, 1000.0f);
     NciContext ctx, ctx2;
@@ -360,10 +361,10 @@ void test_eye_touching_triangle() {
 // the answer does not depend on it.
 void test_automatic_tile() {
   const support::Scene city = support::make_city(5, 2);
-  const NormalClassIndex<glm::vec3> automatic(city.mesh());
+  const nci_test::TestIndex<glm::vec3> automatic(city.mesh());
   NciParams p32;
   p32.tile_size = 32;
-  const NormalClassIndex<glm::vec3> fixed(city.mesh(), p32);
+  const nci_test::TestIndex<glm::vec3> fixed(city.mesh(), p32);
   CHECK(automatic.params().tile_size == 0);
   const glm::vec3 c = city.bounds.center(), e = city.bounds.extent();
   for (const auto& [w, h, expect] : {std::array<int, 3>{640, 480, 64}, std::array<int, 3>{1024, 768, 64},

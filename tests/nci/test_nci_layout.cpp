@@ -19,6 +19,7 @@
 
 #include "check.hpp"
 #include "nci_test_util.hpp"
+#include "nci_index.hpp"
 
 using namespace cullkit;
 using cullkit::support::Scene;
@@ -26,7 +27,7 @@ using cullkit::support::Scene;
 namespace {
 
 NciPixels run(const Scene& s, const NciParams& p, const Camera& cam, VisibleSet& set) {
-  const NormalClassIndex<glm::vec3> index(s.mesh(), p);
+  const nci_test::TestIndex<glm::vec3> index(s.mesh(), p);
   NciContext ctx;
   NciPixels px;
   index.select_visible(cam, ctx, set, &px);
@@ -37,7 +38,7 @@ void crowded(const Scene& s, int grid, int tile, std::uint64_t seed) {
   NciParams p;
   p.grid = grid;
   p.tile_size = tile;
-  const NormalClassIndex<glm::vec3> index(s.mesh(), p);
+  const nci_test::TestIndex<glm::vec3> index(s.mesh(), p);
   NciContext ctx;
   const auto cams = nci_test::cameras_for(s.bounds, 8, 64, 48, seed);
   for (std::size_t ci = 0; ci < cams.size(); ++ci) {
@@ -74,8 +75,8 @@ int main() {
         loose.positions.push_back(city.positions[city.indices[3 * t + static_cast<std::size_t>(k)]]);
       }
     }
-    const NormalClassIndex<glm::vec3> shared_index(city.mesh(), NciParams{});
-    const NormalClassIndex<glm::vec3> loose_index(loose.mesh(), NciParams{});
+    const nci_test::TestIndex<glm::vec3> shared_index(city.mesh(), NciParams{});
+    const nci_test::TestIndex<glm::vec3> loose_index(loose.mesh(), NciParams{});
     CHECK_MSG(loose_index.memory_bytes() == shared_index.memory_bytes(),
               "unshared corners: %zu bytes, shared: %zu (positions not merged?)", loose_index.memory_bytes(),
               shared_index.memory_bytes());
@@ -133,7 +134,7 @@ int main() {
     floor.add_triangles(corners, "floor");
     NciParams one;
     one.classes = 1;  // one class of all 72,200 triangles
-    const NormalClassIndex<glm::vec3> index(floor.mesh(), one);
+    const nci_test::TestIndex<glm::vec3> index(floor.mesh(), one);
     CHECK(index.stats().triangles_indexed == std::size_t{2} * n * n);
     CHECK(index.class_count() == 1);
     const std::vector<Camera> cams = {
@@ -162,7 +163,7 @@ int main() {
   // in place, plus 3%.
   {
     const auto cams = nci_test::cameras_for(city.bounds, 6, 160, 120, 304);
-    const NormalClassIndex<glm::vec3> index(city.mesh(), NciParams{});
+    const nci_test::TestIndex<glm::vec3> index(city.mesh(), NciParams{});
     NciContext ctx;
     std::size_t tested = 0, visible = 0;
     for (const Camera& cam : cams) {

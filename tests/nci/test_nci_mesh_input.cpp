@@ -8,6 +8,7 @@
 
 #include "check.hpp"
 #include "nci_test_util.hpp"
+#include "nci_index.hpp"
 
 using namespace cullkit;
 using cullkit::support::Scene;
@@ -50,7 +51,7 @@ int main() {
   const std::size_t vertex_count = city.positions.size();
   CHECK_MSG(vertex_count <= 65536, "the scene fits 16-bit indices (%zu vertices)", vertex_count);
 
-  const NormalClassIndex<glm::vec3> plain(city.mesh());
+  const nci_test::TestIndex<glm::vec3> plain(city.mesh());
   const std::vector<Answer> want = answers(plain, cams);
   std::size_t selected = 0;
   for (const auto& a : want) selected += a.set.triangles.size();
@@ -63,21 +64,21 @@ int main() {
   for (std::size_t v = 0; v < vertex_count; ++v)
     std::memcpy(&buffer[1 + v * stride + 8], &city.positions[v], 3 * sizeof(float));
   const StridedPositions strided{buffer.data(), stride, offset};
-  const NormalClassIndex<glm::vec3> from_buffer(strided, vertex_count, city.indices.data(), city.indices.size());
+  const nci_test::TestIndex<glm::vec3> from_buffer(strided, vertex_count, city.indices.data(), city.indices.size());
   CHECK(same_stats(from_buffer.stats(), plain.stats()));
   CHECK_MSG(differences(answers(from_buffer, cams), want) == 0, "strided positions answer differently");
 
   std::vector<std::uint16_t> small(city.indices.begin(), city.indices.end());
-  const NormalClassIndex<glm::vec3, std::uint16_t> narrow(
+  const nci_test::TestIndex<glm::vec3, std::uint16_t> narrow(
       MeshView<glm::vec3, std::uint16_t>{city.positions.data(), vertex_count, small.data(), small.size()});
   CHECK(same_stats(narrow.stats(), plain.stats()));
   CHECK_MSG(differences(answers(narrow, cams), want) == 0, "16-bit indices answer differently");
-  const NormalClassIndex<glm::vec3, std::uint16_t> both(strided, vertex_count, small.data(), small.size());
+  const nci_test::TestIndex<glm::vec3, std::uint16_t> both(strided, vertex_count, small.data(), small.size());
   CHECK(same_stats(both.stats(), plain.stats()));
   CHECK_MSG(differences(answers(both, cams), want) == 0, "strided positions with 16-bit indices answer differently");
 
   // A buffer read 4 bytes off (y, z and the pad as x, y, z) is another mesh: the comparison sees it.
-  const NormalClassIndex<glm::vec3> shifted(StridedPositions{buffer.data(), stride, offset + 4}, vertex_count,
+  const nci_test::TestIndex<glm::vec3> shifted(StridedPositions{buffer.data(), stride, offset + 4}, vertex_count,
                                             city.indices.data(), city.indices.size());
   CHECK(differences(answers(shifted, cams), want) > 0);
 
@@ -85,12 +86,12 @@ int main() {
   std::vector<std::uint16_t> bad = small;
   bad[0] = 65535;
   bad[5] = static_cast<std::uint16_t>(vertex_count);
-  const NormalClassIndex<glm::vec3, std::uint16_t> skipping(strided, vertex_count, bad.data(), bad.size());
+  const nci_test::TestIndex<glm::vec3, std::uint16_t> skipping(strided, vertex_count, bad.data(), bad.size());
   CHECK(skipping.stats().skipped_out_of_range == 2);
   CHECK(skipping.triangle_count() + 2 == plain.triangle_count());
 
   // No positions at all: an empty index that selects nothing.
-  const NormalClassIndex<glm::vec3, std::uint16_t> empty(StridedPositions{nullptr, stride, 0}, 0, nullptr, 0);
+  const nci_test::TestIndex<glm::vec3, std::uint16_t> empty(StridedPositions{nullptr, stride, 0}, 0, nullptr, 0);
   CHECK(empty.triangle_count() == 0);
   CHECK(empty.select_visible(cams[0]).triangles.empty());
   return cullkit_test::report("test_nci_mesh_input");

@@ -9,6 +9,7 @@
 
 #include "check.hpp"
 #include "nci_test_util.hpp"
+#include "nci_index.hpp"
 
 using namespace cullkit;
 using cullkit::support::Scene;
@@ -16,8 +17,8 @@ using cullkit::support::Scene;
 int main() {
   const Scene city = support::make_city(41, 2);
   const Scene object = support::make_office(42, 1, 1);  // a furnished room as the moving object
-  const NormalClassIndex<glm::vec3> static_index(city.mesh());
-  const NormalClassIndex<glm::vec3> object_index(object.mesh());
+  const nci_test::TestIndex<glm::vec3> static_index(city.mesh());
+  const nci_test::TestIndex<glm::vec3> object_index(object.mesh());
   const glm::vec3 oc = object.bounds.center();
   int checked = 0, ties = 0, object_pixels = 0;
   for (int frame = 0; frame < 6; ++frame) {

@@ -29,6 +29,7 @@
 
 #include "check.hpp"
 #include "nci_test_util.hpp"
+#include "nci_index.hpp"
 
 using namespace cullkit;
 using cullkit::support::Scene;
@@ -156,7 +157,7 @@ int main() {
   const Scene city = support::make_city(41, 2);
   const Scene pil = pillar();
   const Scene room = support::make_office(42, 1, 1);
-  const Index city_index(city.mesh());
+  const nci_test::TestIndex<glm::vec3> city_index(city.mesh());
   const Index pillar_index(pil.mesh());
   const Index room_index(room.mesh());
   const Scene* locals[2] = {&pil, &room};

@@ -20,6 +20,7 @@
 
 #include "check.hpp"
 #include "nci_double_cast.hpp"
+#include "nci_index.hpp"
 
 using namespace cullkit;
 
@@ -77,7 +78,7 @@ Selection select_with_object(const Camera& cam, const std::vector<glm::vec3>& sc
   NciParams params;
   params.threads = 1;
   const std::vector<std::uint32_t> idx = {0, 1, 2};
-  const Index scene({scene_vertices.data(), scene_vertices.size(), scene_indices.data(), scene_indices.size()}, params);
+  const nci_test::TestIndex<glm::vec3> scene({scene_vertices.data(), scene_vertices.size(), scene_indices.data(), scene_indices.size()}, params);
   const Index object({object_vertices.data(), 3, idx.data(), 3}, params);
   const NciMovingObject<Index> mover{&object, m, 7u};
   Selection s;

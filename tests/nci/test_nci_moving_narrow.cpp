@@ -35,6 +35,7 @@
 
 #include "check.hpp"
 #include "nci_test_util.hpp"
+#include "nci_index.hpp"
 
 using namespace cullkit;
 using cullkit::support::Scene;
@@ -81,8 +82,8 @@ int main() {
   const Scene forest = subdivided(support::make_forest(5, 12, 20), 2);
   const Scene room = subdivided(support::make_office(42, 1, 1), 3);  // one furnished room, 6 x 5 x 3 m
   const Scene patch = subdivided(support::make_forest(9, 2, 2), 3);  // 8 x 8 m of terrain with two trees
-  const NormalClassIndex<glm::vec3> room_index(room.mesh());
-  const NormalClassIndex<glm::vec3> patch_index(patch.mesh());
+  const nci_test::TestIndex<glm::vec3> room_index(room.mesh());
+  const nci_test::TestIndex<glm::vec3> patch_index(patch.mesh());
   const Scene* const locals[2] = {&room, &patch};
   const glm::vec3 fc = forest.bounds.center();
   const glm::vec3 fe = forest.bounds.extent();
@@ -101,7 +102,7 @@ int main() {
     Scene s = forest;
     for (auto& p : s.positions) p += shift;
     s.bounds = Aabb{forest.bounds.min + shift, forest.bounds.max + shift};
-    const NormalClassIndex<glm::vec3> index(s.mesh());
+    const nci_test::TestIndex<glm::vec3> index(s.mesh());
 
     // The room sunk a metre into the ground near the forest's middle, turned and tilted; the patch
     // floating above one of its corners, tilted the other way. Both are built around their centres.

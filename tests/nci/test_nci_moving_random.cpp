@@ -26,6 +26,7 @@
 #include "check.hpp"
 #include "nci_double_cast.hpp"
 #include "nci_test_util.hpp"
+#include "nci_index.hpp"
 
 using namespace cullkit;
 
@@ -143,7 +144,7 @@ void trial(std::uint64_t seed, Counts& counts) {
   NciParams params;
   params.threads = 1;
   params.classes = 4;  // a few dozen triangles per index: the build's normal lookup would dominate the test's time
-  const Index static_index({svert.data(), svert.size(), sidx.data(), sidx.size()}, params);
+  const nci_test::TestIndex<glm::vec3> static_index({svert.data(), svert.size(), sidx.data(), sidx.size()}, params);
   // Two objects.
   const bool mirror = rng.uniform(0, 1) < 0.5;
   std::vector<std::vector<glm::vec3>> local(2);

@@ -19,6 +19,7 @@
 
 #include "check.hpp"
 #include "nci_test_util.hpp"
+#include "nci_index.hpp"
 
 using namespace cullkit;
 using cullkit::support::Scene;
@@ -39,7 +40,7 @@ void run(const std::string& label, const Scene& base, const std::vector<float>& 
     for (auto& p : s.positions) p += shift;
     s.bounds = Aabb{b0.min + shift, b0.max + shift};
     const glm::vec3 c = b0.center() + shift;
-    const NormalClassIndex<glm::vec3> index(s.mesh());
+    const nci_test::TestIndex<glm::vec3> index(s.mesh());
     oracle::EmbreeScene embree;
     embree.add_mesh(s.positions.data(), s.positions.size(), s.indices.data(), s.indices.size());
     embree.commit();

@@ -13,6 +13,7 @@
 
 #include "check.hpp"
 #include "nci_test_util.hpp"
+#include "nci_index.hpp"
 
 using namespace cullkit;
 using cullkit::support::Scene;
@@ -32,7 +33,7 @@ void check_scene(const std::string& label, const Scene& scene, int w, int h) {
   oracle::EmbreeScene embree;
   embree.add_mesh(scene.positions.data(), scene.positions.size(), scene.indices.data(), scene.indices.size());
   embree.commit();
-  const NormalClassIndex<glm::vec3> index(scene.mesh());
+  const nci_test::TestIndex<glm::vec3> index(scene.mesh());
   std::size_t tested = 0, visible = 0;
   NciContext ctx;
   const auto cams = bench_views(scene, w, h);

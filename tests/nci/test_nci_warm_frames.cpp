@@ -16,6 +16,7 @@
 #include "check.hpp"
 #include "count_allocations.hpp"
 #include "nci_test_util.hpp"
+#include "nci_index.hpp"
 
 
 using namespace cullkit;
@@ -103,7 +104,7 @@ struct Reverse {
   }
 };
 
-Answer select(const NormalClassIndex<glm::vec3>& index, const Camera& cam) {
+Answer select(const nci_test::TestIndex<glm::vec3>& index, const Camera& cam) {
   Answer a;
   NciContext ctx;
   index.select_visible(cam, ctx, a.set, &a.pixels);
@@ -114,7 +115,7 @@ void test_warm_frames_allocate_nothing(const Scene& city, const std::vector<Came
   for (unsigned threads : {0u, 1u, 3u}) {
     NciParams params;
     params.threads = threads;
-    const NormalClassIndex<glm::vec3> index(city.mesh(), params);
+    const nci_test::TestIndex<glm::vec3> index(city.mesh(), params);
     NciContext ctx;
     VisibleSet set;
     NciPixels pixels;
@@ -148,13 +149,13 @@ void test_warm_frames_allocate_nothing(const Scene& city, const std::vector<Came
 void test_task_runner(const Scene& city, const std::vector<Camera>& cams) {
   NciParams serial;
   serial.threads = 1;
-  const NormalClassIndex<glm::vec3> reference(city.mesh(), serial);
+  const nci_test::TestIndex<glm::vec3> reference(city.mesh(), serial);
   for (unsigned threads : {0u, 2u, 5u}) {
     JobSystem jobs(3);
     NciParams params;
     params.threads = threads;
     params.task_runner = TaskRunner{&JobSystem::dispatch, &jobs};
-    const NormalClassIndex<glm::vec3> index(city.mesh(), params);
+    const nci_test::TestIndex<glm::vec3> index(city.mesh(), params);
     // The build's tasks go to the job system too (build_threads 0: every hardware thread).
     if (std::thread::hardware_concurrency() > 1)
       CHECK_MSG(jobs.dispatches > 0, "threads=%u: the build did not use the task runner", threads);
@@ -162,7 +163,7 @@ void test_task_runner(const Scene& city, const std::vector<Camera>& cams) {
     Reverse reverse;
     NciParams reversed = params;
     reversed.task_runner = TaskRunner{&Reverse::dispatch, &reverse};
-    const NormalClassIndex<glm::vec3> reverse_index(city.mesh(), reversed);
+    const nci_test::TestIndex<glm::vec3> reverse_index(city.mesh(), reversed);
     const unsigned want = threads != 0 ? threads : std::max(1u, std::thread::hardware_concurrency());
     int disagree = 0;
     for (const Camera& cam : cams) {
@@ -189,7 +190,7 @@ void test_task_runner(const Scene& city, const std::vector<Camera>& cams) {
 void test_concurrent_callers(const Scene& city, const std::vector<Camera>& cams) {
   NciParams params;
   params.threads = 2;
-  const NormalClassIndex<glm::vec3> index(city.mesh(), params);
+  const nci_test::TestIndex<glm::vec3> index(city.mesh(), params);
   std::vector<Answer> expect;
   for (const Camera& cam : cams) expect.push_back(select(index, cam));
   std::atomic<int> disagree{0};

@@ -20,13 +20,7 @@ cullkit_add_test(test_nci_moving_affine SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_n
 cullkit_add_test(test_nci_moving_far_plane SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_moving_far_plane.cpp
                  LIBS Threads::Threads)
 cullkit_add_test(test_nci_moving_random SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_moving_random.cpp LIBS Threads::Threads)
-# Every NormalClassIndex test takes env CULLKIT_NCI_CROWDED_PATH (walk, rays, auto) to run with that
-# NciParams::crowded_path whatever its own parameters say (the paths must give the same answers).
-foreach(t test_nci_bruteforce test_nci_embree test_nci_input test_nci_moving test_nci_layout test_nci_footprint
-          test_nci_narrow test_nci_precision test_nci_moving_narrow test_nci_warm_frames test_nci_mesh_input
-          test_nci_moving_affine test_nci_moving_far_plane test_nci_moving_random)
-  if(TARGET ${t})
-    target_compile_definitions(${t} PRIVATE CULLKIT_NCI_CROWDED_PATH_FROM_ENV=1)
-  endif()
-endforeach()
+# Every NormalClassIndex test builds its static index through nci_test::TestIndex (nci_index.hpp),
+# which takes env CULLKIT_NCI_CROWDED_PATH (walk, rays, auto) as NciParams::crowded_path whatever the
+# test's own parameters say (the paths must give the same answers).
 cullkit_add_test(test_nci_crowded SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_nci_crowded.cpp EMBREE LIBS Threads::Threads)
