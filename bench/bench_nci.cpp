@@ -12,7 +12,7 @@
 //     (support::make_foliage, 10.1M triangles, mostly leaves of 0.12-0.24 m; seen whole from outside
 //     and straight down from high above). The racing peer is a plain Embree scene (default flags: not robust, two-sided): the
 //     fast configuration a user would pick. After each race, one `nci_cells` line per crowded path:
-//     the (tile, cell) pairs it walked and the tiles it cast through the frame hierarchy, and its
+//     the (tile, cell) pairs it walked and the tiles it cast through the triangle hierarchy, and its
 //     tested count; with two or more paths, one `nci_path_ratio` line per path: its median over the
 //     first path's; and one `nci_crowding` line: triangles per pixel of the scene box's rectangle.
 // Flags: --no-big, --only-big (both big scenes), --only-foliage, --no-precision, --quick (precision at the default parameters only,
@@ -51,7 +51,7 @@
 #include <embree_oracle.hpp>
 
 #include <cullkit/normal_class_index.hpp>
-#include <cullkit/detail/nci/frame_bvh.hpp>
+#include <cullkit/detail/nci/triangle_bvh.hpp>
 #include <cullkit/detail/nci/frame_cast.hpp>
 #include <cullkit_support/scene.hpp>
 
@@ -451,7 +451,7 @@ int profile(const std::string& name, int view, int frames) {
 }
 
 
-// --frame-race SCENE [REPS]: the frame hierarchy's cast alone (nearest front-facing watertight hit
+// --frame-race SCENE [REPS]: the triangle hierarchy's cast alone (nearest front-facing watertight hit
 // per pixel, no edge bands, no screen rectangles: the floor of the crowded path), raced against
 // Embree's single rays and select_visible on each path of --path. Its own hierarchy is built over
 // the mesh with the index's builder; its leaves hold vertex ids in leaf order and positions
@@ -459,7 +459,7 @@ int profile(const std::string& name, int view, int frames) {
 // per-pixel answer (frame_agree) and of the cast's work (frame_stats).
 struct FrameCaster {
   const Scene& s;
-  detail::nci::FrameBvh bvh;
+  detail::nci::TriangleBvh bvh;
   std::vector<std::uint32_t> lv;  // 3 vertex ids per leaf slot
   std::vector<glm::vec3> lpos;    // positions in first use along the slots
   double build_seconds = 0;
@@ -467,7 +467,7 @@ struct FrameCaster {
 
   FrameCaster(const Scene& scene, unsigned threads) : s(scene) {
     const auto t0 = std::chrono::steady_clock::now();
-    std::vector<detail::nci::FrameBvhItem> items(s.triangle_count());
+    std::vector<detail::nci::TriangleBvhItem> items(s.triangle_count());
     for (std::size_t i = 0; i < items.size(); ++i)
       for (int k = 0; k < 3; ++k) {
         const float a = s.positions[s.indices[3 * i]][k], b = s.positions[s.indices[3 * i + 1]][k],
@@ -475,7 +475,7 @@ struct FrameCaster {
         items[i].lo[k] = std::min({a, b, c});
         items[i].hi[k] = std::max({a, b, c});
       }
-    detail::nci::FrameBvhBuilder builder(items, threads);
+    detail::nci::TriangleBvhBuilder builder(items, threads, TaskRunner{});
     builder.traversal_cost = detail::nci::frame_traversal_cost;
     bvh = builder.build();
     build_seconds = seconds_since(t0);

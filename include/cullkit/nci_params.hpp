@@ -117,7 +117,7 @@ struct NciSelectStats {
   /// through a BVH does less work.
   std::size_t triangles_no_pixel = 0;
   std::size_t cells_walked = 0;    ///< (tile, cell) pairs served by the near-to-far walk
-  std::size_t tiles_ray_cast = 0;  ///< tiles whose rays were cast through the frame hierarchy (from the start, or
+  std::size_t tiles_ray_cast = 0;  ///< tiles whose rays were cast through the triangle hierarchy (from the start, or
                                    ///< after their walk met too many triangles)
   int axis = 0;                    ///< grid axis walked
   /// Moving objects whose transform could not be used (singular, NaN or infinite, or projective;

@@ -1,5 +1,5 @@
 // NormalClassIndex on crowded views (many triangles per pixel), under each NciCrowdedPath: the
-// near-to-far walk only, every tile's rays cast through the frame hierarchy only, and the per-frame
+// near-to-far walk only, every tile's rays cast through the triangle hierarchy only, and the per-frame
 // choice. On support::make_crowd scenes (a field of small boxes, overhanging slabs and sliver
 // tufts, and the same field beside a plaza of large boxes), cameras seeing the field whole, grazing
 // it, inside it among the boxes, and views holding both parts:

@@ -196,7 +196,7 @@ void test_select_stats() {
   const nci_test::BruteHits brute = nci_test::brute_force<float>(field, cam);
   CHECK(px.triangle == brute.tri);
   // Met also counts triangles of the tile's cells outside its beam (not in triangles_no_pixel). The
-  // walk meets most specks; cast through the frame hierarchy (NciCrowdedPath), only those in the
+  // walk meets most specks; cast through the triangle hierarchy (NciCrowdedPath), only those in the
   // leaves a ray reaches.
   std::printf("specks: met %zu, no pixel %zu, tested %zu, tiles cast %zu\n", ctx.stats.triangles_met,
               ctx.stats.triangles_no_pixel, out.triangles_tested, ctx.stats.tiles_ray_cast);

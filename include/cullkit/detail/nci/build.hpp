@@ -15,7 +15,7 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
-#include "frame_bvh.hpp"
+#include "triangle_bvh.hpp"
 #include "kmeans.hpp"
 #include "overlap.hpp"
 #include "../parallel.hpp"
@@ -428,10 +428,10 @@ inline void make_chunk_boxes(IndexData& data, const std::vector<std::uint32_t>& 
 // Narrow forms: 16-bit vertex ids when there are at most 65536 vertices; cell entry ranges
 // in 16 bits relative to their class when every class has at most 65535 entries (one extra
 // end per class: class k's cells c read ranges at c + k and c + k + 1).
-// The frame hierarchy over every kept triangle (internal ids), its subtrees built on the worker pool.
+// The triangle hierarchy over every kept triangle (internal ids), its subtrees built on the worker pool.
 inline void make_frame_hierarchy(IndexData& data) {
   const std::size_t n = data.triangle_count();
-  std::vector<FrameBvhItem> items(n);
+  std::vector<TriangleBvhItem> items(n);
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t tri = static_cast<std::uint32_t>(i);
     const glm::vec3 &a = data.corner(tri, 0), &b = data.corner(tri, 1), &c = data.corner(tri, 2);
@@ -440,10 +440,10 @@ inline void make_frame_hierarchy(IndexData& data) {
       items[i].hi[k] = std::max({a[k], b[k], c[k]});
     }
   }
-  FrameBvhBuilder builder(items, detail::resolve_threads(data.params.build_threads, 16), data.params.task_runner);
+  TriangleBvhBuilder builder(items, detail::resolve_threads(data.params.build_threads, 16), data.params.task_runner);
   builder.traversal_cost = frame_traversal_cost;
-  data.frame = builder.build();
-  data.frame.nodes.shrink_to_fit();
+  data.bvh = builder.build();
+  data.bvh.nodes.shrink_to_fit();
 }
 
 inline void narrow_forms(IndexData& data) {

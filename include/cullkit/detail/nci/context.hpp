@@ -84,7 +84,7 @@ struct Worker {
   std::vector<Candidate> candidates;
   std::vector<std::uint16_t> active_classes;
   std::vector<TileState> tile_rays;  // empty or one: the worker's tile scratch
-  std::vector<FrameSlot> frame_slots;  // the packets of a tile cast through the frame hierarchy
+  std::vector<FrameSlot> frame_slots;  // the packets of a tile cast through the triangle hierarchy
   std::vector<std::uint8_t> class_on;  // per class: active in the tile being cast (frame_tile.hpp)
   NciSelectStats stats;
 };

@@ -1,5 +1,5 @@
 // cullkit/detail/nci/frame_cast.hpp: casting packets of up to 64 rays from the eye through the
-// frame hierarchy (frame_bvh.hpp). Per node, each ray of the packet still reaching it takes one
+// triangle hierarchy (triangle_bvh.hpp). Per node, each ray of the packet still reaching it takes one
 // 4-wide box test over the children; the children reached are entered nearest first, each with the
 // rays that reach it, and a ray leaves a subtree once its nearest solid hit lies before the
 // subtree's box. Leaves go to the caller's test.
@@ -19,7 +19,7 @@
 
 #include "../bits.hpp"
 #include "../../config.hpp"
-#include "frame_bvh.hpp"
+#include "triangle_bvh.hpp"
 #include "tile_state.hpp"
 
 #if CULLKIT_HAS_SSE2
@@ -69,13 +69,13 @@ struct FrameCursor {
     float near;  // the smallest entry distance of its rays into its box (a lower bound)
     std::uint32_t carry;  // leaves: what the last preparation step hands to the next one
   };
-  // Depth of the tree is at most FrameBvhBuilder::depth_limit plus a balanced tail (below 64);
+  // Depth of the tree is at most TriangleBvhBuilder::depth_limit plus a balanced tail (below 64);
   // each level leaves at most three siblings on the stack.
   Entry stack[256];
   int top = 0;
-  void start(const FrameBvh& bvh, std::uint64_t live) noexcept {
+  void start(const TriangleBvh& bvh, std::uint64_t live) noexcept {
     top = 0;
-    if (bvh.root != FrameBvhNode::empty && live) stack[top++] = Entry{bvh.root, 0u, live, 0.0f, 0u};
+    if (bvh.root != TriangleBvhNode::empty && live) stack[top++] = Entry{bvh.root, 0u, live, 0.0f, 0u};
   }
   [[nodiscard]] bool done() const noexcept { return top == 0; }
 };
@@ -92,7 +92,7 @@ struct FrameSlot {
 
 // The rays of `mask` whose boxes test the 4 children of `node`: cm[j] the rays reaching child j,
 // nv[j] the smallest entry distance among them.
-CULLKIT_FORCEINLINE void frame_node_test(const FrameBvhNode& node, const float eye[3], const FramePacket& p,
+CULLKIT_FORCEINLINE void frame_node_test(const TriangleBvhNode& node, const float eye[3], const FramePacket& p,
                                          std::uint64_t mask, std::uint64_t cm[4], float nv[4]) {
   const float lo_scale = 1.0f - frame_t_slack, hi_scale = 1.0f + frame_t_slack;
 #if CULLKIT_HAS_SSE2
@@ -217,13 +217,13 @@ CULLKIT_FORCEINLINE void frame_node_test(const FrameBvhNode& node, const float e
 // rays reach, nearest last (popped first), prefetching them (`leaf.prefetch(first, count)` for
 // leaves).
 template <class Leaf>
-CULLKIT_FORCEINLINE void frame_cursor_step(const FrameBvh& bvh, const float eye[3], FramePacket& p, FrameCursor& c,
+CULLKIT_FORCEINLINE void frame_cursor_step(const TriangleBvh& bvh, const float eye[3], FramePacket& p, FrameCursor& c,
                                            Leaf& leaf, FrameCastStats& stats) {
   const FrameCursor::Entry e = c.stack[--c.top];
   std::uint64_t mask = e.mask;
   // A leaf's later phases skip the depth cut: only this packet's own leaf tests lower its p.t, and
   // none ran since the cut of its first phase.
-  const bool cut = !FrameBvhNode::is_leaf(e.code) || e.phase == 0;
+  const bool cut = !TriangleBvhNode::is_leaf(e.code) || e.phase == 0;
 #if CULLKIT_HAS_SSE2
   if (cut) {
     // Four rays per compare, over the groups of four that hold rays of the entry (deep in the
@@ -245,8 +245,8 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const FrameBvh& bvh, const float eye[
   }
 #endif
   if (!mask) return;
-  if (FrameBvhNode::is_leaf(e.code)) {
-    const std::uint32_t first = FrameBvhNode::leaf_first(e.code), count = FrameBvhNode::leaf_count(e.code);
+  if (TriangleBvhNode::is_leaf(e.code)) {
+    const std::uint32_t first = TriangleBvhNode::leaf_first(e.code), count = TriangleBvhNode::leaf_count(e.code);
     if (e.phase < Leaf::phases) {
       const std::uint32_t carry = leaf.prepare(first, count, e.phase, e.carry);
       c.stack[c.top++] = FrameCursor::Entry{e.code, e.phase + 1u, mask, e.near, carry};
@@ -256,14 +256,14 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const FrameBvh& bvh, const float eye[
     leaf.test(first, count, mask, e.carry);
     return;
   }
-  const FrameBvhNode& node = bvh.nodes[e.code];
+  const TriangleBvhNode& node = bvh.nodes[e.code];
   ++stats.nodes;
   std::uint64_t cm[4] = {0, 0, 0, 0};
   float nv[4];
   frame_node_test(node, eye, p, mask, cm, nv);
   int order[4], count = 0;
   for (int j = 0; j < 4; ++j) {
-    if (!cm[j] || node.child[j] == FrameBvhNode::empty) continue;
+    if (!cm[j] || node.child[j] == TriangleBvhNode::empty) continue;
     int at = count++;
     while (at > 0 && nv[order[at - 1]] < nv[j]) {
       order[at] = order[at - 1];
@@ -273,8 +273,8 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const FrameBvh& bvh, const float eye[
   }
   for (int q = 0; q < count; ++q) {
     const std::uint32_t code = node.child[order[q]];
-    if (FrameBvhNode::is_leaf(code)) {
-      leaf.prefetch(FrameBvhNode::leaf_first(code), FrameBvhNode::leaf_count(code));
+    if (TriangleBvhNode::is_leaf(code)) {
+      leaf.prefetch(TriangleBvhNode::leaf_first(code), TriangleBvhNode::leaf_count(code));
     } else {
       detail::prefetch(reinterpret_cast<const char*>(bvh.nodes.data() + code));
       detail::prefetch(reinterpret_cast<const char*>(bvh.nodes.data() + code) + 64);

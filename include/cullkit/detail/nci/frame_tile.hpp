@@ -1,4 +1,4 @@
-// cullkit/detail/nci/frame_tile.hpp: one screen tile served by the frame hierarchy instead of the
+// cullkit/detail/nci/frame_tile.hpp: one screen tile served by the triangle hierarchy instead of the
 // grid walk (NciCrowdedPath): the tile's rays are set up as for the walk, cast in packets of 8x8
 // through the hierarchy (frame_cast.hpp), four packets taking turns, and every triangle of a leaf
 // a packet reaches goes through the walk's own cuts and ray step: its grown box against the
@@ -26,7 +26,7 @@ namespace cullkit::detail::nci {
 // few per cent from 4 (72.8-83.4 ms against 69.7-76.9 in alternating runs; 8: within noise of 4).
 inline constexpr int frame_footprint_rays = 4;
 
-// What a leaf of the frame hierarchy does for one packet: prefetch its entries when it is pushed;
+// What a leaf of the triangle hierarchy does for one packet: prefetch its entries when it is pushed;
 // phase 0: load them and prefetch the triangles' vertex ids and cached rectangles; phase 1: load
 // the vertex ids and prefetch the corners; then the test.
 struct FrameLeaf {
@@ -62,14 +62,14 @@ struct FrameLeaf {
     return run_on;
   }
 
-  void prefetch(std::uint32_t first, std::uint32_t) const { detail::prefetch(data.frame.tris.data() + first); }
+  void prefetch(std::uint32_t first, std::uint32_t) const { detail::prefetch(data.bvh.tris.data() + first); }
 
   // Phase 0 finds the triangles of active classes (bit q of the carry: triangle first + q) and
   // prefetches their vertex ids; phase 1 prefetches their corners.
   std::uint32_t prepare(std::uint32_t first, std::uint32_t count, std::uint32_t phase, std::uint32_t carry) {
     if (phase == 0) carry = 0;
     for (std::uint32_t q = 0; q < count; ++q) {
-      const std::uint32_t tri = data.frame.tris[first + q];
+      const std::uint32_t tri = data.bvh.tris[first + q];
       const std::size_t v = 3 * std::size_t{tri};
       if (phase == 0) {
         if (!active(tri)) continue;
@@ -114,7 +114,7 @@ struct FrameLeaf {
   // meets its grown box (then it lies between the packet's pixel centres).
   bool make_item(std::uint32_t slot_index, std::uint64_t mask, Item& it) const {
     const float* dir = slot->dir;
-    it.tri = data.frame.tris[slot_index];
+    it.tri = data.bvh.tris[slot_index];
     float k = std::numeric_limits<float>::infinity();
     for (int c = 0; c < 3; ++c) {
       const glm::vec3& v = data.corner(it.tri, c);
@@ -151,8 +151,8 @@ struct FrameLeaf {
     // First the box test against the packet's rays: the packet's depths (p.t) do not change
     // during a leaf's test, so it may come before the order is known, and the triangles between
     // pixel centres (about half of those met on a crowded view) take no other step.
-    Item item[FrameBvhNode::leaf_max];
-    std::uint8_t order[FrameBvhNode::leaf_max];
+    Item item[TriangleBvhNode::leaf_max];
+    std::uint8_t order[TriangleBvhNode::leaf_max];
     std::uint32_t kept = 0;
     for (std::uint32_t q = 0; q < count; ++q) {
       if (!(carry >> q & 1u)) continue;  // a back face for every ray of the tile
@@ -238,14 +238,14 @@ inline bool open_frame_block(const IndexData& data, const TileState& r, const Ma
       packet |= static_cast<std::uint64_t>(bits) << (8 * j);
     }
     if (!packet) continue;
-    slot.cur.start(data.frame, packet);
+    slot.cur.start(data.bvh, packet);
     slot.busy = true;
     return true;
   }
   return false;
 }
 
-// The live rays of a tile (`live`, their hits so far in `r`) cast through the frame hierarchy in
+// The live rays of a tile (`live`, their hits so far in `r`) cast through the triangle hierarchy in
 // packets of 8x8, four taking turns, triangles of the classes in worker.active_classes only. Every
 // hit they can still take is found: a packet's rays start from their solid hits.
 inline void cast_live_rays(const IndexData& data, const ViewSetup& f, int x0, int y0, int tw, int th, const Mask* live,
@@ -267,7 +267,7 @@ inline void cast_live_rays(const IndexData& data, const ViewSetup& f, int x0, in
     for (FrameSlot& slot : worker.frame_slots) {
       if (!slot.busy) continue;
       leaf.slot = &slot;
-      frame_cursor_step(data.frame, eye, slot.p, slot.cur, leaf, cast);
+      frame_cursor_step(data.bvh, eye, slot.p, slot.cur, leaf, cast);
       if (!slot.cur.done()) continue;
       slot.busy = false;
       if (!open_frame_block(data, r, live, tw, th, next, slot)) --active;
@@ -276,7 +276,7 @@ inline void cast_live_rays(const IndexData& data, const ViewSetup& f, int x0, in
   worker.stats.triangles_met += met;
 }
 
-// One screen tile (x0, y0)..(x1, y1) through the frame hierarchy: the same outputs as
+// One screen tile (x0, y0)..(x1, y1) through the triangle hierarchy: the same outputs as
 // process_tile (slice_walk.hpp).
 inline void process_tile_frame(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
                                Worker& worker, Scratch& scratch) {

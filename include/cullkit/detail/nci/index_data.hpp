@@ -18,7 +18,7 @@
 #include <glm/vec3.hpp>
 
 #include "../../geometry/aabb.hpp"
-#include "frame_bvh.hpp"
+#include "triangle_bvh.hpp"
 #include "watertight.hpp"
 #include "../../nci_params.hpp"
 
@@ -80,9 +80,9 @@ struct IndexData {
   // 0.67-0.68 of the walk's time at 2.1 triangles per pixel, 0.88-0.89 at 1.7 and at 0.83, 1.22-1.27
   // at 0.66 and 1.0-1.76 from 0.07 to 0.33 (0.15-0.24 at 24-63 before the pre-test).
   static constexpr double cast_crowding = 0.75;
-  // One hierarchy over every kept triangle (frame_bvh.hpp): the tiles of a crowded frame cast their
+  // One hierarchy over every kept triangle (triangle_bvh.hpp): the tiles of a crowded frame cast their
   // rays through it (frame_tile.hpp) instead of walking the grid. Leaves name internal ids.
-  FrameBvh frame;
+  TriangleBvh bvh;
   // Width of the ray test's edge band (detail::watertight_hit_band) in units of the coordinates.
   float band = edge_band_units * 0x1p-24f;
 
@@ -111,7 +111,7 @@ struct IndexData {
            bytes(cell_tri_begin) + bytes(cell_tris) + bytes(cell_tris16) + bytes(chunk_box) + bytes(class_tri_begin) +
            bytes(grid_base) + bytes(slice_rows) + bytes(row_coord) + bytes(row_begin) + bytes(cell_col) +
            bytes(cell_id) + bytes(cell_id16) + bytes(grid_shift) + bytes(class_cell_base) + bytes(class_of) +
-           frame.memory_bytes();
+           bvh.memory_bytes();
   }
 
  private:

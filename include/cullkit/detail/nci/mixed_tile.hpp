@@ -1,5 +1,5 @@
 // cullkit/detail/nci/mixed_tile.hpp: one screen tile walked until it turns out crowded, then its
-// unfinished rays cast through the frame hierarchy. A frame that is not crowded as a whole (the eye
+// unfinished rays cast through the triangle hierarchy. A frame that is not crowded as a whole (the eye
 // inside the scene, or few triangles per pixel) may still hold a few tiles that look across many
 // small, distant triangles, most of them between pixel centres (an arena's far stands seen from its
 // floor); the walk pays for each of them, the hierarchy per ray.
@@ -23,7 +23,7 @@ inline constexpr double tile_cast_crowding = 4.0;
 }
 
 // One screen tile (x0, y0)..(x1, y1): walked, and when the walk has met more than its budget before
-// every ray finished, the rest of its live rays cast through the frame hierarchy from the hits the
+// every ray finished, the rest of its live rays cast through the triangle hierarchy from the hits the
 // walk found. The same outputs as process_tile: both paths keep every hit a ray can still take.
 inline void process_tile_mixed(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1, TileState& r,
                                Worker& worker, Scratch& scratch) {

@@ -76,12 +76,12 @@ inline void prepare_workers(const IndexData& data, Scratch& scratch, unsigned co
   }
 }
 
-// Whether the frame's tiles are cast through the frame hierarchy (frame_tile.hpp) rather than
+// Whether the frame's tiles are cast through the triangle hierarchy (frame_tile.hpp) rather than
 // walked: never under walk_only, always under rays_only, and under automatic when the view is
 // crowded: the eye outside the scene box (grown by the grid's inflation) and at least
 // `IndexData::cast_crowding` triangles per pixel of the box's screen rectangle (f.box_rect).
 [[nodiscard]] inline bool cast_frame(const IndexData& data, const ViewSetup& f) noexcept {
-  if (data.frame.root == FrameBvhNode::empty) return false;
+  if (data.bvh.root == TriangleBvhNode::empty) return false;
   switch (data.params.crowded_path) {
     case NciCrowdedPath::walk_only: return false;
     case NciCrowdedPath::rays_only: return true;
@@ -154,7 +154,7 @@ inline void merge_workers(const IndexData& data, NciContext& context, Scratch& s
     // Every worker's lists grow to what any worker needed (the extras to this call's total), so
     // a later frame that spreads the same tiles over the workers differently does not allocate.
     std::size_t cand = 0, unsure = 0;
-    bool frames = false;  // some worker cast a tile through the frame hierarchy: all get its packets
+    bool frames = false;  // some worker cast a tile through the triangle hierarchy: all get its packets
     for (unsigned i = 0; i < count; ++i) {
       cand = std::max(cand, scratch.workers[i].candidates.capacity());
       unsure = std::max(unsure, scratch.workers[i].edge_hits.capacity());
@@ -247,7 +247,7 @@ CULLKIT_CORE_FN void select_frame(const IndexData& data, const FrameCamera& came
     frame.initial_depth = initial_depth;
     frame.initial_solid = initial_solid;
     frame.cast_frame = cast_frame(data, frame);
-    frame.cast_crowded_tiles = !frame.cast_frame && data.frame.root != FrameBvhNode::empty &&
+    frame.cast_crowded_tiles = !frame.cast_frame && data.bvh.root != TriangleBvhNode::empty &&
                                data.params.crowded_path == NciCrowdedPath::automatic;
     const int tile = frame.tile = tile_edge(data, width, height);
     context.stats.axis = frame.axis;

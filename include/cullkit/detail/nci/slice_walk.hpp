@@ -502,7 +502,7 @@ inline void collect_edge_band(const ViewSetup& f, const TileState& r, int x0, in
     }
 }
 
-// The start of a tile on either path (the walk here, the frame hierarchy in frame_tile.hpp): false
+// The start of a tile on either path (the walk here, the triangle hierarchy in frame_tile.hpp): false
 // when the tile lies off the scene (its pixels are then written); else its rays are set up in `r`
 // and `m`, and `cone_sum` is the sum of their directions.
 [[nodiscard]] inline bool start_tile(const IndexData& data, const ViewSetup& f, int x0, int y0, int x1, int y1,

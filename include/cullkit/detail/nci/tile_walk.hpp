@@ -1,6 +1,6 @@
 // cullkit/detail/nci/tile_walk.hpp: what one walk of a screen tile shares between its steps
 // (slice_walk.hpp): the TileWalk state; test_triangle, the ray test of an admitted triangle against
-// the tile's live rays; and test_ray, the per-ray step it shares with the frame hierarchy's leaves
+// the tile's live rays; and test_ray, the per-ray step it shares with the triangle hierarchy's leaves
 // (frame_tile.hpp).
 #pragma once
 
@@ -23,7 +23,7 @@ namespace cullkit::detail::nci {
 // The ray test of triangle `tri` (corners a, b, c relative to the eye, `mag` their largest
 // coordinates) on the tile's ray i, and what it changes: the ray's first hit (ties to the lower
 // mesh index), its solid hit, and an edge-band record. Both paths (the walk's test_triangle and
-// the frame hierarchy's leaves, frame_tile.hpp) test through it.
+// the triangle hierarchy's leaves, frame_tile.hpp) test through it.
 CULLKIT_FORCEINLINE void test_ray(const IndexData& data, TileState& r, Worker& worker, int i, std::uint32_t tri,
                                   const float a[3], const float b[3], const float c[3], const float mag[3]) {
   ++worker.stats.ray_tests;

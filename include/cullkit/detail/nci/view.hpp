@@ -56,7 +56,7 @@ struct ViewSetup {
   // holds every triangle's rectangle. A tile wholly outside it has no ray to set up.
   Rect box_rect{Rect::full, 0, 0, 0};
   int tile = 32;  // the tile edge of this call
-  bool cast_frame = false;  // tiles are cast through the frame hierarchy (frame_tile.hpp), not walked
+  bool cast_frame = false;  // tiles are cast through the triangle hierarchy (frame_tile.hpp), not walked
   bool cast_crowded_tiles = false;  // walked tiles that turn out crowded are cast (mixed_tile.hpp)
 };
 

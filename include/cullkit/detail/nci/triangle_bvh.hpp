@@ -1,9 +1,9 @@
-// cullkit/detail/nci/frame_bvh.hpp: one 4-wide bounding-volume hierarchy over every triangle of
+// cullkit/detail/nci/triangle_bvh.hpp: one 4-wide bounding-volume hierarchy over every triangle of
 // the index (binned surface-area heuristic), for the crowded-frame path: a screen tile's rays are
 // cast through it together (frame_cast.hpp) where the walk would meet many triangles per pixel.
 //
 // Nodes hold four child boxes by axis over the lanes (the layout a 4-wide box test loads). Leaves
-// are runs of FrameBvh::tris, the triangles in the tree's own order.
+// are runs of TriangleBvh::tris, the triangles in the tree's own order.
 #pragma once
 
 #include <algorithm>
@@ -16,7 +16,7 @@
 
 namespace cullkit::detail::nci {
 
-struct alignas(16) FrameBvhNode {
+struct alignas(16) TriangleBvhNode {
   float lo[3][4];
   float hi[3][4];
   std::uint32_t child[4];
@@ -33,24 +33,24 @@ struct alignas(16) FrameBvhNode {
   }
 };
 
-struct FrameBvh {
-  std::vector<FrameBvhNode> nodes;
+struct TriangleBvh {
+  std::vector<TriangleBvhNode> nodes;
   std::vector<std::uint32_t> tris;  // the triangles, leaf after leaf
-  std::uint32_t root = FrameBvhNode::empty;
+  std::uint32_t root = TriangleBvhNode::empty;
   float root_lo[3] = {0, 0, 0}, root_hi[3] = {0, 0, 0};
   [[nodiscard]] std::size_t memory_bytes() const noexcept {
-    return nodes.capacity() * sizeof(FrameBvhNode) + tris.capacity() * sizeof(std::uint32_t);
+    return nodes.capacity() * sizeof(TriangleBvhNode) + tris.capacity() * sizeof(std::uint32_t);
   }
 };
 
-// The build's cost of a traversal step against one triangle test (FrameBvhBuilder::traversal_cost)
+// The build's cost of a traversal step against one triangle test (TriangleBvhBuilder::traversal_cost)
 // for the index's hierarchy. On the 10.1M city seen whole (nearest hits only, one thread) 1, 2 and 3
 // cast within 3 % of each other; 2 and 3 take half the nodes of 1 (18.0 and 17.2 bytes per
 // triangle against 29.6, with 128-byte nodes).
 inline constexpr float frame_traversal_cost = 3.0f;
 
 // A triangle's box, handed to the builder by triangle id.
-struct FrameBvhItem {
+struct TriangleBvhItem {
   float lo[3], hi[3];
 };
 
@@ -58,16 +58,16 @@ struct FrameBvhItem {
 // until it has four or none can be split. Leaves hold at most leaf_max triangles and are cut where
 // the heuristic says a leaf costs less than a split. The two top levels' subtrees are built on
 // `threads` threads and spliced in subtree order, so the tree does not depend on the thread count.
-class FrameBvhBuilder {
+class TriangleBvhBuilder {
  public:
-  FrameBvhBuilder(const std::vector<FrameBvhItem>& items, unsigned threads, const TaskRunner& runner)
+  TriangleBvhBuilder(const std::vector<TriangleBvhItem>& items, unsigned threads, const TaskRunner& runner)
       : items_(items), threads_(threads), runner_(runner) {}
 
   // The cost of a traversal step against one triangle test, for the leaf / split choice.
   float traversal_cost = 1.0f;
 
-  FrameBvh build() {
-    FrameBvh out;
+  TriangleBvh build() {
+    TriangleBvh out;
     const std::size_t n = items_.size();
     out.tris.resize(n);
     for (std::size_t i = 0; i < n; ++i) out.tris[i] = static_cast<std::uint32_t>(i);
@@ -82,12 +82,12 @@ class FrameBvhBuilder {
     // on its own thread, spliced below the top in range order.
     std::vector<Range> tops;
     split_into(all, 16, tops);
-    std::vector<std::vector<FrameBvhNode>> sub(tops.size());
+    std::vector<std::vector<TriangleBvhNode>> sub(tops.size());
     std::vector<std::uint32_t> sub_root(tops.size());
     struct Job {
-      FrameBvhBuilder* self;
+      TriangleBvhBuilder* self;
       std::vector<Range>* tops;
-      std::vector<std::vector<FrameBvhNode>>* sub;
+      std::vector<std::vector<TriangleBvhNode>>* sub;
       std::vector<std::uint32_t>* sub_root;
       std::size_t workers;
     } job{this, &tops, &sub, &sub_root, std::max<std::size_t>(1, std::min<std::size_t>(threads_, tops.size()))};
@@ -96,7 +96,7 @@ class FrameBvhBuilder {
       for (std::size_t t = k; t < b.tops->size(); t += b.workers) (*b.sub_root)[t] = b.self->make((*b.tops)[t], (*b.sub)[t]);
     }, &job);
     // Top nodes: the whole set cut into `tops` by the same rule, rebuilt over the ranges' roots.
-    std::vector<FrameBvhNode>& nodes = out.nodes;
+    std::vector<TriangleBvhNode>& nodes = out.nodes;
     std::size_t next = 0;
     out.root = make_top(all, tops, sub, sub_root, nodes, next);
     return out;
@@ -108,7 +108,7 @@ class FrameBvhBuilder {
     float lo[3], hi[3];
   };
   static constexpr int bins = 16;
-  const std::vector<FrameBvhItem>& items_;
+  const std::vector<TriangleBvhItem>& items_;
   unsigned threads_;
   TaskRunner runner_;
   std::uint32_t* ids_ = nullptr;
@@ -125,7 +125,7 @@ class FrameBvhBuilder {
       r.hi[a] = -std::numeric_limits<float>::infinity();
     }
     for (std::size_t i = b; i < e; ++i) {
-      const FrameBvhItem& it = items_[ids_[i]];
+      const TriangleBvhItem& it = items_[ids_[i]];
       for (int a = 0; a < 3; ++a) {
         r.lo[a] = std::min(r.lo[a], it.lo[a]);
         r.hi[a] = std::max(r.hi[a], it.hi[a]);
@@ -139,14 +139,14 @@ class FrameBvhBuilder {
   bool split(const Range& r, Range& left, Range& right, bool median = false) const {
     const std::size_t n = r.e - r.b;
     if (n <= 1) return false;
-    if (median && n > static_cast<std::size_t>(FrameBvhNode::leaf_max)) return median_split(r, left, right);
+    if (median && n > static_cast<std::size_t>(TriangleBvhNode::leaf_max)) return median_split(r, left, right);
     float cl[3], ch[3];
     for (int a = 0; a < 3; ++a) {
       cl[a] = std::numeric_limits<float>::infinity();
       ch[a] = -cl[a];
     }
     for (std::size_t i = r.b; i < r.e; ++i) {
-      const FrameBvhItem& it = items_[ids_[i]];
+      const TriangleBvhItem& it = items_[ids_[i]];
       for (int a = 0; a < 3; ++a) {
         const float c = it.lo[a] + it.hi[a];
         cl[a] = std::min(cl[a], c);
@@ -170,7 +170,7 @@ class FrameBvhBuilder {
       }
     }
     for (std::size_t i = r.b; i < r.e; ++i) {
-      const FrameBvhItem& it = items_[ids_[i]];
+      const TriangleBvhItem& it = items_[ids_[i]];
       for (int a = 0; a < 3; ++a) {
         const int k = std::min(bins - 1, static_cast<int>((it.lo[a] + it.hi[a] - cl[a]) * scale[a]));
         Bin& bb = bin[a][k];
@@ -220,11 +220,11 @@ class FrameBvhBuilder {
         }
       }
     }
-    if (n <= static_cast<std::size_t>(FrameBvhNode::leaf_max) && best_axis >= 0 &&
+    if (n <= static_cast<std::size_t>(TriangleBvhNode::leaf_max) && best_axis >= 0 &&
         best + area(r.lo, r.hi) * traversal_cost >= area(r.lo, r.hi) * float(n))
       return false;  // a leaf is cheaper than a split
     if (best_axis < 0) {
-      if (n <= static_cast<std::size_t>(FrameBvhNode::leaf_max)) return false;
+      if (n <= static_cast<std::size_t>(TriangleBvhNode::leaf_max)) return false;
       return median_split(r, left, right);
     }
     std::size_t mid;
@@ -232,7 +232,7 @@ class FrameBvhBuilder {
       const int a = best_axis;
       const float c0 = cl[a], s = scale[a];
       std::uint32_t* m = std::partition(ids_ + r.b, ids_ + r.e, [&](std::uint32_t id) {
-        const FrameBvhItem& it = items_[id];
+        const TriangleBvhItem& it = items_[id];
         return std::min(bins - 1, static_cast<int>((it.lo[a] + it.hi[a] - c0) * s)) < best_plane;
       });
       mid = static_cast<std::size_t>(m - ids_);
@@ -297,7 +297,7 @@ class FrameBvhBuilder {
       int pick = -1;
       float big = -1.0f;
       for (std::size_t k = 0; k < out.size(); ++k)
-        if (!done[k] && out[k].e - out[k].b > static_cast<std::size_t>(FrameBvhNode::leaf_max) &&
+        if (!done[k] && out[k].e - out[k].b > static_cast<std::size_t>(TriangleBvhNode::leaf_max) &&
             area(out[k].lo, out[k].hi) > big) {
           big = area(out[k].lo, out[k].hi);
           pick = static_cast<int>(k);
@@ -320,11 +320,11 @@ class FrameBvhBuilder {
     std::sort(out.begin(), out.end(), [](const Range& x, const Range& y) { return x.b < y.b; });
   }
 
-  std::uint32_t leaf_or_node(const Range& r, std::vector<FrameBvhNode>& nodes, int depth) {
+  std::uint32_t leaf_or_node(const Range& r, std::vector<TriangleBvhNode>& nodes, int depth) {
     const std::size_t n = r.e - r.b;
-    if (n <= static_cast<std::size_t>(FrameBvhNode::leaf_max)) {
+    if (n <= static_cast<std::size_t>(TriangleBvhNode::leaf_max)) {
       Range a, b;
-      if (!split(r, a, b)) return FrameBvhNode::leaf(static_cast<std::uint32_t>(r.b), static_cast<std::uint32_t>(n));
+      if (!split(r, a, b)) return TriangleBvhNode::leaf(static_cast<std::uint32_t>(r.b), static_cast<std::uint32_t>(n));
     }
     return make(r, nodes, depth);
   }
@@ -333,7 +333,7 @@ class FrameBvhBuilder {
   // Below depth_limit nodes split at medians (a balanced bound on the depth, which the cast's
   // stack relies on).
   static constexpr int depth_limit = 48;
-  std::uint32_t make(const Range& r, std::vector<FrameBvhNode>& nodes, int depth = 2) {
+  std::uint32_t make(const Range& r, std::vector<TriangleBvhNode>& nodes, int depth = 2) {
     std::vector<Range> kids;
     split_into(r, 4, kids, depth >= depth_limit);
     if (kids.size() == 1) {  // cannot be split: one leaf per leaf_max run
@@ -344,7 +344,7 @@ class FrameBvhBuilder {
     const std::size_t index = nodes.size();
     nodes.emplace_back();
     for (int j = 0; j < 4; ++j) {
-      std::uint32_t code = FrameBvhNode::empty;
+      std::uint32_t code = TriangleBvhNode::empty;
       float lo[3] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
                      std::numeric_limits<float>::infinity()};
       float hi[3] = {-lo[0], -lo[1], -lo[2]};
@@ -356,7 +356,7 @@ class FrameBvhBuilder {
           hi[a] = k.hi[a];
         }
       }
-      FrameBvhNode& node = nodes[index];
+      TriangleBvhNode& node = nodes[index];
       for (int a = 0; a < 3; ++a) {
         node.lo[a][j] = lo[a];
         node.hi[a][j] = hi[a];
@@ -368,8 +368,8 @@ class FrameBvhBuilder {
 
   // The top of the tree over the ranges `tops` (in order), whose subtrees are built: the same cut
   // of r into four as make() does, down to the ranges.
-  std::uint32_t make_top(const Range& r, const std::vector<Range>& tops, std::vector<std::vector<FrameBvhNode>>& sub,
-                         const std::vector<std::uint32_t>& sub_root, std::vector<FrameBvhNode>& nodes, std::size_t& /*next*/) {
+  std::uint32_t make_top(const Range& r, const std::vector<Range>& tops, std::vector<std::vector<TriangleBvhNode>>& sub,
+                         const std::vector<std::uint32_t>& sub_root, std::vector<TriangleBvhNode>& nodes, std::size_t& /*next*/) {
     // Ranges as the leaves of a top built by equal groups: four groups of up to four tops.
     std::vector<std::uint32_t> codes(tops.size());
     // Splice the subtrees first (their node indices shift by their offset).
@@ -383,23 +383,23 @@ class FrameBvhBuilder {
     nodes.resize(at);
     for (std::size_t t = 0; t < tops.size(); ++t) {
       std::size_t put = offset[t];
-      for (FrameBvhNode nd : sub[t]) {
+      for (TriangleBvhNode nd : sub[t]) {
         for (int j = 0; j < 4; ++j)
-          if (nd.child[j] != FrameBvhNode::empty && !FrameBvhNode::is_leaf(nd.child[j]))
+          if (nd.child[j] != TriangleBvhNode::empty && !TriangleBvhNode::is_leaf(nd.child[j]))
             nd.child[j] += static_cast<std::uint32_t>(offset[t]);
         nodes[put++] = nd;
       }
-      codes[t] = FrameBvhNode::is_leaf(sub_root[t]) ? sub_root[t] : sub_root[t] + static_cast<std::uint32_t>(offset[t]);
-      std::vector<FrameBvhNode>().swap(sub[t]);
+      codes[t] = TriangleBvhNode::is_leaf(sub_root[t]) ? sub_root[t] : sub_root[t] + static_cast<std::uint32_t>(offset[t]);
+      std::vector<TriangleBvhNode>().swap(sub[t]);
     }
-    auto fill = [&](FrameBvhNode& nd, const std::uint32_t* c, const Range* rg, std::size_t count) {
+    auto fill = [&](TriangleBvhNode& nd, const std::uint32_t* c, const Range* rg, std::size_t count) {
       for (int j = 0; j < 4; ++j) {
         const bool has = static_cast<std::size_t>(j) < count;
         for (int a = 0; a < 3; ++a) {
           nd.lo[a][j] = has ? rg[j].lo[a] : std::numeric_limits<float>::infinity();
           nd.hi[a][j] = has ? rg[j].hi[a] : -std::numeric_limits<float>::infinity();
         }
-        nd.child[j] = has ? c[j] : FrameBvhNode::empty;
+        nd.child[j] = has ? c[j] : TriangleBvhNode::empty;
       }
     };
     if (tops.size() <= 4) {
