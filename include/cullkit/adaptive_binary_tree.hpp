@@ -45,13 +45,13 @@
 
 #include "abt_params.hpp"
 #include "config.hpp"
-#include "detail/abt_build.hpp"
-#include "detail/abt_dynamic.hpp"
-#include "detail/abt_leaf.hpp"
-#include "detail/abt_repair.hpp"
-#include "detail/abt_split.hpp"
-#include "detail/abt_validate.hpp"
-#include "detail/abt_views.hpp"
+#include "detail/abt/build.hpp"
+#include "detail/abt/dynamic.hpp"
+#include "detail/abt/leaf.hpp"
+#include "detail/abt/repair.hpp"
+#include "detail/abt/split.hpp"
+#include "detail/abt/validate.hpp"
+#include "detail/abt/views.hpp"
 #include "geometry/aabb.hpp"
 #include "geometry/convex_volume.hpp"
 #include "geometry/frustum.hpp"
@@ -358,7 +358,7 @@ class AdaptiveBinaryTree {
   }
 
   // ---- Incremental changes. Ids are stable: the build's objects have ids 0..count-1 (their input
-  // ---- index), `insert` hands out more; every cull reports ids. Internals: detail/abt_dynamic.hpp.
+  // ---- index), `insert` hands out more; every cull reports ids. Internals: detail/abt/dynamic.hpp.
 
   /// Returned by `insert` when no id is left (2^32 - 2 ids in use).
   static constexpr std::uint32_t invalid_id = detail::abt_no_position;

@@ -2,7 +2,7 @@
 //
 // Seed: 基于主要遮挡物的动态可见性算法 (dynamic visibility with major occluders), §3.3 (see
 // docs/papers.md), corrected as below. The eye's position against the three slabs of a box picks
-// one of 27 regions; a constant 26-entry table (detail/box_proxy_table.hpp) then names the 4 or 6
+// one of 27 regions; a constant 26-entry table (detail/box_proxy/table.hpp) then names the 4 or 6
 // outline corners and the 1 to 3 front faces directly, so building a proxy costs six comparisons
 // and a table read.
 //
@@ -38,7 +38,7 @@
 #include <glm/vec3.hpp>
 
 #include "config.hpp"
-#include "detail/box_proxy_table.hpp"
+#include "detail/box_proxy/table.hpp"
 #include "geometry/aabb.hpp"
 #include "geometry/plane.hpp"
 

@@ -34,7 +34,7 @@
 // same direction are merged, fragments with no area seen from the eye are dropped, and a slightly
 // non-planar occluder's own plane is pushed back behind its farthest corner.
 //
-// Fusion (seams; detail/occlusion_seams.hpp, docs/occlusion_fusion.md). Two occluders sharing an
+// Fusion (seams; detail/occlusion/seams.hpp, docs/occlusion_fusion.md). Two occluders sharing an
 // edge each have a plane through the eye and that edge: one true plane, so a query piece within
 // the margin of it would be "not clearly inside" for both, and the pair would hide nothing along the
 // seam. Every edge plane therefore carries a seam id that names its true plane exactly (the edge's
@@ -46,8 +46,8 @@
 // the margin or by the assumption), so a hidden answer stays proof.
 //
 // Layout: this header holds the public types; the machinery lives in detail headers, as helpers
-// over the tree's arrays: detail/occlusion_insert.hpp (chains, insertion), detail/occlusion_walk.hpp
-// (the query phases and the seam rule), detail/occlusion_top_level.hpp (the planes around the eye).
+// over the tree's arrays: detail/occlusion/insert.hpp (chains, insertion), detail/occlusion/walk.hpp
+// (the query phases and the seam rule), detail/occlusion/top_level.hpp (the planes around the eye).
 //
 // Thread safety: queries are const and may run concurrently; insert/reset need exclusive access.
 // Allocation: insertion grows flat arrays (none once warm, since `reset` keeps capacity); queries
@@ -69,12 +69,12 @@
 
 #include "box_proxy.hpp"
 #include "config.hpp"
-#include "detail/occlusion_geometry.hpp"
-#include "detail/occlusion_insert.hpp"
-#include "detail/occlusion_query.hpp"
-#include "detail/occlusion_seams.hpp"
-#include "detail/occlusion_top_level.hpp"
-#include "detail/occlusion_walk.hpp"
+#include "detail/occlusion/geometry.hpp"
+#include "detail/occlusion/insert.hpp"
+#include "detail/occlusion/query.hpp"
+#include "detail/occlusion/seams.hpp"
+#include "detail/occlusion/top_level.hpp"
+#include "detail/occlusion/walk.hpp"
 #include "geometry/aabb.hpp"
 #include "geometry/convex_polygon.hpp"
 #include "geometry/plane.hpp"

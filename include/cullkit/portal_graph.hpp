@@ -14,7 +14,7 @@
 #include <glm/vec3.hpp>
 
 #include "config.hpp"
-#include "detail/portal_clip.hpp"
+#include "detail/portals/clip.hpp"
 #include "geometry/aabb.hpp"
 #include "geometry/convex_volume.hpp"
 #include "geometry/frustum.hpp"

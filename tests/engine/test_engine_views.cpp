@@ -158,7 +158,7 @@ struct ViewsCheck {
 // set, every bit a box meeting the view (brute force) needs is set, and no bit is set for an
 // object outside the view's planes loosened by twice the merge tolerance. Not "equal to the single
 // cull": the contract only asks that a bit is never clear where the box meets the view, and planes
-// that views share up to rounding are tested once at the looser offset (abt_views_merged.hpp).
+// that views share up to rounding are tested once at the looser offset (detail/abt/views_merged.hpp).
 ViewsCheck check_views(const AdaptiveBinaryTree<Aabb>& tree, const std::vector<Aabb>& boxes,
                        const std::vector<Frustum>& fr, const std::vector<const abt_test::OracleFrustum*>& oracles,
                        const char* what) {

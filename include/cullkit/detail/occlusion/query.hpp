@@ -1,4 +1,4 @@
-// cullkit/detail/occlusion_query.hpp: the query side of OcclusionTree (not public API).
+// cullkit/detail/occlusion/query.hpp: the query side of OcclusionTree (not public API).
 //
 // Query fragments are small polygons pushed down the tree. They live in a fixed local array on the
 // stack of a const query, so they must cost nothing until written: the type has no member
@@ -13,12 +13,12 @@
 
 #include <glm/vec3.hpp>
 
-#include "../geometry/aabb.hpp"
-#include "../geometry/plane.hpp"
+#include "../../geometry/aabb.hpp"
+#include "../../geometry/plane.hpp"
 
 namespace cullkit::detail {
 
-/// Seam assumptions a query fragment can carry (see occlusion_seams.hpp); a fragment that has no
+/// Seam assumptions a query fragment can carry (see seams.hpp); a fragment that has no
 /// room for another one treats further seams as ordinary planes (safe, less precise).
 inline constexpr std::uint32_t max_seam_assumptions = 8;
 

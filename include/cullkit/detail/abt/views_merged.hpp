@@ -1,4 +1,4 @@
-// cullkit/detail/abt_views_merged.hpp: the multi-view walk of AdaptiveBinaryTree::cull_views over
+// cullkit/detail/abt/views_merged.hpp: the multi-view walk of AdaptiveBinaryTree::cull_views over
 // the views' planes merged into one set (users never name this).
 //
 // Why. Views drawn in one frame share most of their planes. The two eyes of a headset sit apart
@@ -28,12 +28,12 @@
 #include <limits>
 #include <vector>
 
-#include "../config.hpp"
-#include "../geometry/aabb.hpp"
-#include "../geometry/frustum.hpp"
-#include "../geometry/sphere.hpp"
-#include "abt_dynamic.hpp"
-#include "abt_leaf.hpp"
+#include "../../config.hpp"
+#include "../../geometry/aabb.hpp"
+#include "../../geometry/frustum.hpp"
+#include "../../geometry/sphere.hpp"
+#include "dynamic.hpp"
+#include "leaf.hpp"
 
 #if CULLKIT_HAS_SSE2
 #include <emmintrin.h>

@@ -1,4 +1,4 @@
-// cullkit/detail/occlusion_geometry.hpp: eye-relative helpers for OcclusionTree (not public API).
+// cullkit/detail/occlusion/geometry.hpp: eye-relative helpers for OcclusionTree (not public API).
 //
 // The occlusion tree works in coordinates relative to its eye: every plane through the eye then has
 // d == 0 exactly, and plane normals are computed in double precision from float corners (the
@@ -14,11 +14,11 @@
 #include <glm/mat4x4.hpp>
 #include <glm/ext/vector_double3.hpp>
 
-#include "../geometry/aabb.hpp"
-#include "../geometry/convex_polygon.hpp"
-#include "../geometry/plane.hpp"
-#include "occlusion_query.hpp"
-#include "occlusion_seams.hpp"
+#include "../../geometry/aabb.hpp"
+#include "../../geometry/convex_polygon.hpp"
+#include "../../geometry/plane.hpp"
+#include "query.hpp"
+#include "seams.hpp"
 
 namespace cullkit::detail {
 

@@ -1,4 +1,4 @@
-// cullkit/detail/portal_clip.hpp: the geometric step of the portal traversal. A portal polygon is
+// cullkit/detail/portals/clip.hpp: the geometric step of the portal traversal. A portal polygon is
 // clipped, in double precision and with outward margins, by the planes of the current view volume,
 // and what is left spans the narrowed volume of the next cell.
 #pragma once
@@ -11,8 +11,8 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
-#include "../geometry/convex_volume.hpp"
-#include "../geometry/plane.hpp"
+#include "../../geometry/convex_volume.hpp"
+#include "../../geometry/plane.hpp"
 
 namespace cullkit::detail {
 

@@ -1,4 +1,4 @@
-// cullkit/detail/abt_leaf.hpp: the plane tests of AdaptiveBinaryTree walks (node box and sphere
+// cullkit/detail/abt/leaf.hpp: the plane tests of AdaptiveBinaryTree walks (node box and sphere
 // against any plane list with a bit mask), and the per-object test inside a straddling leaf,
 // over boxes stored as structure-of-arrays (centers and half extents), a fixed number of lanes at
 // a time so the compiler vectorizes the plane loop. Users never name this.
@@ -18,12 +18,12 @@
 
 #include <glm/geometric.hpp>
 
-#include "../config.hpp"
-#include "bits.hpp"
-#include "../geometry/aabb.hpp"
-#include "../geometry/plane.hpp"
-#include "../geometry/sphere.hpp"
-#include "../geometry/frustum.hpp"
+#include "../../config.hpp"
+#include "../bits.hpp"
+#include "../../geometry/aabb.hpp"
+#include "../../geometry/plane.hpp"
+#include "../../geometry/sphere.hpp"
+#include "../../geometry/frustum.hpp"
 
 namespace cullkit::detail {
 

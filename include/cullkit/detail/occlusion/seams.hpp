@@ -1,4 +1,4 @@
-// cullkit/detail/occlusion_seams.hpp: shared edges of occluders ("seams") for OcclusionTree (not
+// cullkit/detail/occlusion/seams.hpp: shared edges of occluders ("seams") for OcclusionTree (not
 // public API).
 //
 // Two occluders that meet along an edge (two triangles of one mesh, two faces of one box, two boxes

@@ -1,4 +1,4 @@
-// cullkit/detail/abt_dynamic.hpp: the bookkeeping behind AdaptiveBinaryTree::insert, remove and
+// cullkit/detail/abt/dynamic.hpp: the bookkeeping behind AdaptiveBinaryTree::insert, remove and
 // update (users never name this).
 //
 // Why this shape. The tree keeps every node's objects in one contiguous range of `order()`, which
@@ -21,9 +21,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "../abt_params.hpp"
-#include "../geometry/aabb.hpp"
-#include "abt_leaf.hpp"
+#include "../../abt_params.hpp"
+#include "../../geometry/aabb.hpp"
+#include "leaf.hpp"
 
 namespace cullkit::detail {
 

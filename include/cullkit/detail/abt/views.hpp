@@ -1,8 +1,8 @@
-// cullkit/detail/abt_views.hpp: the multi-view walk of AdaptiveBinaryTree::cull_views (users never
+// cullkit/detail/abt/views.hpp: the multi-view walk of AdaptiveBinaryTree::cull_views (users never
 // name this).
 //
 // Views whose planes fit in 32 distinct ones (up to five views always; stereo pairs and cascades
-// of one camera share planes) take the merged walk of abt_views_merged.hpp. The walk below is for
+// of one camera share planes) take the merged walk of views_merged.hpp. The walk below is for
 // more: it tests each view's own planes and shares arithmetic only within families.
 //
 // Why it is shaped this way. A walk that tests every node and object against each view in turn
@@ -27,13 +27,13 @@
 #include <limits>
 #include <vector>
 
-#include "../abt_params.hpp"
-#include "../config.hpp"
-#include "../geometry/aabb.hpp"
-#include "../geometry/frustum.hpp"
-#include "abt_dynamic.hpp"
-#include "abt_leaf.hpp"
-#include "abt_views_merged.hpp"
+#include "../../abt_params.hpp"
+#include "../../config.hpp"
+#include "../../geometry/aabb.hpp"
+#include "../../geometry/frustum.hpp"
+#include "dynamic.hpp"
+#include "leaf.hpp"
+#include "views_merged.hpp"
 
 #if CULLKIT_HAS_SSE2
 #include <emmintrin.h>

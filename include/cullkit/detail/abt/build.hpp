@@ -1,7 +1,7 @@
-// cullkit/detail/abt_build.hpp: the AdaptiveBinaryTree builder (users never name this).
+// cullkit/detail/abt/build.hpp: the AdaptiveBinaryTree builder (users never name this).
 //
 // Three named steps fill the tree's flat arrays:
-//  1. `abt_build_node` splits a range of build items recursively (scores from abt_split.hpp,
+//  1. `abt_build_node` splits a range of build items recursively (scores from split.hpp,
 //     then an in-place partition by centroid), appending child pairs to a raw node array;
 //  2. `abt_build_raw` runs step 1 over the whole input, serially or on the shared WorkerPool (top
 //     levels on the calling thread, then each deferred subtree into its own array, stitched);
@@ -20,11 +20,11 @@
 #include <mutex>
 #include <vector>
 
-#include "../abt_params.hpp"
-#include "../geometry/aabb.hpp"
-#include "../geometry/sphere.hpp"
-#include "abt_split.hpp"
-#include "parallel.hpp"
+#include "../../abt_params.hpp"
+#include "../../geometry/aabb.hpp"
+#include "../../geometry/sphere.hpp"
+#include "split.hpp"
+#include "../parallel.hpp"
 
 namespace cullkit::detail {
 

@@ -1,4 +1,4 @@
-// cullkit/detail/abt_repair.hpp: the repair step of AdaptiveBinaryTree's repairing refit (users
+// cullkit/detail/abt/repair.hpp: the repair step of AdaptiveBinaryTree's repairing refit (users
 // never name this): the topmost subtrees whose split ratio degraded are rebuilt in place.
 #pragma once
 
@@ -7,10 +7,10 @@
 #include <limits>
 #include <vector>
 
-#include "../abt_params.hpp"
-#include "abt_build.hpp"
-#include "abt_leaf.hpp"
-#include "abt_split.hpp"
+#include "../../abt_params.hpp"
+#include "build.hpp"
+#include "leaf.hpp"
+#include "split.hpp"
 
 namespace cullkit::detail {
 

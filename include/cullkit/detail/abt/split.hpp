@@ -1,4 +1,4 @@
-// cullkit/detail/abt_split.hpp: split-plane choice for AdaptiveBinaryTree (users never name this).
+// cullkit/detail/abt/split.hpp: split-plane choice for AdaptiveBinaryTree (users never name this).
 //
 // A node's candidates are axis-aligned planes; each is scored with the four weighted criteria of
 // the seed paper (基于自适应二叉树的场景视锥体裁剪算法, §1.1.2, after Dickheiser, Game Programming
@@ -19,9 +19,9 @@
 
 #include <glm/vec3.hpp>
 
-#include "../config.hpp"
-#include "../geometry/aabb.hpp"
-#include "splitmix64.hpp"
+#include "../../config.hpp"
+#include "../../geometry/aabb.hpp"
+#include "../splitmix64.hpp"
 
 namespace cullkit::detail {
 

@@ -1,4 +1,4 @@
-// cullkit/detail/abt_validate.hpp: the invariant check behind AdaptiveBinaryTree::validate (users
+// cullkit/detail/abt/validate.hpp: the invariant check behind AdaptiveBinaryTree::validate (users
 // never name this; tests and debugging call validate()).
 #pragma once
 
@@ -6,11 +6,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "../abt_params.hpp"
-#include "../geometry/aabb.hpp"
-#include "../geometry/sphere.hpp"
-#include "abt_dynamic.hpp"
-#include "abt_split.hpp"
+#include "../../abt_params.hpp"
+#include "../../geometry/aabb.hpp"
+#include "../../geometry/sphere.hpp"
+#include "dynamic.hpp"
+#include "split.hpp"
 
 namespace cullkit::detail {
 

@@ -1,4 +1,4 @@
-// cullkit/detail/box_proxy_table.hpp: the 27-entry outline table behind BoxProxy (entry 13, the
+// cullkit/detail/box_proxy/table.hpp: the 27-entry outline table behind BoxProxy (entry 13, the
 // inside of the box, is empty). Generated once offline from the brute-force rule (silhouette edges
 // are the edges of the front faces not shared by two front faces, chained into a loop and turned
 // counter-clockwise as seen from the eye) and re-derived by tests/box_proxy/test_box_proxy.cpp.

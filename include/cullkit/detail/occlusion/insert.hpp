@@ -1,4 +1,4 @@
-// cullkit/detail/occlusion_insert.hpp: occluder insertion for OcclusionTree (not public API).
+// cullkit/detail/occlusion/insert.hpp: occluder insertion for OcclusionTree (not public API).
 //
 // `OcclusionInsert<Tree>` turns one occluder (a convex polygon, or a box through its outline) into
 // the description of its chain (`OcclusionChain`: the whole occluder's beam planes, longest edge
@@ -20,13 +20,13 @@
 #include <glm/vec3.hpp>
 #include <glm/ext/vector_double3.hpp>
 
-#include "../box_proxy.hpp"
-#include "../geometry/aabb.hpp"
-#include "../geometry/convex_polygon.hpp"
-#include "../geometry/plane.hpp"
-#include "occlusion_geometry.hpp"
-#include "occlusion_query.hpp"
-#include "occlusion_seams.hpp"
+#include "../../box_proxy.hpp"
+#include "../../geometry/aabb.hpp"
+#include "../../geometry/convex_polygon.hpp"
+#include "../../geometry/plane.hpp"
+#include "geometry.hpp"
+#include "query.hpp"
+#include "seams.hpp"
 
 namespace cullkit::detail {
 

@@ -1,4 +1,4 @@
-// cullkit/detail/occlusion_walk.hpp: the query walks of OcclusionTree (not public API).
+// cullkit/detail/occlusion/walk.hpp: the query walks of OcclusionTree (not public API).
 //
 // `OcclusionWalk<Tree>` holds the three query phases described in occlusion_tree.hpp as static
 // functions over a const tree: the undivided descent of the whole box or polygon, the exact walk of
@@ -17,14 +17,14 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
-#include "../box_proxy.hpp"
-#include "../config.hpp"
-#include "../geometry/aabb.hpp"
-#include "../geometry/convex_polygon.hpp"
-#include "../geometry/plane.hpp"
-#include "occlusion_geometry.hpp"
-#include "occlusion_query.hpp"
-#include "occlusion_seams.hpp"
+#include "../../box_proxy.hpp"
+#include "../../config.hpp"
+#include "../../geometry/aabb.hpp"
+#include "../../geometry/convex_polygon.hpp"
+#include "../../geometry/plane.hpp"
+#include "geometry.hpp"
+#include "query.hpp"
+#include "seams.hpp"
 
 namespace cullkit::detail {
 
@@ -213,7 +213,7 @@ struct OcclusionWalk {
     visible,    // cannot be decided (NaN, too many corners): the query answers visible
   };
 
-  // One step at a node on a seam shared by several occluders (see occlusion_seams.hpp). A fragment
+  // One step at a node on a seam shared by several occluders (see seams.hpp). A fragment
   // that already assumed a side of this seam follows that side: every point it stands for is there.
   // Otherwise a fragment clearly on one side (by the margin) goes there; one within the margin band
   // becomes two overlapping copies, the part at distance >= -m going inside and the part at distance

@@ -1,4 +1,4 @@
-// cullkit/detail/occlusion_top_level.hpp: the top-level planes of OcclusionTree (not public API).
+// cullkit/detail/occlusion/top_level.hpp: the top-level planes of OcclusionTree (not public API).
 //
 // Before any occluder, the tree is split around the eye by fixed planes through it (seed §3.4.3):
 // azimuth wedges around `up`, then elevation bands in each wedge. Occluder chains then hang in
@@ -17,8 +17,8 @@
 #include <glm/geometric.hpp>
 #include <glm/ext/vector_double3.hpp>
 
-#include "../geometry/plane.hpp"
-#include "occlusion_geometry.hpp"
+#include "../../geometry/plane.hpp"
+#include "geometry.hpp"
 
 namespace cullkit::detail {
 
