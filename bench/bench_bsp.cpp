@@ -6,11 +6,13 @@
 //  3. per frame: back_to_front from eyes inside and outside the scene, raced against what a renderer
 //     does without a BSP: order_back_to_front (radix) and std::sort of the triangles by the distance
 //     of their centroids from the eye (each computes the distances itself). Race CSV (median, ratio).
-// Flags: --splitters, --scene NAME (only that real scene, e.g. fzk_haus.obj), --no-real.
+// Flags: --splitters, --scene NAME (only that real scene, e.g. fzk_haus.obj), --no-real,
+// --epsilon E (BspParams::epsilon for every build), --no-frames (builds only).
 // CULLKIT_BENCH_SMOKE=1: a small generated office only.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <thread>
@@ -88,12 +90,15 @@ void frame_race(const Scene& scene) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool splitters = false, real = true;
+  bool splitters = false, real = true, frames = true;
+  cullkit::BspParams defaults;
   std::string only;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--splitters") == 0) splitters = true;
     if (std::strcmp(argv[i], "--no-real") == 0) real = false;
+    if (std::strcmp(argv[i], "--no-frames") == 0) frames = false;
     if (std::strcmp(argv[i], "--scene") == 0 && i + 1 < argc) only = argv[++i];
+    if (std::strcmp(argv[i], "--epsilon") == 0 && i + 1 < argc) defaults.epsilon = std::strtof(argv[++i], nullptr);
   }
   std::vector<Scene> scenes;
   if (cullkit_bench::smoke()) {
@@ -119,8 +124,8 @@ int main(int argc, char** argv) {
   const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
   std::printf("build,scene,params,threads,triangles,kept,fragments,fragments_per_triangle,nodes,depth,seconds\n");
   for (const auto& scene : scenes) {
-    build_row(scene, 1, {}, "default");
-    if (hw > 1 && !cullkit_bench::smoke()) build_row(scene, hw, {}, "default");
+    build_row(scene, 1, defaults, "default");
+    if (hw > 1 && !cullkit_bench::smoke()) build_row(scene, hw, defaults, "default");
   }
   if (splitters) {
     struct Variant {
@@ -133,13 +138,14 @@ int main(int argc, char** argv) {
     for (const auto& scene : scenes) {
       if (scene.triangle_count() > 100000) continue;
       for (const auto& v : variants) {
-        cullkit::BspParams p;
+        cullkit::BspParams p = defaults;
         p.candidates = v.candidates;
         p.split_weight = v.split_weight;
         build_row(scene, hw, p, v.label);
       }
     }
   }
-  for (const auto& scene : scenes) frame_race(scene);
+  if (frames)
+    for (const auto& scene : scenes) frame_race(scene);
   return 0;
 }

@@ -65,7 +65,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                                          params);
   check(tree.validate());
   const auto& s = tree.stats();
-  check(s.dropped_bad_index + s.dropped_non_finite + s.dropped_degenerate <= s.triangles);
+  // Every input triangle is either dropped by one rule or has fragments.
+  std::vector<std::uint8_t> has_fragment(s.triangles, 0);
+  for (const auto& fr : tree.fragments()) {
+    check(fr.triangle < s.triangles);
+    if (fr.triangle < s.triangles) has_fragment[fr.triangle] = 1;
+  }
+  std::size_t with_fragments = 0;
+  for (std::uint8_t h : has_fragment) with_fragments += h;
+  check(with_fragments + s.dropped_bad_index + s.dropped_non_finite + s.dropped_degenerate == s.triangles);
   std::vector<std::uint32_t> order, reverse;
   tree.back_to_front(eye, order);
   tree.front_to_back(eye, reverse);
