@@ -262,6 +262,20 @@ void test_threads_and_progress() {
     same = a.nodes()[i].front == b.nodes()[i].front && a.nodes()[i].back == b.nodes()[i].back &&
            a.nodes()[i].normal == b.nodes()[i].normal;
   CHECK(same);
+  // The caller's job system: the build's tasks go to it (run here in reverse order), same tree.
+  struct Jobs {
+    std::size_t calls = 0;
+  } jobs;
+  BspParams hooked = many;
+  hooked.progress = nullptr;
+  hooked.task_runner.context = &jobs;
+  hooked.task_runner.dispatch = [](void* context, std::size_t count, void (*run)(void*, std::size_t), void* job) {
+    ++static_cast<Jobs*>(context)->calls;
+    for (std::size_t i = count; i-- > 0;) run(job, i);
+  };
+  const Tree h(soup.mesh(), hooked);
+  CHECK_MSG(jobs.calls > 0, "the build's tasks did not go to the task runner");
+  CHECK(h.corners() == a.corners() && h.fragments().size() == a.fragments().size() && h.nodes().size() == a.nodes().size());
   // One thread with a callback: it still reports on the way, from the calling thread only.
   BspParams single;
   single.threads = 1;
