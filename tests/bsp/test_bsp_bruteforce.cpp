@@ -59,6 +59,11 @@ void check_scene(const char* name, const Scene& scene, const std::vector<glm::ve
     tree.front_to_back(eyes[e], reverse);
     std::reverse(reverse.begin(), reverse.end());
     CHECK_MSG(reverse == order, "%s eye %zu: front_to_back is the reverse", name, e);
+    std::vector<std::uint32_t> visited_near_first, visited_far_first;
+    tree.visit_front_to_back(eyes[e], [&](std::uint32_t f) { visited_near_first.push_back(f); });
+    tree.visit_back_to_front(eyes[e], [&](std::uint32_t f) { visited_far_first.push_back(f); });
+    std::reverse(visited_near_first.begin(), visited_near_first.end());
+    CHECK_MSG(visited_near_first == order && visited_far_first == order, "%s eye %zu: the visitor forms' orders", name, e);
     std::reverse(reverse.begin(), reverse.end());
     mutant_violations += bsp_test::check_order(tree, eyes[e], reverse, rays / 4, 100 + e).violations;
     sort_violations += bsp_test::check_order(tree, eyes[e], centroid_order(tree, eyes[e]), rays, 100 + e).violations;

@@ -244,6 +244,7 @@ void check_null(const Scene& scene) {
 }  // namespace
 
 int main() {
+  static_assert(index_size(IndexFormat::uint16) == 2 && index_size(IndexFormat::uint32) == 4, "index widths");
   const Scene city = support::make_city(1, 8);
   CHECK(city.positions.size() <= 65535);
   const Interleaved buf(city);

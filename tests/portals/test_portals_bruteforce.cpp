@@ -206,8 +206,11 @@ void test_aligned_chain(Totals& t) {
   for (int k = 0; k <= w.nz; ++k) w.zs.push_back(5.0f * static_cast<float>(k));
   for (std::uint32_t r = 0; r < w.rooms(); ++r) {
     w.graph.add_cell();
+    CHECK(!w.graph.cell_has_shape(r));
     w.graph.set_cell_bounds(r, w.box(r));
+    CHECK(w.graph.cell_has_shape(r));
   }
+  CHECK(!w.graph.cell_has_shape(w.rooms()));  // not a cell
   for (int k = 0; k + 1 < w.nz; ++k) add_portal(w, w.room(0, 0, k), w.room(0, 0, k + 1), 2, rect_portal(2, w.zs[k + 1], 1.5f, 2.5f, 0.0f, 2.1f));
   support::Rng rng(0xA119);
   std::vector<PortalView> views;

@@ -157,24 +157,6 @@ class AbtLeafBoxes {
   /// The six columns (cx, cy, cz, ex, ey, ez), each padded by `lanes` zero boxes past the end.
   [[nodiscard]] const float* column(int k) const noexcept { return data_.data() + std::size_t(k) * stride_; }
 
-  /// The exact rule of `classify_lanes` for the one box at `position`: true when it is outside one
-  /// of the planes in `mask`. Same operations in the same order, so the same answer bit for bit.
-  [[nodiscard]] bool outside_one(const Plane* planes, std::uint32_t mask, std::uint32_t position) const noexcept {
-    constexpr float k = 8.0f * std::numeric_limits<float>::epsilon();
-    const float cx = column(0)[position], cy = column(1)[position], cz = column(2)[position];
-    const float ex = column(3)[position], ey = column(4)[position], ez = column(5)[position];
-    for (std::uint32_t rest = mask; rest != 0; rest &= rest - 1u) {
-      const Plane& pl = planes[abt_lowest_bit(rest)];
-      const float nx = pl.normal.x, ny = pl.normal.y, nz = pl.normal.z, pd = pl.d;
-      const float px = nx * cx, py = ny * cy, pz = nz * cz;
-      const float dc = px + py + pz + pd;
-      const float r = std::fabs(nx) * ex + std::fabs(ny) * ey + std::fabs(nz) * ez;
-      const float slack = (std::fabs(px) + std::fabs(py) + std::fabs(pz) + std::fabs(pd) + r) * k;
-      if (dc + r < -slack) return true;
-    }
-    return false;
-  }
-
   /// Calls `emit(position, containment)` for every box in [begin, end) not outside the planes in
   /// `mask` (bit i for planes[i]); returns false as soon as `emit` does.
   template <class Emit>

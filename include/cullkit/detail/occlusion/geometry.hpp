@@ -105,30 +105,6 @@ template <std::size_t Capacity>
   return n;
 }
 
-/// Corners of the box faces the eye sees (eye-relative), as up to 3 quads, and the distinct front
-/// corners. Returns the number of faces (0 when the eye is inside or on the box).
-/// `faces` has room for 3; `points` for 8 (written: the distinct corners of the front faces).
-template <std::size_t Capacity>
-[[nodiscard]] inline int box_front_faces(const Aabb& box, const glm::vec3& eye,
-                                         BasicConvexPolygon<Capacity>* faces, glm::vec3* points,
-                                         int& point_count) noexcept {
-  int cycles[3][4];
-  const int nfaces = box_front_face_cycles(box, eye, cycles);
-  unsigned corner_mask = 0;
-  for (int i = 0; i < nfaces; ++i) {
-    BasicConvexPolygon<Capacity>& f = faces[i];
-    f.clear();
-    for (int k = 0; k < 4; ++k) {
-      f.push_back(corner(box, cycles[i][k]) - eye);
-      corner_mask |= 1u << cycles[i][k];
-    }
-  }
-  point_count = 0;
-  for (int c = 0; c < 8; ++c)
-    if (corner_mask & (1u << c)) points[point_count++] = corner(box, c) - eye;
-  return nfaces;
-}
-
 /// The faces of the box `local_box` placed by the affine matrix `model` that the eye (world) sees:
 /// up to 3 quads of world corners, written to `out`; returns how many. Every face uses the same 8
 /// rounded world corners, so neighbouring faces share their edges bit for bit. 0 when the box or
