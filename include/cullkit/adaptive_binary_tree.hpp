@@ -48,6 +48,7 @@
 #include "detail/abt/build.hpp"
 #include "detail/abt/dynamic.hpp"
 #include "detail/abt/leaf.hpp"
+#include "detail/abt/occlusion_walk.hpp"
 #include "detail/abt/repair.hpp"
 #include "detail/abt/split.hpp"
 #include "detail/abt/validate.hpp"
@@ -191,39 +192,12 @@ class AdaptiveBinaryTree {
   template <class Occlusion>
   void cull(const Frustum& frustum, const Occlusion& occlusion, std::vector<std::uint32_t>& out) const {
     out.clear();
-    const glm::vec3 eye = occlusion.eye();
-    const Plane* planes = &frustum.plane(0);
-    const auto consider = [&](std::uint32_t i, std::uint32_t mask, bool alone) {
-      if (dyn_.is_hole(i)) return;
-      if (mask != 0 && detail::abt_box_outside(planes, mask, bounds_[i])) return;
-      if (!alone && !is_unbounded(bounds_[i]) && occlusion.is_occluded(bounds_[i])) return;
-      out.push_back(order_[i]);
-    };
-    // Objects inserted since the last rebuild come first (they have no place in the tree's order).
-    for (std::size_t i = dyn_.tree_end; i < order_.size(); ++i) consider(std::uint32_t(i), frustum.active_mask(), false);
-    if (nodes_.empty()) return;
-    struct Entry {
-      std::uint32_t node;
-      std::uint32_t mask;
-    };
-    Entry stack[depth_limit + 2];
-    std::uint32_t top = 0;
-    stack[top++] = Entry{0, frustum.active_mask()};
-    while (top > 0) {
-      const Entry entry = stack[--top];
-      const AbtNode& node = nodes_[entry.node];
-      std::uint32_t mask = entry.mask;
-      if (detail::abt_node_outside(planes, mask, node.bounds, node.sphere)) continue;
-      if (!is_unbounded(node.bounds) && occlusion.is_occluded(node.bounds)) continue;
-      if (node.is_leaf()) {
-        for (std::uint32_t i = node.begin; i < node.end; ++i) consider(i, mask, node.count() == 1);
-        continue;
-      }
-      const bool left_first = near_is_left(node, eye);
-      // Pushed far child first, so the near child is popped (visited) first.
-      stack[top++] = Entry{left_first ? node.left + 1 : node.left, mask};
-      stack[top++] = Entry{left_first ? node.left : node.left + 1, mask};
-    }
+    struct NoState {};
+    detail::AbtOcclusionWalkCounts counts;
+    detail::abt_occlusion_walk(
+        *this, frustum, occlusion.eye(), NoState{}, true,
+        [&occlusion](const Aabb& box, NoState&) { return !occlusion.is_occluded(box); },
+        [&](std::uint32_t pos, const NoState&) { out.push_back(order_[pos]); }, counts);
   }
 
   /// Pre-order walk in front-to-back order from `eye`: at every inner node, the child on the eye's

@@ -85,92 +85,52 @@ void cull_with_occlusion(const AdaptiveBinaryTree<Object, Traits>& abt, const Fr
   out.clear();
   OcclusionCullStats local;
   OcclusionCullStats& st = stats ? *stats : local;
-  const auto& nodes = abt.nodes();
-  if (nodes.empty()) return;
   const auto& order = abt.order();
-  const auto& bounds = abt.object_bounds();
-  const glm::vec3 eye = tree.eye();
 
-  struct Item {
-    std::uint32_t node;
-    std::uint32_t start;   // occlusion-tree node to start queries at
-    bool frustum_inside;   // the parent was entirely inside the frustum
-    bool clear;            // the parent was entirely clear of hidden regions
+  // Per node: the occlusion-tree node its queries start at (the seed's second refinement), and
+  // whether it was proven clear of every hidden region (the first).
+  struct State {
+    std::uint32_t start;
+    bool clear;
   };
-  constexpr int stack_size = 2 * AdaptiveBinaryTree<Object, Traits>::depth_limit + 4;
-  Item stack[static_cast<std::size_t>(stack_size)];
-  int top = 0;
-  stack[top++] = Item{0, OcclusionTree::whole_tree, false, false};
-
-  // Returns false if the box is hidden; updates `start` and `clear` for what lies inside it.
-  // Unbounded boxes (objects without valid bounds, and their ancestors) are never queried.
-  const auto occlusion_pass = [&](const Aabb& box, std::uint32_t& start, bool& clear) {
-    if (clear || is_unbounded(box)) return true;
+  // False if the box is hidden; refines `state` for what lies inside it.
+  const auto visible = [&](const Aabb& box, State& state) {
+    if (state.clear) return true;
     ++st.occlusion_queries;
-    const OcclusionQueryResult r = tree.query(box, params.start_at_parent_node ? start : OcclusionTree::whole_tree,
-                                              params.skip_clear_subtrees);
+    const OcclusionQueryResult r =
+        tree.query(box, params.start_at_parent_node ? state.start : OcclusionTree::whole_tree, params.skip_clear_subtrees);
     if (r.answer == OcclusionAnswer::hidden) {
       ++st.hidden;
       return false;
     }
     if (r.answer == OcclusionAnswer::clear) {
       ++st.clear_subtrees;
-      clear = true;
+      state.clear = true;
     }
-    if (params.start_at_parent_node) start = r.together;
+    if (params.start_at_parent_node) state.start = r.together;
     return true;
   };
-
-  // One object at `pos` of the order: frustum test unless already known inside, occlusion query
-  // when `query` (a single-object leaf was already queried as its node), then reported.
-  const auto visit_object = [&](std::uint32_t pos, bool known_inside, bool query, std::uint32_t start, bool clear) {
-    const Aabb& b = bounds[pos];
-    if (!known_inside && frustum.classify(b) == Containment::outside) {
-      ++st.frustum_rejected;
-      return;
-    }
-    if (query && !occlusion_pass(b, start, clear)) return;
+  // A visible object is reported, then offered as an occluder at once so it hides what follows.
+  const auto report = [&](std::uint32_t pos, const State&) {
+    const Aabb& box = abt.object_bounds()[pos];
     out.push_back(order[pos]);
     ++st.objects_visible;
-    if (is_unbounded(b)) ++st.unbounded;
-    if (params.grow && !is_unbounded(b)) {
+    if (is_unbounded(box)) {
+      ++st.unbounded;
+      return;
+    }
+    if (params.grow) {
       ++st.occluder_calls;
       occluders(order[pos], tree);
     }
   };
-
-  while (top > 0) {
-    Item item = stack[--top];
-    const AbtNode& node = nodes[item.node];
-    ++st.nodes_visited;
-    if (!item.frustum_inside) {
-      const Containment c = frustum.classify(node.bounds);
-      if (c == Containment::outside) {
-        ++st.frustum_rejected;
-        continue;
-      }
-      item.frustum_inside = c == Containment::inside;
-    }
-    if (!occlusion_pass(node.bounds, item.start, item.clear)) continue;
-    if (!node.is_leaf()) {
-      const bool left_first = eye[node.axis] < node.split;
-      const std::uint32_t near_child = left_first ? node.left : node.right();
-      const std::uint32_t far_child = left_first ? node.right() : node.left;
-      stack[top++] = Item{far_child, item.start, item.frustum_inside, item.clear};
-      stack[top++] = Item{near_child, item.start, item.frustum_inside, item.clear};
-      continue;
-    }
-    for (std::uint32_t pos = node.begin; pos < node.end; ++pos) {
-      if (order[pos] == AdaptiveBinaryTree<Object, Traits>::removed_slot) continue;
-      visit_object(pos, item.frustum_inside || node.count() == 1, node.count() > 1, item.start, item.clear);
-    }
-  }
-  // Objects inserted since the last rebuild belong to no node: tested one by one, after the walk,
-  // against the grown tree (they are not in front-to-back order and grow no occluders first).
-  for (std::size_t pos = abt.pending_begin(); pos < order.size(); ++pos) {
-    if (order[pos] == AdaptiveBinaryTree<Object, Traits>::removed_slot) continue;
-    visit_object(static_cast<std::uint32_t>(pos), false, true, OcclusionTree::whole_tree, false);
-  }
+  // Objects inserted since the last rebuild go last, against the grown tree (they are not in
+  // front-to-back order and grow no occluders first).
+  detail::AbtOcclusionWalkCounts counts;
+  detail::abt_occlusion_walk(abt, frustum, tree.eye(), State{OcclusionTree::whole_tree, false}, false, visible,
+                             report, counts);
+  st.nodes_visited += counts.nodes_visited;
+  st.frustum_rejected += counts.frustum_rejected;
 }
 
 /// The same with the parameters before the statistics, so that parameters need no `nullptr`:
