@@ -695,6 +695,36 @@ void engine_frame(const std::string& name, const CullScene& cs, const std::vecto
     flagged[o].occludes = !see_through[o];
     glass += see_through[o];
   }
+  {
+    // Building from instances against building from the concatenated mesh: the scene as instances of
+    // its own objects (each object's triangles a mesh of its own, placed by the identity), alternated.
+    std::vector<std::vector<std::uint32_t>> pieces;
+    std::vector<MeshInstance> instances;
+    for (const auto& o : cs.scene.objects) {
+      pieces.emplace_back(cs.scene.indices.begin() + std::ptrdiff_t(3 * std::size_t(o.first_triangle)),
+                          cs.scene.indices.begin() + std::ptrdiff_t(3 * (std::size_t(o.first_triangle) + o.triangle_count)));
+    }
+    for (const auto& piece : pieces) instances.push_back({strided(cs.scene.positions, piece), glm::mat4(1.0f)});
+    // The same with a matrix that is not the identity (a rotation by a quarter turn, exact in float).
+    std::vector<MeshInstance> turned = instances;
+    for (MeshInstance& in : turned) in.model = glm::mat4(glm::vec4(0, 0, -1, 0), glm::vec4(0, 1, 0, 0), glm::vec4(1, 0, 0, 0), glm::vec4(0, 0, 0, 1));
+    std::vector<double> whole_ms, instance_ms, turned_ms;
+    for (int r = 0; r < std::max(reps, 2); ++r) {
+      double t0 = thread_ms();
+      { const MeshOcclusionCuller<glm::vec3> c(cs.scene.mesh(), map.objects.data(), map.objects.size(), params); }
+      whole_ms.push_back(thread_ms() - t0);
+      t0 = thread_ms();
+      { const MeshOcclusionCuller<glm::vec3> c(instances.data(), instances.size(), map.objects.data(), map.objects.size(), params); }
+      instance_ms.push_back(thread_ms() - t0);
+      t0 = thread_ms();
+      { const MeshOcclusionCuller<glm::vec3> c(turned.data(), turned.size(), map.objects.data(), map.objects.size(), params); }
+      turned_ms.push_back(thread_ms() - t0);
+    }
+    std::printf("engine,%s,build_ms_concatenated=%s,build_ms_instances=%s (%zu instances; turned %s),"
+                "instances_over_concatenated=%.2f (turned %.2f)\n",
+                name.c_str(), ms_text(whole_ms).c_str(), ms_text(instance_ms).c_str(), instances.size(),
+                ms_text(turned_ms).c_str(), ratio(instance_ms, whole_ms), ratio(turned_ms, whole_ms));
+  }
   const MeshOcclusionCuller<glm::vec3> opaque(cs.scene.mesh(), map.objects.data(), map.objects.size(), params);
   const MeshOcclusionCuller<glm::vec3> culler(cs.scene.mesh(), flagged.data(), flagged.size(), params);
   const double total = static_cast<double>(std::max<std::size_t>(cs.scene.triangle_count(), 1));
