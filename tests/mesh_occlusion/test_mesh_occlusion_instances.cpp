@@ -49,13 +49,7 @@ Prefab house() {
 
 Prefab panel(int n) {
   Prefab p;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) p.positions.emplace_back(float(i) / float(n) - 0.5f, float(j) / float(n), 0.0f);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const auto a = std::uint32_t(j * (n + 1) + i), b = a + 1, c = a + std::uint32_t(n + 2), d = a + std::uint32_t(n + 1);
-      for (std::uint32_t v : {a, b, c, a, c, d}) p.indices.push_back(v);
-    }
+  cut_panel(n, p.positions, p.indices);
   return p;
 }
 
