@@ -595,19 +595,6 @@ void culler_only(const std::string& name, const CullScene& cs, const std::vector
 
 // ---- --engine: the parts of an engine frame ----
 
-/// A panel x in [-0.5, 0.5], y in [0, 1], z = 0, facing +z, cut into n x n quads.
-void engine_panel(int n, std::vector<glm::vec3>& positions, std::vector<std::uint32_t>& indices) {
-  positions.clear();
-  indices.clear();
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) positions.emplace_back(float(i) / float(n) - 0.5f, float(j) / float(n), 0.0f);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const auto a = std::uint32_t(j * (n + 1) + i), b = a + 1, c = a + std::uint32_t(n + 2), d = a + std::uint32_t(n + 1);
-      for (std::uint32_t v : {a, b, c, a, c, d}) indices.push_back(v);
-    }
-}
-
 StridedMesh strided(const std::vector<glm::vec3>& positions, const std::vector<std::uint32_t>& indices) {
   return StridedMesh{{reinterpret_cast<const unsigned char*>(positions.data()), sizeof(glm::vec3), 0}, positions.size(),
                      {indices.data(), indices.size(), IndexFormat::uint32}};
@@ -635,7 +622,7 @@ std::vector<double> frame_times(const std::vector<Camera>& cams, int reps, Cull&
 void moving_against_static(int reps) {
   std::vector<glm::vec3> wall;
   std::vector<std::uint32_t> wall_indices;
-  engine_panel(32, wall, wall_indices);
+  cut_panel(32, wall, wall_indices);
   const glm::mat4 model = glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0, -3, -6)), glm::vec3(8, 6, 1));
   std::vector<glm::vec3> positions;
   std::vector<std::uint32_t> indices;
@@ -695,6 +682,36 @@ void engine_frame(const std::string& name, const CullScene& cs, const std::vecto
     flagged[o].occludes = !see_through[o];
     glass += see_through[o];
   }
+  {
+    // Building from instances against building from the concatenated mesh: the scene as instances of
+    // its own objects (each object's triangles a mesh of its own, placed by the identity), alternated.
+    std::vector<std::vector<std::uint32_t>> pieces;
+    std::vector<MeshInstance> instances;
+    for (const auto& o : cs.scene.objects) {
+      pieces.emplace_back(cs.scene.indices.begin() + std::ptrdiff_t(3 * std::size_t(o.first_triangle)),
+                          cs.scene.indices.begin() + std::ptrdiff_t(3 * (std::size_t(o.first_triangle) + o.triangle_count)));
+    }
+    for (const auto& piece : pieces) instances.push_back({strided(cs.scene.positions, piece), glm::mat4(1.0f)});
+    // The same with a matrix that is not the identity (a rotation by a quarter turn, exact in float).
+    std::vector<MeshInstance> turned = instances;
+    for (MeshInstance& in : turned) in.model = glm::mat4(glm::vec4(0, 0, -1, 0), glm::vec4(0, 1, 0, 0), glm::vec4(1, 0, 0, 0), glm::vec4(0, 0, 0, 1));
+    std::vector<double> whole_ms, instance_ms, turned_ms;
+    for (int r = 0; r < std::max(reps, 2); ++r) {
+      double t0 = thread_ms();
+      { const MeshOcclusionCuller<glm::vec3> c(cs.scene.mesh(), map.objects.data(), map.objects.size(), params); }
+      whole_ms.push_back(thread_ms() - t0);
+      t0 = thread_ms();
+      { const MeshOcclusionCuller<glm::vec3> c(instances.data(), instances.size(), map.objects.data(), map.objects.size(), params); }
+      instance_ms.push_back(thread_ms() - t0);
+      t0 = thread_ms();
+      { const MeshOcclusionCuller<glm::vec3> c(turned.data(), turned.size(), map.objects.data(), map.objects.size(), params); }
+      turned_ms.push_back(thread_ms() - t0);
+    }
+    std::printf("engine,%s,build_ms_concatenated=%s,build_ms_instances=%s (%zu instances; turned %s),"
+                "instances_over_concatenated=%.2f (turned %.2f)\n",
+                name.c_str(), ms_text(whole_ms).c_str(), ms_text(instance_ms).c_str(), instances.size(),
+                ms_text(turned_ms).c_str(), ratio(instance_ms, whole_ms), ratio(turned_ms, whole_ms));
+  }
   const MeshOcclusionCuller<glm::vec3> opaque(cs.scene.mesh(), map.objects.data(), map.objects.size(), params);
   const MeshOcclusionCuller<glm::vec3> culler(cs.scene.mesh(), flagged.data(), flagged.size(), params);
   const double total = static_cast<double>(std::max<std::size_t>(cs.scene.triangle_count(), 1));
@@ -717,8 +734,8 @@ void engine_frame(const std::string& name, const CullScene& cs, const std::vecto
   // Moving occluders along the walk: 6 per frame, as test_mesh_occlusion_moving places them.
   std::vector<glm::vec3> wall, door;
   std::vector<std::uint32_t> wall_indices, door_indices;
-  engine_panel(4, wall, wall_indices);
-  engine_panel(1, door, door_indices);
+  cut_panel(4, wall, wall_indices);
+  cut_panel(1, door, door_indices);
   support::Rng rng(7);
   std::vector<std::vector<MovingOccluder>> per_camera;
   for (const Camera& cam : cams) {

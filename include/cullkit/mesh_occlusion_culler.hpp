@@ -31,6 +31,7 @@
 // The index and the query are plain functions on flat arrays, compiled once whatever the vertex type.
 #include "detail/mesh_occlusion/box_test.hpp"
 #include "detail/mesh_occlusion/index.hpp"
+#include "detail/mesh_occlusion/instances.hpp"
 #include "detail/mesh_occlusion/query.hpp"
 
 namespace cullkit {
@@ -114,6 +115,25 @@ class MeshOcclusionCuller {
           object_count, params);
   }
 
+  /// Builds over several meshes placed by world matrices (instances of prefabs), as if their
+  /// triangles were one mesh, pre-transformed, in the order given: the objects index that numbering.
+  /// Corners are placed in double precision and rounded to float (the same corner of two instances
+  /// that meet lands on the same float, so their seam fuses); a mirroring matrix (negative
+  /// determinant) has its triangles' winding reversed, so front faces stay front faces. The
+  /// triangles of an instance whose matrix is not affine or not finite are unusable (skipped,
+  /// counted, and their objects always reported visible), as are triangles with an index out of
+  /// range or a corner placed at a non-finite point.
+  /// pre: `instances` points to `instance_count` instances (may be null when the count is 0); as the
+  /// StridedMesh constructor's otherwise.
+  MeshOcclusionCuller(const MeshInstance* instances, std::size_t instance_count, const MeshObject* objects,
+                      std::size_t object_count, const MeshOcclusionParams& params = {}) {
+    CULLKIT_ASSERT(instances != nullptr || instance_count == 0, "instances points to instance_count instances");
+    if (instances == nullptr) instance_count = 0;
+    detail::mesh_occlusion::InstanceReader reader(instances, instance_count);
+    build(reader.triangle_count(), [&reader](std::size_t t, glm::vec3 p[3]) { return reader.read(t, p); }, objects,
+          object_count, params);
+  }
+
   /// Clears `out`, then writes, once each, in any order, every object that may be visible from
   /// `camera`: an object is left out only if no ray from camera.eye through the view frustum meets a
   /// front-facing triangle of it beyond the near plane before it meets a front-facing triangle of
@@ -164,6 +184,22 @@ class MeshOcclusionCuller {
   /// false for an object number out of range.
   [[nodiscard]] bool occludes(std::uint32_t object) const noexcept {
     return object < index_.objects.size() && index_.objects[object].occludes;
+  }
+
+  /// The frustum-only answer: clears `out`, then writes every object whose box may meet `camera`'s
+  /// frustum and every object always reported visible (unusable data), as `cull` does before
+  /// occlusion. Thread safety: concurrent calls are safe (distinct `out`). Allocation: growth of `out`.
+  void cull_frustum(const Camera& camera, std::vector<std::uint32_t>& out) const {
+    index_.tree.cull(frustum_of(camera), out);
+    for (std::uint32_t& i : out) i = index_.tree_objects[i];
+    out.insert(out.end(), index_.unusable.begin(), index_.unusable.end());
+  }
+
+  /// Object `object`'s bounds (tight over its triangles, degenerate ones included); an inverted box
+  /// (Aabb::empty()) for an object out of range or one always reported visible (unusable data).
+  [[nodiscard]] Aabb object_bounds(std::uint32_t object) const noexcept {
+    if (object >= index_.objects.size() || index_.objects[object].triangle_count == 0) return Aabb::empty();
+    return index_.bounds[object];
   }
 
   /// What the constructor found.

@@ -12,3 +12,6 @@ cullkit_add_test(test_mesh_occlusion_box_query SOURCES ${CMAKE_CURRENT_LIST_DIR}
 # Moving occluders (walls, vehicles, doors; mirrored, scaled) against Embree truth.
 cullkit_add_test(test_mesh_occlusion_moving SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_moving.cpp EMBREE
                  TIMEOUT 600 LABELS mesh_occlusion)
+# A culler built from instances (prefabs placed by matrices, mirrored ones) equals the level by hand.
+cullkit_add_test(test_mesh_occlusion_instances SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_instances.cpp EMBREE
+                 TIMEOUT 300 LABELS mesh_occlusion)

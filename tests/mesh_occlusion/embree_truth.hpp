@@ -25,6 +25,24 @@
 
 #include <cullkit/mesh_occlusion_culler.hpp>
 
+// Smaller screens and fewer cameras under sanitizers and in unoptimized builds (the suite runs
+// three times in CI, once under ASan): MESH_OCC_SLOW is 1 there.
+#ifndef MESH_OCC_SLOW
+#if defined(__SANITIZE_ADDRESS__)
+#define MESH_OCC_SLOW 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define MESH_OCC_SLOW 1
+#endif
+#endif
+#if !defined(MESH_OCC_SLOW) && !defined(__OPTIMIZE__)
+#define MESH_OCC_SLOW 1
+#endif
+#ifndef MESH_OCC_SLOW
+#define MESH_OCC_SLOW 0
+#endif
+#endif
+
 namespace mesh_occlusion_test {
 
 using namespace cullkit;
@@ -92,26 +110,20 @@ struct RaySet {
   std::uint64_t seed = 1;
 };
 
-/// Per object: 0 not seen, else 1 + the first ray family that saw it (0 centres, 1 second grid,
-/// 2 jitter). Cost: one Embree ray per pixel of both grids plus `jitter` rays, single thread.
-inline std::vector<std::uint8_t> truly_visible(const oracle::EmbreeScene& embree, const ObjectMap& map,
-                                               const Camera& cam, const RaySet& rays) {
-  std::vector<std::uint8_t> seen(map.objects.size(), 0);
-  const auto mark = [&](const glm::vec3& dir, std::uint8_t family) {
-    if (dir == glm::vec3(0.0f)) return;
-    const std::uint32_t o = first_object(embree, map, cam, dir);
-    if (o != no_object && !seen[o]) seen[o] = static_cast<std::uint8_t>(1 + family);
-  };
+/// Calls `visit(direction, family)` for every ray of `rays` from `cam` (family 0 centres, 1 second
+/// grid, 2 jitter, one in 8 of those on the screen's border).
+template <class Visit>
+void for_each_ray(const Camera& cam, const RaySet& rays, Visit&& visit) {
   const PixelRays centres(cam);
   for (int y = 0; y < cam.height; ++y)
-    for (int x = 0; x < cam.width; ++x) mark(centres.ray(x, y).direction, 0);
+    for (int x = 0; x < cam.width; ++x) visit(centres.ray(x, y).direction, std::uint8_t{0});
   if (rays.second_width > 0 && rays.second_height > 0) {
     Camera second = cam;
     second.width = rays.second_width;
     second.height = rays.second_height;
     const PixelRays grid(second);
     for (int y = 0; y < second.height; ++y)
-      for (int x = 0; x < second.width; ++x) mark(grid.ray(x, y).direction, 1);
+      for (int x = 0; x < second.width; ++x) visit(grid.ray(x, y).direction, std::uint8_t{1});
   }
   support::Rng rng(rays.seed);
   for (int i = 0; i < rays.jitter; ++i) {
@@ -125,8 +137,20 @@ inline std::vector<std::uint8_t> truly_visible(const oracle::EmbreeScene& embree
         default: py = cam.height; break;
       }
     }
-    mark(centres.ray_at(px, py).direction, 2);
+    visit(centres.ray_at(px, py).direction, std::uint8_t{2});
   }
+}
+
+/// Per object: 0 not seen, else 1 + the first ray family that saw it (0 centres, 1 second grid,
+/// 2 jitter). Cost: one Embree ray per pixel of both grids plus `jitter` rays, single thread.
+inline std::vector<std::uint8_t> truly_visible(const oracle::EmbreeScene& embree, const ObjectMap& map,
+                                               const Camera& cam, const RaySet& rays) {
+  std::vector<std::uint8_t> seen(map.objects.size(), 0);
+  for_each_ray(cam, rays, [&](const glm::vec3& dir, std::uint8_t family) {
+    if (dir == glm::vec3(0.0f)) return;
+    const std::uint32_t o = first_object(embree, map, cam, dir);
+    if (o != no_object && !seen[o]) seen[o] = static_cast<std::uint8_t>(1 + family);
+  });
   return seen;
 }
 

@@ -21,7 +21,9 @@
 #include <string>
 #include <vector>
 
+#include <glm/ext/matrix_clip_space.hpp>
 #include <glm/ext/matrix_double4x4.hpp>
+#include <glm/ext/matrix_transform.hpp>
 #include <glm/ext/vector_double3.hpp>
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
@@ -102,31 +104,7 @@ inline std::vector<TruthRay> cast_frame(const FrameOccluders& occluders, const O
     }
     rays.push_back(r);
   };
-  const PixelRays centres(cam);
-  for (int y = 0; y < cam.height; ++y)
-    for (int x = 0; x < cam.width; ++x) cast(centres.ray(x, y).direction, 0);
-  if (set.second_width > 0 && set.second_height > 0) {
-    Camera second = cam;
-    second.width = set.second_width;
-    second.height = set.second_height;
-    const PixelRays grid(second);
-    for (int y = 0; y < second.height; ++y)
-      for (int x = 0; x < second.width; ++x) cast(grid.ray(x, y).direction, 1);
-  }
-  support::Rng rng(set.seed);
-  for (int i = 0; i < set.jitter; ++i) {
-    double px = static_cast<double>(rng.uniform()) * cam.width;
-    double py = static_cast<double>(rng.uniform()) * cam.height;
-    if (i % 8 == 7) {
-      switch (rng.range(0, 3)) {
-        case 0: px = 0.0; break;
-        case 1: px = cam.width; break;
-        case 2: py = 0.0; break;
-        default: py = cam.height; break;
-      }
-    }
-    cast(centres.ray_at(px, py).direction, 2);
-  }
+  for_each_ray(cam, set, cast);
   return rays;
 }
 
@@ -283,6 +261,45 @@ inline std::vector<std::uint8_t> quake_see_through(const support::Scene& scene, 
     flags[o] = named[j].second;
   }
   return flags;
+}
+
+/// The ray families of the engine-frame tests: fewer in slow builds (MESH_OCC_SLOW).
+inline RaySet frame_rays(std::uint64_t seed) {
+  RaySet set;
+  set.second_width = MESH_OCC_SLOW ? 127 : 257;
+  set.second_height = MESH_OCC_SLOW ? 71 : 143;
+  set.jitter = MESH_OCC_SLOW ? 1024 : 4096;
+  set.seed = seed;
+  return set;
+}
+constexpr int kFrameWidth = MESH_OCC_SLOW ? 160 : 320, kFrameHeight = MESH_OCC_SLOW ? 90 : 180;
+
+/// A 256x256 camera at `eye` looking at `target` (60 degrees, near 0.1, far 100).
+inline Camera look_at(const glm::vec3& eye, const glm::vec3& target) {
+  Camera cam;
+  cam.eye = eye;
+  cam.width = 256;
+  cam.height = 256;
+  cam.view_proj = glm::perspective(glm::radians(60.0f), 1.0f, 0.1f, 100.0f) * glm::lookAt(eye, target, glm::vec3(0, 1, 0));
+  return cam;
+}
+
+/// Whether `out` lists object `o`.
+inline bool lists(const std::vector<std::uint32_t>& out, std::uint32_t o) {
+  return std::find(out.begin(), out.end(), o) != out.end();
+}
+
+/// A panel x in [-0.5, 0.5], y in [0, 1], z = 0, facing +z, cut into n x n quads (shared corners).
+inline void cut_panel(int n, std::vector<glm::vec3>& positions, std::vector<std::uint32_t>& indices) {
+  positions.clear();
+  indices.clear();
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) positions.emplace_back(float(i) / float(n) - 0.5f, float(j) / float(n), 0.0f);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const auto a = std::uint32_t(j * (n + 1) + i), b = a + 1, c = a + std::uint32_t(n + 2), d = a + std::uint32_t(n + 1);
+      for (std::uint32_t v : {a, b, c, a, c, d}) indices.push_back(v);
+    }
 }
 
 }  // namespace mesh_occlusion_test

@@ -23,25 +23,10 @@
 using namespace cullkit;
 using namespace mesh_occlusion_test;
 
-#if defined(__SANITIZE_ADDRESS__)
-#define BOX_QUERY_SLOW 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define BOX_QUERY_SLOW 1
-#endif
-#endif
-#if !defined(BOX_QUERY_SLOW) && !defined(__OPTIMIZE__)
-#define BOX_QUERY_SLOW 1
-#endif
-#ifndef BOX_QUERY_SLOW
-#define BOX_QUERY_SLOW 0
-#endif
-
 namespace {
 
-constexpr int kWidth = BOX_QUERY_SLOW ? 160 : 320, kHeight = BOX_QUERY_SLOW ? 90 : 180;
-constexpr int kWalk = BOX_QUERY_SLOW ? 3 : 8;
-constexpr int kBoxesPerCamera = BOX_QUERY_SLOW ? 120 : 300;
+constexpr int kWalk = MESH_OCC_SLOW ? 3 : 8;
+constexpr int kBoxesPerCamera = MESH_OCC_SLOW ? 120 : 300;
 
 /// A query box: axis-aligned (`model` unset) or `local` placed by `model`.
 struct QueryBox {
@@ -119,10 +104,7 @@ void run_scene(const std::string& name, const support::Scene& scene, std::uint64
   const ObjectMap map(scene);
   const MeshOcclusionCuller<glm::vec3> culler(scene.mesh(), map.objects.data(), map.objects.size());
   const WalkSpec spec = walk_spec(name, scene, walker, seed);
-  std::vector<NamedCamera> cams;
-  const auto walk_cams = walk(spec, scene, walker, kWalk, 2, kWidth, kHeight, seed + 1);
-  for (std::size_t i = 0; i < walk_cams.size(); ++i) cams.push_back({"walk " + std::to_string(i), walk_cams[i]});
-  for (auto& h : hard_cameras(spec, scene, walker, walk_cams, kWidth, kHeight)) cams.push_back(h);
+  const auto cams = walk_then_hard_cameras(spec, scene, walker, kWalk, kFrameWidth, kFrameHeight, seed + 1);
   const float reach = std::min(glm::length(scene.bounds.max - scene.bounds.min) * 0.5f, 150.0f * spec.metre);
   support::Rng rng(seed * 7 + 3);
   MeshOcclusionContext context;
@@ -132,11 +114,7 @@ void run_scene(const std::string& name, const support::Scene& scene, std::uint64
   for (std::size_t ci = 0; ci < cams.size(); ++ci) {
     const Camera& cam = cams[ci].camera;
     culler.cull(cam, context, out);
-    RaySet set;
-    set.second_width = BOX_QUERY_SLOW ? 127 : 257;
-    set.second_height = BOX_QUERY_SLOW ? 71 : 143;
-    set.jitter = BOX_QUERY_SLOW ? 1024 : 4096;
-    set.seed = seed * 1000 + ci;
+    const RaySet set = frame_rays(seed * 1000 + ci);
     const auto rays = cast_frame(occluders, map, cam, set);
     const glm::dvec3 eye(cam.eye);
     const auto boxes = random_boxes(cam, spec, reach, rng, kBoxesPerCamera);
@@ -215,12 +193,12 @@ int main() {
               "hides %% of truly hidden objects | hidden inside / through near / across sides / oriented | false hides |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---|---:|\n");
   Tally all;
-  run_scene("city", support::make_city(3, BOX_QUERY_SLOW ? 4 : 8), 31, all);
-  run_scene("office", support::make_office(3, BOX_QUERY_SLOW ? 5 : 10, BOX_QUERY_SLOW ? 4 : 8), 37, all);
+  run_scene("city", support::make_city(3, MESH_OCC_SLOW ? 4 : 8), 31, all);
+  run_scene("office", support::make_office(3, MESH_OCC_SLOW ? 5 : 10, MESH_OCC_SLOW ? 4 : 8), 37, all);
   std::uint64_t seed = 41;
   for (const auto& file : support::real_scene_files()) {
     if (file.find("oacmpdm9") == std::string::npos && file.find("fzk_haus") == std::string::npos &&
-        (BOX_QUERY_SLOW || file.find("lasdunas") == std::string::npos))
+        (MESH_OCC_SLOW || file.find("lasdunas") == std::string::npos))
       continue;
     if (const auto scene = support::load_obj(support::scenes_dir() + "/" + file)) run_scene(file, *scene, seed++, all);
   }

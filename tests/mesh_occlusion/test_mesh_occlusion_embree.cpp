@@ -24,22 +24,6 @@
 using namespace cullkit;
 using namespace mesh_occlusion_test;
 
-// Smaller screens and fewer cameras under sanitizers and in unoptimized builds (the suite runs
-// three times in CI, once under ASan).
-#if defined(__SANITIZE_ADDRESS__)
-#define MESH_OCC_SLOW 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define MESH_OCC_SLOW 1
-#endif
-#endif
-#if !defined(MESH_OCC_SLOW) && !defined(__OPTIMIZE__)
-#define MESH_OCC_SLOW 1
-#endif
-#ifndef MESH_OCC_SLOW
-#define MESH_OCC_SLOW 0
-#endif
-
 namespace {
 
 constexpr int kWidth = MESH_OCC_SLOW ? 160 : 320, kHeight = MESH_OCC_SLOW ? 90 : 180;

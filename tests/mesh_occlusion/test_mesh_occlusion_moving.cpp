@@ -12,9 +12,6 @@
 #include <string>
 #include <vector>
 
-#include <glm/ext/matrix_clip_space.hpp>
-#include <glm/ext/matrix_transform.hpp>
-
 #include "check.hpp"
 #include "frame_truth.hpp"
 #include "walk_cameras.hpp"
@@ -22,24 +19,9 @@
 using namespace cullkit;
 using namespace mesh_occlusion_test;
 
-#if defined(__SANITIZE_ADDRESS__)
-#define MOVING_SLOW 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define MOVING_SLOW 1
-#endif
-#endif
-#if !defined(MOVING_SLOW) && !defined(__OPTIMIZE__)
-#define MOVING_SLOW 1
-#endif
-#ifndef MOVING_SLOW
-#define MOVING_SLOW 0
-#endif
-
 namespace {
 
-constexpr int kWidth = MOVING_SLOW ? 160 : 320, kHeight = MOVING_SLOW ? 90 : 180;
-constexpr int kWalk = MOVING_SLOW ? 3 : 10;
+constexpr int kWalk = MESH_OCC_SLOW ? 3 : 10;
 
 /// A moving occluder's own buffers and what the truth needs of it.
 struct Shape {
@@ -55,16 +37,10 @@ struct Shape {
   }
 };
 
-/// A panel x in [-0.5, 0.5], y in [0, 1], z = 0, facing +z, cut into n x n quads (shared corners).
+/// A cut panel (cut_panel) as a wall or door: 16-bit indices.
 Shape panel(int n) {
   Shape s;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) s.positions.emplace_back(float(i) / float(n) - 0.5f, float(j) / float(n), 0.0f);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const std::uint32_t a = std::uint32_t(j * (n + 1) + i), b = a + 1, c = a + std::uint32_t(n + 1) + 1, d = a + std::uint32_t(n + 1);
-      for (std::uint32_t v : {a, b, c, a, c, d}) s.indices.push_back(v);
-    }
+  cut_panel(n, s.positions, s.indices);
   for (std::uint32_t v : s.indices) s.indices16.push_back(static_cast<std::uint16_t>(v));
   return s;
 }
@@ -85,21 +61,6 @@ Shape vehicle() {
   return s;
 }
 
-Camera look(const glm::vec3& eye, const glm::vec3& target) {
-  Camera cam;
-  cam.eye = eye;
-  cam.width = 256;
-  cam.height = 256;
-  cam.view_proj = glm::perspective(glm::radians(60.0f), 1.0f, 0.1f, 100.0f) * glm::lookAt(eye, target, glm::vec3(0, 1, 0));
-  return cam;
-}
-
-bool has(const std::vector<std::uint32_t>& out, std::uint32_t o) {
-  for (std::uint32_t v : out)
-    if (v == o) return true;
-  return false;
-}
-
 /// A crate face at z = -3 (and a floor tile beside it, so there are two objects), eye at z = 5;
 /// moving walls at z = 0.
 void shortest_cases() {
@@ -109,7 +70,7 @@ void shortest_cases() {
   const MeshObject objects[2] = {{0, 2}, {2, 1}};
   const MeshOcclusionCuller<glm::vec3> culler(MeshView<glm::vec3>{positions.data(), positions.size(), indices.data(), indices.size()},
                                               objects, 2);
-  const Camera cam = look({0, 0, 5}, {0, 0, 0});
+  const Camera cam = look_at({0, 0, 5}, {0, 0, 0});
   const Shape wall = panel(3);
   MeshOcclusionContext context;
   std::vector<std::uint32_t> out;
@@ -117,7 +78,7 @@ void shortest_cases() {
   const auto run = [&](const glm::mat4& model) {
     const MovingOccluder moving{wall.mesh(), model};
     culler.cull(cam, context, out, &moving, 1);
-    return !has(out, 0);
+    return !lists(out, 0);
   };
   CHECK_MSG(run(glm::scale(at, glm::vec3(4, 4, 1))), "a moving wall hides the crate");
   CHECK(context.stats().moving_triangles > 0);
@@ -141,9 +102,9 @@ void shortest_cases() {
                                           {bad.data(), bad.size(), IndexFormat::uint16}},
                               glm::scale(at, glm::vec3(4, 4, 1))};
   culler.cull(cam, context, out, &broken, 1);
-  CHECK(has(out, 0));
+  CHECK(lists(out, 0));
   culler.cull(cam, context, out, nullptr, 0);
-  CHECK(has(out, 0) && context.stats().moving_triangles == 0);
+  CHECK(lists(out, 0) && context.stats().moving_triangles == 0);
   // The box query sees the moving wall: a box behind it is hidden, the crate's box too.
   culler.cull(cam, context, out, std::vector<MovingOccluder>{{wall.mesh(), glm::scale(at, glm::vec3(4, 4, 1))}}.data(), 1);
   CHECK(context.is_hidden(Aabb{{-0.2f, -0.2f, -2.0f}, {0.2f, 0.2f, -1.0f}}));
@@ -192,19 +153,13 @@ void run_scene(const std::string& name, const support::Scene& scene, std::uint64
   const ObjectMap map(scene);
   const MeshOcclusionCuller<glm::vec3> culler(scene.mesh(), map.objects.data(), map.objects.size());
   const WalkSpec spec = walk_spec(name, scene, walker, seed);
-  std::vector<NamedCamera> cams;
-  const auto walk_cams = walk(spec, scene, walker, kWalk, 2, kWidth, kHeight, seed + 1);
-  for (std::size_t i = 0; i < walk_cams.size(); ++i) cams.push_back({"walk " + std::to_string(i), walk_cams[i]});
-  for (auto& h : hard_cameras(spec, scene, walker, walk_cams, kWidth, kHeight)) cams.push_back(h);
+  const auto cams = walk_then_hard_cameras(spec, scene, walker, kWalk, kFrameWidth, kFrameHeight, seed + 1);
   const Shape shapes[3] = {panel(4), vehicle(), panel(1)};
   support::Rng rng(seed * 13 + 5);
   MeshOcclusionContext context;
   std::vector<std::uint32_t> out;
   Tally tally;
-  RaySet set;
-  set.second_width = MOVING_SLOW ? 127 : 257;
-  set.second_height = MOVING_SLOW ? 71 : 143;
-  set.jitter = MOVING_SLOW ? 1024 : 4096;
+  RaySet set = frame_rays(0);
   const auto seen_by = [&](const FrameOccluders& occ, const Camera& cam) {
     const auto rays = cast_frame(occ, map, cam, set);
     std::vector<std::uint8_t> seen(scene.objects.size(), 0);
@@ -298,8 +253,8 @@ int main() {
   std::printf("| scene | frames | false culls | moving boxes hidden | of them seen | objects truly hidden by the wall 3 m "
               "ahead | culler hides %% of them |\n|---|---:|---:|---:|---:|---:|---:|\n");
   Tally all;
-  run_scene("city", support::make_city(3, MOVING_SLOW ? 4 : 8), 31, all);
-  run_scene("office", support::make_office(3, MOVING_SLOW ? 5 : 10, MOVING_SLOW ? 4 : 8), 37, all);
+  run_scene("city", support::make_city(3, MESH_OCC_SLOW ? 4 : 8), 31, all);
+  run_scene("office", support::make_office(3, MESH_OCC_SLOW ? 5 : 10, MESH_OCC_SLOW ? 4 : 8), 37, all);
   std::uint64_t seed = 41;
   for (const auto& file : support::real_scene_files()) {
     if (file.find("oacmpdm9") == std::string::npos && file.find("fzk_haus") == std::string::npos) continue;

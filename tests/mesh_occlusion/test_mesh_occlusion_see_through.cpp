@@ -8,9 +8,6 @@
 #include <string>
 #include <vector>
 
-#include <glm/ext/matrix_clip_space.hpp>
-#include <glm/ext/matrix_transform.hpp>
-
 #include "check.hpp"
 #include "frame_truth.hpp"
 #include "walk_cameras.hpp"
@@ -18,39 +15,9 @@
 using namespace cullkit;
 using namespace mesh_occlusion_test;
 
-#if defined(__SANITIZE_ADDRESS__)
-#define SEE_THROUGH_SLOW 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define SEE_THROUGH_SLOW 1
-#endif
-#endif
-#if !defined(SEE_THROUGH_SLOW) && !defined(__OPTIMIZE__)
-#define SEE_THROUGH_SLOW 1
-#endif
-#ifndef SEE_THROUGH_SLOW
-#define SEE_THROUGH_SLOW 0
-#endif
-
 namespace {
 
-constexpr int kWidth = SEE_THROUGH_SLOW ? 160 : 320, kHeight = SEE_THROUGH_SLOW ? 90 : 180;
-constexpr int kWalk = SEE_THROUGH_SLOW ? 3 : 10;
-
-Camera look(const glm::vec3& eye, const glm::vec3& target) {
-  Camera cam;
-  cam.eye = eye;
-  cam.width = 256;
-  cam.height = 256;
-  cam.view_proj = glm::perspective(glm::radians(60.0f), 1.0f, 0.1f, 100.0f) * glm::lookAt(eye, target, glm::vec3(0, 1, 0));
-  return cam;
-}
-
-bool has(const std::vector<std::uint32_t>& out, std::uint32_t o) {
-  for (std::uint32_t v : out)
-    if (v == o) return true;
-  return false;
-}
+constexpr int kWalk = MESH_OCC_SLOW ? 3 : 10;
 
 /// A 4x4 glass quad at z = 0 in front of a 1x1 crate face at z = -3, eye at z = 5.
 void glass_in_front_of_crate() {
@@ -58,13 +25,13 @@ void glass_in_front_of_crate() {
                                             {-0.5f, -0.5f, -3}, {0.5f, -0.5f, -3}, {0.5f, 0.5f, -3}, {-0.5f, 0.5f, -3}};
   const std::vector<std::uint32_t> indices = {0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7};
   const MeshView<glm::vec3> mesh{positions.data(), positions.size(), indices.data(), indices.size()};
-  const Camera cam = look({0, 0, 5}, {0, 0, 0});
+  const Camera cam = look_at({0, 0, 5}, {0, 0, 0});
   std::vector<std::uint32_t> out;
   {
     const MeshObject objects[2] = {{0, 2, false}, {2, 2}};
     const MeshOcclusionCuller<glm::vec3> culler(mesh, objects, 2);
     culler.cull(cam, out);
-    CHECK_MSG(has(out, 0) && has(out, 1), "glass: the crate behind non-occluding glass must be kept");
+    CHECK_MSG(lists(out, 0) && lists(out, 1), "glass: the crate behind non-occluding glass must be kept");
     CHECK(!culler.occludes(0) && culler.occludes(1) && !culler.occludes(2));
   }
   {
@@ -73,17 +40,17 @@ void glass_in_front_of_crate() {
     MeshOcclusionCuller<glm::vec3> culler(mesh, objects, 2);
     MeshOcclusionContext context;
     culler.cull(cam, context, out);
-    CHECK_MSG(has(out, 0) && !has(out, 1), "glass control: an opaque quad hides the crate");
+    CHECK_MSG(lists(out, 0) && !lists(out, 1), "glass control: an opaque quad hides the crate");
     // A door of the level that opens, then closes again: no rebuild.
     culler.set_occludes(0, false);
     culler.cull(cam, context, out);
-    CHECK_MSG(has(out, 0) && has(out, 1), "set_occludes(false): the crate is kept");
+    CHECK_MSG(lists(out, 0) && lists(out, 1), "set_occludes(false): the crate is kept");
     culler.set_occludes(0, true);
     culler.cull(cam, context, out);
-    CHECK_MSG(has(out, 0) && !has(out, 1), "set_occludes(true): the crate is hidden again");
+    CHECK_MSG(lists(out, 0) && !lists(out, 1), "set_occludes(true): the crate is hidden again");
     culler.set_occludes(7, false);  // out of range: ignored
     culler.cull(cam, context, out);
-    CHECK(!has(out, 1));
+    CHECK(!lists(out, 1));
   }
 }
 
@@ -111,18 +78,11 @@ void run_scene(const std::string& name, const support::Scene& scene, const std::
   const MeshOcclusionCuller<glm::vec3> control(scene.mesh(), all_occlude.data(), all_occlude.size());
 
   const WalkSpec spec = walk_spec(name, scene, walker, seed);
-  std::vector<NamedCamera> cams;
-  const auto walk_cams = walk(spec, scene, walker, kWalk, 2, kWidth, kHeight, seed + 1);
-  for (std::size_t i = 0; i < walk_cams.size(); ++i) cams.push_back({"walk " + std::to_string(i), walk_cams[i]});
-  for (auto& h : hard_cameras(spec, scene, walker, walk_cams, kWidth, kHeight)) cams.push_back(h);
+  const auto cams = walk_then_hard_cameras(spec, scene, walker, kWalk, kFrameWidth, kFrameHeight, seed + 1);
   std::vector<std::uint32_t> out;
   for (std::size_t ci = 0; ci < cams.size(); ++ci) {
     const Camera& cam = cams[ci].camera;
-    RaySet set;
-    set.second_width = SEE_THROUGH_SLOW ? 127 : 257;
-    set.second_height = SEE_THROUGH_SLOW ? 71 : 143;
-    set.jitter = SEE_THROUGH_SLOW ? 1024 : 4096;
-    set.seed = seed * 1000 + ci;
+    const RaySet set = frame_rays(seed * 1000 + ci);
     const auto rays = cast_frame(occluders, map, cam, set);
     const auto seen = seen_objects(scene, see_through, rays, cam);
     const auto missing = [&](const std::vector<std::uint32_t>& answer) {
@@ -161,13 +121,13 @@ int main() {
   std::printf("| scene | objects | see-through | cameras | kept %% | visible %% | false culls | all occluding: false culls |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|---:|\n");
   {
-    auto city = support::make_city(3, SEE_THROUGH_SLOW ? 4 : 8);
-    const auto flags = add_see_through(city, SEE_THROUGH_SLOW ? 60 : 200, 6.0f, 5);
+    auto city = support::make_city(3, MESH_OCC_SLOW ? 4 : 8);
+    const auto flags = add_see_through(city, MESH_OCC_SLOW ? 60 : 200, 6.0f, 5);
     run_scene("city", city, flags, 31, true);
   }
   {
-    auto office = support::make_office(3, SEE_THROUGH_SLOW ? 5 : 10, SEE_THROUGH_SLOW ? 4 : 8);
-    const auto flags = add_see_through(office, SEE_THROUGH_SLOW ? 60 : 200, 1.5f, 7);
+    auto office = support::make_office(3, MESH_OCC_SLOW ? 5 : 10, MESH_OCC_SLOW ? 4 : 8);
+    const auto flags = add_see_through(office, MESH_OCC_SLOW ? 60 : 200, 1.5f, 7);
     run_scene("office", office, flags, 37, true);
   }
   const std::string obj = support::scenes_dir() + "/oacmpdm9.obj";

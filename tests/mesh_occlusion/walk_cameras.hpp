@@ -337,4 +337,15 @@ inline std::vector<NamedCamera> hard_cameras(const WalkSpec& spec, const support
   return out;
 }
 
+/// A scene's walk (`count` cameras in 2 legs, named "walk <i>") followed by its hard cameras.
+inline std::vector<NamedCamera> walk_then_hard_cameras(const WalkSpec& spec, const support::Scene& scene,
+                                                       const oracle::EmbreeScene& embree, int count, int width,
+                                                       int height, std::uint64_t seed) {
+  std::vector<NamedCamera> cams;
+  const auto walk_cams = walk(spec, scene, embree, count, 2, width, height, seed);
+  for (std::size_t i = 0; i < walk_cams.size(); ++i) cams.push_back({"walk " + std::to_string(i), walk_cams[i]});
+  for (auto& h : hard_cameras(spec, scene, embree, walk_cams, width, height)) cams.push_back(h);
+  return cams;
+}
+
 }  // namespace mesh_occlusion_test

@@ -10,29 +10,23 @@
 // stay front faces in the world.
 #pragma once
 
-#include <cstddef>
-#include <cstdint>
-#include <vector>
-
-#include <glm/ext/vector_double3.hpp>
-
-#include "../../mesh_occlusion_params.hpp"
-#include "frame.hpp"
-#include "index.hpp"
-#if CULLKIT_CORE_BODIES
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 #include <glm/ext/matrix_double4x4.hpp>
 #include <glm/matrix.hpp>
 
+// Scratch (and through it the view and the grid), MeshIndex with its welding and edge pairing.
+#include "frame.hpp"
+#include "index.hpp"
+#if CULLKIT_CORE_BODIES
+// insert_run, the path of static patches (compiled only where the frame's definition is).
 #include "occluders.hpp"
 #endif
 
-namespace cullkit {
-namespace detail {
-namespace mesh_occlusion {
+namespace cullkit::detail::mesh_occlusion {
 
 /// Working memory for the moving occluders of a frame; only grows.
 struct MovingScratch {
@@ -91,31 +85,51 @@ inline bool place_moving(const glm::mat4& model, MovingScratch& m) {
 }
 
 /// Clips triangle t of the moving occluder (corners c, `inside` as for clip_occluder) at the
-/// clipping level, each clip point from its edge's endpoints ordered by welded id.
+/// clipping level, each clip point from its edge's endpoints ordered by welded id, so the two
+/// triangles of a shared edge get the same point.
 inline bool clip_moving(const MovingScratch& m, const std::uint32_t* c, unsigned inside, ClippedPolygon& poly) {
   poly.n = 0;
+  const auto put = [&poly](const Projected& p, int edge) {
+    poly.x[poly.n] = p.x;
+    poly.y[poly.n] = p.y;
+    poly.w[poly.n] = p.w;
+    poly.edge[poly.n++] = edge;
+  };
   for (int k = 0; k < 3; ++k) {
-    const int l = k == 2 ? 0 : k + 1;
+    const int l = (k + 1) % 3;
     const bool in_k = (inside >> k) & 1u, in_l = (inside >> l) & 1u;
-    if (in_k) {
-      const Projected& p = m.s.projected[c[k]];
-      poly.x[poly.n] = p.x;
-      poly.y[poly.n] = p.y;
-      poly.w[poly.n] = p.w;
-      poly.edge[poly.n++] = k;
-    }
+    if (in_k) put(m.s.projected[c[k]], k);  // on along edge k, to corner l or its clip point
     if (in_k == in_l) continue;
-    const glm::dvec3& pa = m.world[std::min(c[k], c[l])];
-    const glm::dvec3& pb = m.world[std::max(c[k], c[l])];
-    const double a[3] = {pa.x, pa.y, pa.z}, b[3] = {pb.x, pb.y, pb.z};
+    const glm::dvec3 &from = m.world[std::min(c[k], c[l])], &to = m.world[std::max(c[k], c[l])];
+    const double a[3] = {from.x, from.y, from.z}, b[3] = {to.x, to.y, to.z};
     Projected q;
     if (!m.s.view.clip_point(a, b, q)) return false;
-    poly.x[poly.n] = q.x;
-    poly.y[poly.n] = q.y;
-    poly.w[poly.n] = q.w;
-    poly.edge[poly.n++] = in_k ? -1 : k;
+    put(q, in_k ? -1 : k);  // leaving: on along the clipping line; entering: on along edge k
   }
   return true;
+}
+
+/// The screen box and depth range of a projected polygon of n corners.
+struct PolygonExtent {
+  double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, w0 = HUGE_VAL, w1 = -HUGE_VAL;
+  PolygonExtent(const double* x, const double* y, const double* w, int n) {
+    for (int k = 0; k < n; ++k) add(x[k], y[k], w[k]);
+  }
+  void add(double x, double y, double w) {
+    x0 = std::min(x0, x), x1 = std::max(x1, x);
+    y0 = std::min(y0, y), y1 = std::max(y1, y);
+    w0 = std::min(w0, w), w1 = std::max(w1, w);
+  }
+};
+
+/// gather_triangles' front-facing rule: the polygon's signed grid area, by `orient`, clearly positive
+/// against its extent (edge-on and back-facing polygons never occlude).
+inline bool clearly_front_facing(const double* x, const double* y, int n, const PolygonExtent& e, int orient) {
+  double twice_area = 0.0;
+  for (int k = 2; k < n; ++k)
+    twice_area += (x[k - 1] - x[0]) * (y[k] - y[0]) - (x[k] - x[0]) * (y[k - 1] - y[0]);
+  const double size = std::max(e.x1 - e.x0, e.y1 - e.y0);
+  return twice_area * orient > 1e-9 * size * size;
 }
 
 /// Keeps the moving occluder's triangles that can occlude, by gather_triangles' rules (clearly
@@ -133,60 +147,41 @@ inline void gather_moving(MovingScratch& m, int grid_width, int grid_height, dou
   s.triangle_band.resize(count);
   s.member_stamp.assign(count, 0);
   s.member_value = 1;
-  box[0] = box[1] = box[4] = HUGE_VAL;
-  box[2] = box[3] = -HUGE_VAL;
-  const int orient = s.view.orient;
+  PolygonExtent all(nullptr, nullptr, nullptr, 0);
   for (std::size_t t = 0; t < count; ++t) {
     const std::uint32_t* c = &m.index.corners[3 * t];
     if (c[0] == none) continue;
-    double x[4], y[4], w[4];
-    int n = 3;
     unsigned inside = 0;
-    for (int k = 0; k < 3; ++k) {
-      const Projected& p = s.projected[c[k]];
-      inside |= p.inside ? 1u << k : 0u;
-      x[k] = p.x;
-      y[k] = p.y;
-      w[k] = p.w;
+    for (int k = 0; k < 3; ++k) inside |= s.projected[c[k]].inside ? 1u << k : 0u;
+    if (inside == 0u) continue;  // wholly short of the clipping level
+    ClippedPolygon poly;
+    if (inside == 7u) {
+      for (int k = 0; k < 3; ++k) {
+        const Projected& p = s.projected[c[k]];
+        poly.x[k] = p.x, poly.y[k] = p.y, poly.w[k] = p.w, poly.edge[k] = k;
+      }
+      poly.n = 3;
+    } else if (!clip_moving(m, c, inside, poly)) {
+      continue;
     }
-    if (inside == 0u) continue;
+    const PolygonExtent e(poly.x, poly.y, poly.w, poly.n);
+    if (e.x1 < 0.0 || e.x0 > grid_width || e.y1 < 0.0 || e.y0 > grid_height) continue;
+    if (!clearly_front_facing(poly.x, poly.y, poly.n, e, s.view.orient)) continue;
     if (inside != 7u) {
-      ClippedPolygon poly;
-      if (!clip_moving(m, c, inside, poly)) continue;
-      n = poly.n;
-      std::copy(poly.x, poly.x + n, x);
-      std::copy(poly.y, poly.y + n, y);
-      std::copy(poly.w, poly.w + n, w);
       s.clip_stamp[t] = s.frame;
       s.clip_slot[t] = static_cast<std::uint32_t>(s.clipped.size());
       s.clipped.push_back(poly);
     }
-    double xmin = x[0], xmax = x[0], ymin = y[0], ymax = y[0], wmin = w[0], wmax = w[0];
-    for (int k = 1; k < n; ++k) {
-      xmin = std::min(xmin, x[k]);
-      xmax = std::max(xmax, x[k]);
-      ymin = std::min(ymin, y[k]);
-      ymax = std::max(ymax, y[k]);
-      wmin = std::min(wmin, w[k]);
-      wmax = std::max(wmax, w[k]);
-    }
-    if (xmax < 0.0 || xmin > grid_width || ymax < 0.0 || ymin > grid_height) continue;
-    double area2 = 0.0;
-    for (int k = 1; k + 1 < n; ++k) area2 += (x[k] - x[0]) * (y[k + 1] - y[0]) - (x[k + 1] - x[0]) * (y[k] - y[0]);
-    const double extent = std::max(xmax - xmin, ymax - ymin);
-    if (!(area2 * orient > 1e-9 * extent * extent)) continue;
     // A clipped polygon goes in by its farthest depth, as a static one does (gather_triangles).
-    const float key = static_cast<float>(inside != 7u ? wmax : wmin);
+    const float key = static_cast<float>(inside != 7u ? e.w1 : e.w0);
     std::uint32_t bits;
     std::memcpy(&bits, &key, sizeof bits);
     s.triangles.emplace_back(bits, static_cast<std::uint32_t>(t));
     s.member_stamp[t] = s.member_value;
-    box[0] = std::min(box[0], xmin);
-    box[1] = std::min(box[1], ymin);
-    box[2] = std::max(box[2], xmax);
-    box[3] = std::max(box[3], ymax);
-    box[4] = std::min(box[4], wmin);
+    all.add(e.x0, e.y0, e.w0);
+    all.add(e.x1, e.y1, e.w0);
   }
+  box[0] = all.x0, box[1] = all.y0, box[2] = all.x1, box[3] = all.y1, box[4] = all.w0;
   radix_sort(s.triangles, s.sort_buffer);
 }
 
@@ -230,6 +225,4 @@ inline std::size_t insert_moving(const MeshOcclusionParams& params, const Moving
 
 #endif  // CULLKIT_CORE_BODIES
 
-}  // namespace mesh_occlusion
-}  // namespace detail
-}  // namespace cullkit
+}  // namespace cullkit::detail::mesh_occlusion

@@ -1,7 +1,8 @@
 // cullkit/detail/mesh_occlusion/query.hpp: one frame of MeshOcclusionCuller::cull, as named steps:
 // frustum walk, object boxes on screen, occluder choice, occluder bands into the coverage grid
-// (occluders.hpp), moving occluders into the same grid (moving.hpp), object tests (object_tests.hpp). The steps are compiled only where the frame's
-// definition is (CULLKIT_SEPARATE_CORE, config.hpp).
+// (occluders.hpp), moving occluders into the same grid (moving.hpp), object tests
+// (object_tests.hpp). The steps are compiled only where the frame's definition is
+// (CULLKIT_SEPARATE_CORE, config.hpp).
 #pragma once
 
 #include <cmath>
