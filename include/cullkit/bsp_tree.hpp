@@ -37,6 +37,7 @@
 
 #include "config.hpp"
 #include "detail/bsp/build.hpp"
+#include "detail/mesh_instances.hpp"
 #include "mesh_buffers.hpp"
 #include "traits.hpp"
 
@@ -76,6 +77,22 @@ class BspTree {
     const StridedMesh m = detail::checked_mesh(mesh);
     const auto read = [&m](std::size_t t, glm::vec3 out[3]) { return triangle_positions(m, t, out); };
     detail::bsp::build(m.triangle_count(), read, params, data_);
+  }
+
+  /// Builds over several meshes placed by world matrices (a level of prefabs), as if they were one
+  /// mesh whose triangles are the instances' one after another in the order given (fragments name
+  /// triangles in that numbering). Corners are placed in double precision and rounded to float; a
+  /// mirroring matrix (negative determinant) has its triangles' winding reversed, so front faces
+  /// stay front faces. The triangles of an instance whose matrix is not affine or not finite are
+  /// dropped and counted (`dropped_bad_index`), as are triangles with an index out of range.
+  /// pre: `instances` points to `instance_count` instances (may be null when the count is 0); as
+  /// the StridedMesh constructor's otherwise.
+  BspTree(const MeshInstance* instances, std::size_t instance_count, const BspParams& params = {}) {
+    CULLKIT_ASSERT(instances != nullptr || instance_count == 0, "instances points to instance_count instances");
+    if (instances == nullptr) instance_count = 0;
+    detail::InstanceReader reader(instances, instance_count);
+    detail::bsp::build(reader.triangle_count(), [&reader](std::size_t t, glm::vec3 out[3]) { return reader.read(t, out); },
+                       params, data_);
   }
 
   /// Every fragment, grouped by node (fragments of one node are consecutive).

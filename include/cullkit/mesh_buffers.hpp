@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
 #include "config.hpp"
@@ -105,5 +106,16 @@ template <class Vertex, class Index>
 }
 
 }  // namespace detail
+
+/// A mesh placed in the world by a matrix, for building one container from several meshes (a level
+/// of prefabs; MeshOcclusionCuller, BspTree): `mesh` in its own space (front faces counter-clockwise
+/// there, 16- or 32-bit indices, any stride) and `model`, its affine world matrix, mirrored or not
+/// (a negative determinant reverses the apparent winding; the containers compensate, so front faces
+/// stay front faces). The instances' triangles are numbered one after another in
+/// the order given: instance 0's triangles first.
+struct MeshInstance {
+  StridedMesh mesh;
+  glm::mat4 model;
+};
 
 }  // namespace cullkit

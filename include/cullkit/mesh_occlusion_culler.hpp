@@ -31,7 +31,7 @@
 // The index and the query are plain functions on flat arrays, compiled once whatever the vertex type.
 #include "detail/mesh_occlusion/box_test.hpp"
 #include "detail/mesh_occlusion/index.hpp"
-#include "detail/mesh_occlusion/instances.hpp"
+#include "detail/mesh_instances.hpp"
 #include "detail/mesh_occlusion/query.hpp"
 
 namespace cullkit {
@@ -129,7 +129,7 @@ class MeshOcclusionCuller {
                       std::size_t object_count, const MeshOcclusionParams& params = {}) {
     CULLKIT_ASSERT(instances != nullptr || instance_count == 0, "instances points to instance_count instances");
     if (instances == nullptr) instance_count = 0;
-    detail::mesh_occlusion::InstanceReader reader(instances, instance_count);
+    detail::InstanceReader reader(instances, instance_count);
     build(reader.triangle_count(), [&reader](std::size_t t, glm::vec3 p[3]) { return reader.read(t, p); }, objects,
           object_count, params);
   }

@@ -33,16 +33,6 @@ struct MovingOccluder {
   glm::mat4 model;
 };
 
-/// A mesh placed in the world by a matrix, for building one culler from several meshes (a level of
-/// prefabs): `mesh` in its own space (front faces counter-clockwise there, 16- or 32-bit indices,
-/// any stride) and `model`, its affine world matrix, mirrored or not (a negative determinant is
-/// compensated as for MovingOccluder). The instances' triangles are numbered one after another in
-/// the order given: instance 0's triangles first.
-struct MeshInstance {
-  StridedMesh mesh;
-  glm::mat4 model;
-};
-
 /// Parameters of `MeshOcclusionCuller`. Every field has a documented default; `{}` is a sound choice.
 struct MeshOcclusionParams {
   /// Coverage cells across the screen. Default 256. The cells are not the renderer's pixels: the

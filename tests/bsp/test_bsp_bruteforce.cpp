@@ -297,9 +297,60 @@ void test_threads_and_progress() {
               a.fragments().size(), a.nodes().size(), a.stats().depth);
 }
 
+// Built from instances (a soup as it is, and the same soup 16-bit, rotated, scaled and mirrored):
+// the same tree as the level concatenated by hand (corners placed in double and rounded to float,
+// the mirrored instance's triangles wound back).
+void test_instances() {
+  const Scene soup = bsp_test::random_soup(31, 200, 4.0f, 1.5f);
+  std::vector<std::uint16_t> idx16(soup.indices.begin(), soup.indices.end());
+  const cullkit::StridedMesh mesh32{{reinterpret_cast<const unsigned char*>(soup.positions.data()), sizeof(glm::vec3), 0}, soup.positions.size(),
+                                    {soup.indices.data(), soup.indices.size(), cullkit::IndexFormat::uint32}};
+  const cullkit::StridedMesh mesh16{{reinterpret_cast<const unsigned char*>(soup.positions.data()), sizeof(glm::vec3), 0}, soup.positions.size(),
+                                    {idx16.data(), idx16.size(), cullkit::IndexFormat::uint16}};
+  glm::mat4 mirrored(1.0f);
+  mirrored[0] = glm::vec4(0.0f, 0.0f, -1.5f, 0.0f);  // x -> -1.5 z
+  mirrored[1] = glm::vec4(0.0f, 0.8f, 0.0f, 0.0f);
+  mirrored[2] = glm::vec4(-1.0f, 0.0f, 0.0f, 0.0f);  // z -> -x: with the above, a reflection
+  mirrored[3] = glm::vec4(9.0f, 1.0f, -3.0f, 1.0f);
+  const cullkit::MeshInstance instances[2] = {{mesh32, glm::mat4(1.0f)}, {mesh16, mirrored}};
+  const Tree from_instances(instances, 2);
+
+  Scene by_hand;
+  for (int which = 0; which < 2; ++which) {
+    const glm::dmat4 m(which == 0 ? glm::mat4(1.0f) : mirrored);
+    for (std::size_t t = 0; t < soup.triangle_count(); ++t) {
+      glm::vec3 c[3];
+      for (int k = 0; k < 3; ++k)
+        c[k] = glm::vec3(m * glm::dvec4(glm::dvec3(soup.positions[soup.indices[3 * t + static_cast<std::size_t>(k)]]), 1.0));
+      if (which == 1) std::swap(c[1], c[2]);
+      for (int k = 0; k < 3; ++k) {
+        by_hand.indices.push_back(static_cast<std::uint32_t>(by_hand.positions.size()));
+        by_hand.positions.push_back(c[k]);
+      }
+    }
+  }
+  const Tree reference(by_hand.mesh());
+  CHECK(glm::determinant(glm::mat3(mirrored)) < 0.0f);
+  CHECK(from_instances.stats().triangles == 2 * soup.triangle_count());
+  CHECK_MSG(from_instances.corners() == reference.corners() && from_instances.fragments().size() == reference.fragments().size(),
+            "instances: %zu fragments, by hand %zu", from_instances.fragments().size(), reference.fragments().size());
+  bool same_triangles = true;
+  for (std::size_t i = 0; same_triangles && i < reference.fragments().size(); ++i)
+    same_triangles = from_instances.fragments()[i].triangle == reference.fragments()[i].triangle;
+  CHECK(same_triangles);
+  // A matrix that is not affine drops that instance's triangles, counted.
+  cullkit::MeshInstance projective[1] = {{mesh32, glm::mat4(1.0f)}};
+  projective[0].model[0][3] = 0.5f;
+  const Tree dropped(projective, 1);
+  CHECK(dropped.fragments().empty() && dropped.stats().dropped_bad_index == soup.triangle_count());
+  const Tree none(static_cast<const cullkit::MeshInstance*>(nullptr), 0);
+  CHECK(none.fragments().empty());
+}
+
 }  // namespace
 
 int main() {
+  test_instances();
   test_orders();
   test_fragments_tile_triangles();
   test_bad_input();

@@ -1,5 +1,5 @@
-// cullkit/detail/mesh_occlusion/instances.hpp: several meshes placed by world matrices read as one
-// mesh, triangle by triangle, for MeshOcclusionCuller's instance constructor.
+// cullkit/detail/mesh_instances.hpp: several meshes placed by world matrices read as one mesh,
+// triangle by triangle, for the instance constructors of MeshOcclusionCuller and BspTree.
 #pragma once
 
 #include <algorithm>
@@ -12,12 +12,9 @@
 #include <glm/matrix.hpp>
 #include <glm/vec3.hpp>
 
-#include "../../mesh_buffers.hpp"
-#include "../../mesh_occlusion_params.hpp"
+#include "../mesh_buffers.hpp"
 
-namespace cullkit {
-namespace detail {
-namespace mesh_occlusion {
+namespace cullkit::detail {
 
 /// Reads triangle t of the instances' triangles numbered one after another: found by binary search
 /// over the instances' first triangles, its corners placed by the instance's matrix in double
@@ -70,6 +67,4 @@ class InstanceReader {
   std::size_t cursor_ = 0;  // the instance of the last read
 };
 
-}  // namespace mesh_occlusion
-}  // namespace detail
-}  // namespace cullkit
+}  // namespace cullkit::detail
