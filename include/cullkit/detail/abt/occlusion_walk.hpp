@@ -8,6 +8,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "../../abt_params.hpp"
 #include "../../geometry/aabb.hpp"
 #include "../../geometry/frustum.hpp"
 #include "../../geometry/plane.hpp"
