@@ -24,7 +24,7 @@
 #endif
 // Where the compiler targets AVX2 (-march), the per-cell loops run eight cells at a time; SSE2 is
 // the floor. Both widths make the same comparisons and the same float operations as the scalar
-// loops they replace, so the answers do not depend on the instruction set.
+// loops they replace, so what these loops compute does not depend on the width taken.
 #if CULLKIT_HAS_SSE2 && defined(__AVX2__)
 #define CULLKIT_COVERAGE_AVX2 1
 #include <immintrin.h>
