@@ -442,11 +442,10 @@ class CoverageGrid {
     if (dirty_.empty()) return;
     for (int ty = dirty_.y0 / tile; ty <= dirty_.y1 / tile; ++ty)
       for (int tx = dirty_.x0 / tile; tx <= dirty_.x1 / tile; ++tx) {
-        float v = std::numeric_limits<float>::infinity();
-        for (int j = ty * tile; j < std::min(height_, (ty + 1) * tile); ++j)
-          for (int i = tx * tile; i < std::min(width_, (tx + 1) * tile); ++i)
-            v = std::min(v, depth_[static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(i)]);
-        tile_depth_[static_cast<std::size_t>(ty) * static_cast<std::size_t>(tiles_x_) + static_cast<std::size_t>(tx)] = v;
+        const int j0 = ty * tile, j1 = std::min(height_, (ty + 1) * tile);
+        const int i0 = tx * tile, i1 = std::min(width_, (tx + 1) * tile);
+        tile_depth_[static_cast<std::size_t>(ty) * static_cast<std::size_t>(tiles_x_) + static_cast<std::size_t>(tx)] =
+            tile_minimum(j0, j1, i0, i1);
       }
   }
 
@@ -589,6 +588,29 @@ class CoverageGrid {
     i0 = clamp_cell(xl - m, width_);
     i1 = clamp_cell(xr + m, width_);
     return true;
+  }
+
+  // The smallest depth over rows [j0, j1) and columns [i0, i1). Depths are never NaN (frozen
+  // bounds and 0), so the minimum does not depend on the order it is taken in.
+  [[nodiscard]] float tile_minimum(int j0, int j1, int i0, int i1) const {
+    float v = std::numeric_limits<float>::infinity();
+#if CULLKIT_HAS_SSE2
+    static_assert(tile == 8, "a tile row is two groups of four cells");
+    if (i1 - i0 == tile) {
+      __m128 m = _mm_set1_ps(v);
+      for (int j = j0; j < j1; ++j) {
+        const float* row = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + i0;
+        m = _mm_min_ps(m, _mm_min_ps(_mm_loadu_ps(row), _mm_loadu_ps(row + 4)));
+      }
+      m = _mm_min_ps(m, _mm_shuffle_ps(m, m, 0x4E));  // lanes 2, 3, 0, 1
+      m = _mm_min_ps(m, _mm_shuffle_ps(m, m, 0xB1));  // lanes 1, 0, 3, 2
+      return _mm_cvtss_f32(m);
+    }
+#endif
+    for (int j = j0; j < j1; ++j)
+      for (int i = i0; i < i1; ++i)
+        v = std::min(v, depth_[static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(i)]);
+    return v;
   }
 
   // row[i] = min(row[i], max(lowest, start + slope * (i - i0 + step0))) for i in [i0, i1]: a plane's
