@@ -27,6 +27,15 @@
 //                  gave the same answers.
 //   --phases       implies --hash: also where the time of `cull` goes, per named step (an extra,
 //                  separately timed pass with the step probes on; shares of that pass times the median above).
+//   --moc          the culler against Intel's Masked Occlusion Culling (built when CMake's CULLKIT_MOC_DIR
+//                  names its sources; otherwise the flag says so and exits), alternately per camera, best
+//                  of `reps` each, this thread's CPU time. MOC per frame, as the acceptance race runs it:
+//                  ClearBuffer; the frustum-culled objects (AdaptiveBinaryTree) sorted near to far by their
+//                  boxes' nearest clip w; all their triangles in one RenderTriangles at the bench
+//                  resolution (CLIP_PLANE_ALL, back faces culled, AVX2 at most); TestRect of each object's
+//                  projected box (a box reaching the near plane is kept). MOC's time is all of that; the
+//                  culler's is `cull` (its own frustum walk included). Per scene: both medians (min-max),
+//                  the ratio of medians and both kept shares of the scene's triangles.
 //   --scene=TEXT   only the scenes whose name contains TEXT (each scene keeps the cameras of a full run).
 //   --grid=WxH     the culler's grid size; overrides GW and GH.
 //   --split-edges=LEN  the real scenes with every edge longer than LEN (scene units) split at its midpoint,
@@ -64,6 +73,9 @@
 #include "../tests/mesh_occlusion/walk_cameras.hpp"
 #include "../tests/occlusion/scene_cull.hpp"
 #include "race.hpp"
+#if CULLKIT_BENCH_MOC
+#include "moc_peer.hpp"
+#endif
 #include "cullkit/detail/mesh_occlusion/phase_times.hpp"
 
 using namespace cullkit;
@@ -530,7 +542,7 @@ double thread_ms() {
 }
 
 struct Flags {
-  bool reasons = false, hash = false, phases = false, engine = false;
+  bool reasons = false, hash = false, phases = false, engine = false, moc = false;
   std::string scene;
   int grid_width = 0, grid_height = 0;
   float split_edges = 0.0f;
@@ -796,6 +808,107 @@ void engine_frame(const std::string& name, const CullScene& cs, const std::vecto
               ns.empty() ? 0.0 : ns.back());
   std::fflush(stdout);
 }
+#if CULLKIT_BENCH_MOC
+/// The clip w of the near plane's centre: MOC clips occluders there.
+float near_w_of(const Camera& cam) {
+  const glm::dmat4 inv = glm::inverse(glm::dmat4(cam.view_proj));
+  const double z = cam.depth == DepthRange::zero_to_one ? 0.0 : -1.0;
+  const glm::dvec4 h = inv * glm::dvec4(0.0, 0.0, z, 1.0);
+  const glm::dvec4 world = h / h.w;
+  const glm::dvec4 clip = glm::dmat4(cam.view_proj) * world;
+  return static_cast<float>(clip.w);
+}
+
+/// One MOC frame as the acceptance race runs it (see --moc); `kept` gets the objects MOC keeps.
+class MocFrame {
+ public:
+  MocFrame(const CullScene& cs, int width, int height, float near_w) : cs_(cs), moc_(width, height, near_w), near_w_(near_w) {}
+  const char* implementation() const { return moc_.implementation(); }
+
+  void run(const Camera& cam, std::vector<std::uint32_t>& kept) {
+    moc_.clear();
+    cs_.abt.cull(frustum_of(cam), in_frustum_);
+    const glm::mat4& m = cam.view_proj;
+    rects_.clear();
+    for (std::uint32_t o : in_frustum_) {
+      const Aabb& b = cs_.bounds[o];
+      Rect r{o, HUGE_VALF, HUGE_VALF, -HUGE_VALF, -HUGE_VALF, HUGE_VALF, false};
+      for (int k = 0; k < 8; ++k) {
+        const glm::vec4 p(k & 1 ? b.max.x : b.min.x, k & 2 ? b.max.y : b.min.y, k & 4 ? b.max.z : b.min.z, 1.0f);
+        const glm::vec4 c = m * p;
+        if (!(c.w > near_w_)) r.near = true;
+        const float x = c.x / c.w, y = c.y / c.w;
+        r.x0 = std::min(r.x0, x);
+        r.y0 = std::min(r.y0, y);
+        r.x1 = std::max(r.x1, x);
+        r.y1 = std::max(r.y1, y);
+        r.w = std::min(r.w, c.w);
+      }
+      rects_.push_back(r);
+    }
+    std::sort(rects_.begin(), rects_.end(), [](const Rect& a, const Rect& b) { return a.w < b.w; });
+    indices_.clear();
+    for (const Rect& r : rects_) {
+      const auto& so = cs_.scene.objects[r.object];
+      const auto* first = cs_.scene.indices.data() + 3 * std::size_t(so.first_triangle);
+      indices_.insert(indices_.end(), first, first + 3 * std::size_t(so.triangle_count));
+    }
+    if (!indices_.empty())
+      moc_.render(&cs_.scene.positions[0].x, static_cast<int>(sizeof(glm::vec3)), indices_.data(),
+                  static_cast<int>(indices_.size() / 3), &m[0][0]);
+    kept.clear();
+    for (const Rect& r : rects_)
+      if (r.near || moc_.rect_visible(r.x0, r.y0, r.x1, r.y1, r.w)) kept.push_back(r.object);
+  }
+
+ private:
+  struct Rect {
+    std::uint32_t object;
+    float x0, y0, x1, y1, w;
+    bool near;
+  };
+  const CullScene& cs_;
+  cullkit_bench::MocPeer moc_;
+  float near_w_;
+  std::vector<std::uint32_t> in_frustum_, indices_;
+  std::vector<Rect> rects_;
+};
+
+/// --moc: the culler and MOC on the same cameras, alternately.
+void moc_race(const std::string& name, const CullScene& cs, const std::vector<Camera>& cams, int reps,
+              const MeshOcclusionParams& given) {
+  if (cams.empty()) return;
+  const ObjectMap map(cs.scene);
+  const MeshOcclusionCuller<glm::vec3> culler(cs.scene.mesh(), map.objects.data(), map.objects.size(), given);
+  MeshOcclusionContext context;
+  MocFrame moc(cs, cams[0].width, cams[0].height, near_w_of(cams[0]));
+  std::vector<std::uint32_t> kept, moc_kept;
+  std::vector<double> culler_ms, moc_ms;
+  double culler_share = 0, moc_share = 0;
+  const double total = static_cast<double>(std::max<std::size_t>(cs.scene.triangle_count(), 1));
+  for (const Camera& cam : cams) {
+    double best[2] = {1e300, 1e300};
+    for (int r = 0; r < reps; ++r) {
+      double t0 = thread_ms();
+      culler.cull(cam, context, kept);
+      best[0] = std::min(best[0], thread_ms() - t0);
+      t0 = thread_ms();
+      moc.run(cam, moc_kept);
+      best[1] = std::min(best[1], thread_ms() - t0);
+    }
+    culler_ms.push_back(best[0]);
+    moc_ms.push_back(best[1]);
+    culler_share += triangles_of(map, kept) / total;
+    moc_share += triangles_of(map, moc_kept) / total;
+  }
+  const double n = static_cast<double>(cams.size());
+  std::printf("moc,%s,%zu,%s,%s,%s,%.2f,%.2f,%.2f\n", name.c_str(), cs.scene.triangle_count(), moc.implementation(),
+              ms_text(culler_ms).c_str(), ms_text(moc_ms).c_str(), ratio(culler_ms, moc_ms), 100 * culler_share / n,
+              100 * moc_share / n);
+  std::fflush(stdout);
+}
+#endif
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -811,6 +924,7 @@ int main(int argc, char** argv) {
       else if (arg == "--hash") flags.hash = true;
       else if (arg == "--phases") flags.hash = flags.phases = true;
       else if (arg == "--engine") flags.engine = true;
+      else if (arg == "--moc") flags.moc = true;
       else if (arg.rfind("--scene=", 0) == 0) flags.scene = arg.substr(8);
       else if (arg.rfind("--split-edges=", 0) == 0 && (flags.split_edges = std::strtof(arg.c_str() + 14, nullptr)) > 0.0f) {
       }
@@ -826,7 +940,7 @@ int main(int argc, char** argv) {
     if (v <= 0 || positional >= 4) {
       std::fprintf(stderr,
                    "usage: %s [cameras=60] [width=1920] [height=1080] [reps=3] [--reasons] [--hash] [--phases] "
-                   "[--scene=TEXT] [--grid=WxH] [--split-edges=LEN] [--engine]\n",
+                   "[--moc] [--scene=TEXT] [--grid=WxH] [--split-edges=LEN] [--engine]\n",
                    argv[0]);
       return 2;
     }
@@ -843,6 +957,15 @@ int main(int argc, char** argv) {
   std::vector<Row> rows;
   std::vector<Reasons> reasons;
   const auto wanted = [&](const std::string& name) { return name.find(flags.scene) != std::string::npos; };
+#if !CULLKIT_BENCH_MOC
+  if (flags.moc) {
+    std::printf("--moc: this build has no MOC (configure with -DCULLKIT_MOC_DIR=<folder of its sources>); skipped\n");
+    return 0;
+  }
+#else
+  if (flags.moc)
+    std::printf("\nmoc,scene,triangles,moc_isa,culler_ms,moc_ms,culler_over_moc,culler_kept_pct,moc_kept_pct\n");
+#endif
   const auto run = [&](const std::string& name, support::Scene scene, std::uint64_t seed) {
     if (!wanted(name)) return;
     if (flags.engine) {
@@ -857,6 +980,15 @@ int main(int argc, char** argv) {
       engine_frame(name, cs, see_through, spec, cams, reps, params);
       return;
     }
+#if CULLKIT_BENCH_MOC
+    if (flags.moc) {
+      const CullScene cs(std::move(scene));
+      const auto cams = walk(walk_spec(name, cs.scene, cs.embree, seed), cs.scene, cs.embree, cameras, 4, width, height,
+                             seed + 1);
+      moc_race(name, cs, cams, reps, params);
+      return;
+    }
+#endif
     if (flags.hash) {
       const CullScene cs(std::move(scene));
       const auto cams = walk(walk_spec(name, cs.scene, cs.embree, seed), cs.scene, cs.embree, cameras, 4, width, height,
@@ -897,7 +1029,7 @@ int main(int argc, char** argv) {
       run(file, flags.split_edges > 0.0f ? split_edges(*s, flags.split_edges) : std::move(*s), scene_seed);
     }
   }
-  if (flags.hash || flags.engine) return 0;
+  if (flags.hash || flags.engine || flags.moc) return 0;
   print(rows);
   if (flags.reasons) print_reasons(rows, reasons);
   long false_culls = 0;

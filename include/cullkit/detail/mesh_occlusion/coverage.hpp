@@ -22,6 +22,15 @@
 #if CULLKIT_HAS_SSE2
 #include <emmintrin.h>
 #endif
+// Where the compiler targets AVX2 (-march), the per-cell loops run eight cells at a time; SSE2 is
+// the floor. Both widths make the same comparisons and the same float operations as the scalar
+// loops they replace, so what these loops compute does not depend on the width taken.
+#if CULLKIT_HAS_SSE2 && defined(__AVX2__)
+#define CULLKIT_COVERAGE_AVX2 1
+#include <immintrin.h>
+#else
+#define CULLKIT_COVERAGE_AVX2 0
+#endif
 
 namespace cullkit {
 namespace detail {
@@ -64,6 +73,7 @@ class CoverageGrid {
       used_rows_.assign(static_cast<std::size_t>(height), 0);
       used_row_count_ = 0;
       band_row_count_ = 0;
+      band_crossings_ = false;
       dirty_ = CellRect{width, height, -1, -1};
       fresh_ = dirty_;
       return;
@@ -190,10 +200,7 @@ class CoverageGrid {
         int i0, i1;
         if (!row_span(edges, j, m, i0, i1) || !unfrozen_span(j, i0, i1)) continue;
         use(j, i0, i1);
-        for (int i = i0; i <= i1; ++i) {
-          const float v = std::max(lowest, start + af * static_cast<float>(i - r.x0));
-          row[i] = std::min(row[i], v);
-        }
+        lower_row_sloped(row, i0, i1, i0 - r.x0, start, af, lowest);
       }
     } else {
       for (int j = r.y0; j <= r.y1; ++j) {
@@ -201,7 +208,7 @@ class CoverageGrid {
         int i0, i1;
         if (!row_span(edges, j, m, i0, i1) || !unfrozen_span(j, i0, i1)) continue;
         use(j, i0, i1);
-        for (int i = i0; i <= i1; ++i) row[i] = std::min(row[i], lowest);
+        lower_row_flat(row, i0, i1, lowest);
       }
     }
     return r;
@@ -218,8 +225,9 @@ class CoverageGrid {
       const int i0 = band_lo_[static_cast<std::size_t>(j)], i1 = band_hi_[static_cast<std::size_t>(j)];
       band_lo_[static_cast<std::size_t>(j)] = width_;
       band_hi_[static_cast<std::size_t>(j)] = -1;
-      grow(dirty_, CellRect{i0, j, i1, j});
-      const int last = accumulate_row(base, i0, i1) - 1;
+      // A band that added no crossings (the union's, which takes whole patches' counts) leaves the
+      // row's counts as they are: nothing to accumulate.
+      const int last = band_crossings_ ? accumulate_row(base, i0, i1) - 1 : i1;
       grow(dirty_, CellRect{i0, j, last, j});
       use(j, i0, last);
       const std::size_t fresh = freeze(j, i0, last);
@@ -227,6 +235,7 @@ class CoverageGrid {
       covered += fresh;
     }
     band_row_count_ = 0;
+    band_crossings_ = false;
     return covered;
   }
 
@@ -249,6 +258,23 @@ class CoverageGrid {
       }
     };
     int i = a;
+#if CULLKIT_COVERAGE_AVX2
+    for (; i <= b && (i & 7) != 0; ++i) one(i);
+    const __m256i zero8_i = _mm256_setzero_si256();
+    const __m256 zero8_f = _mm256_setzero_ps();
+    for (; i + 7 <= b; i += 8) {
+      const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i));
+      const __m256i k = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(block + i));
+      const __m256 d = _mm256_loadu_ps(depth + i);
+      const __m256 fresh = _mm256_and_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_sub_epi32(c, k), zero8_i)),
+                                         _mm256_cmp_ps(d, zero8_f, _CMP_EQ_OQ));
+      const int mask = _mm256_movemask_ps(fresh);
+      if (mask == 0) continue;
+      _mm256_storeu_ps(depth + i, _mm256_blendv_ps(d, _mm256_loadu_ps(bound + i), fresh));
+      frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+      covered += bits_in_nibble(mask & 15) + bits_in_nibble(mask >> 4);
+    }
+#endif
 #if CULLKIT_HAS_SSE2
     // Groups of four aligned on the row (a word of frozen bits holds 16 of them): the same
     // comparisons, four at once.
@@ -264,7 +290,7 @@ class CoverageGrid {
       if (mask == 0) continue;
       _mm_storeu_ps(depth + i, _mm_or_ps(_mm_and_ps(fresh, _mm_loadu_ps(bound + i)), _mm_andnot_ps(fresh, d)));
       frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
-      covered += static_cast<std::size_t>((mask & 1) + ((mask >> 1) & 1) + ((mask >> 2) & 1) + ((mask >> 3) & 1));
+      covered += bits_in_nibble(mask);
     }
 #endif
     for (; i <= b; ++i) one(i);
@@ -295,6 +321,18 @@ class CoverageGrid {
         }
       };
       int i = r.x0;
+#if CULLKIT_COVERAGE_AVX2
+      for (; i <= r.x1 && (i & 7) != 0; ++i) one(i);
+      const __m256 limit8 = _mm256_set1_ps(nearest);
+      for (; i + 7 <= r.x1; i += 8) {
+        const __m256 d = _mm256_loadu_ps(from + i);
+        const __m256 near = _mm256_cmp_ps(d, limit8, _CMP_GE_OQ);
+        const int mask = _mm256_movemask_ps(near);
+        _mm256_storeu_ps(to + i, _mm256_and_ps(near, d));
+        frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+        open = open || mask != 255;
+      }
+#endif
 #if CULLKIT_HAS_SSE2
       for (; i <= r.x1 && (i & 3) != 0; ++i) one(i);
       const __m128 limit = _mm_set1_ps(nearest);
@@ -327,7 +365,25 @@ class CoverageGrid {
       const std::int32_t* from_count = patch.count_.data() + base;
       const std::int32_t* from_block = patch.block_.data() + base;
       const float* from_bound = patch.bound_.data() + base;
-      for (int i = i0; i <= i1; ++i) {
+      int i = i0;
+#if CULLKIT_COVERAGE_AVX2
+      for (; i + 7 <= i1; i += 8) {
+        const auto at = [i](const std::int32_t* p) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + i)); };
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), _mm256_add_epi32(at(count), at(from_count)));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(block + i), _mm256_add_epi32(at(block), at(from_block)));
+        _mm256_storeu_ps(bound + i, _mm256_min_ps(_mm256_loadu_ps(from_bound + i), _mm256_loadu_ps(bound + i)));
+      }
+#endif
+#if CULLKIT_HAS_SSE2
+      for (; i + 3 <= i1; i += 4) {
+        const auto at = [i](const std::int32_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + i)); };
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(count + i), _mm_add_epi32(at(count), at(from_count)));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(block + i), _mm_add_epi32(at(block), at(from_block)));
+        // min(bound, from) as std::min takes it: `from` where it is smaller, else `bound`.
+        _mm_storeu_ps(bound + i, _mm_min_ps(_mm_loadu_ps(from_bound + i), _mm_loadu_ps(bound + i)));
+      }
+#endif
+      for (; i <= i1; ++i) {
         count[i] += from_count[i];
         block[i] += from_block[i];
         bound[i] = std::min(bound[i], from_bound[i]);
@@ -354,6 +410,17 @@ class CoverageGrid {
         frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
       };
       int i = r.x0;
+#if CULLKIT_COVERAGE_AVX2
+      for (; i <= r.x1 && (i & 7) != 0; ++i) one(i);
+      for (; i + 7 <= r.x1; i += 8) {
+        const __m256 a = _mm256_loadu_ps(from + i), b = _mm256_loadu_ps(to + i);
+        const __m256 nearer = _mm256_cmp_ps(a, b, _CMP_GT_OQ);
+        const int mask = _mm256_movemask_ps(nearer);
+        if (mask == 0) continue;
+        _mm256_storeu_ps(to + i, _mm256_blendv_ps(b, a, nearer));
+        frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+      }
+#endif
 #if CULLKIT_HAS_SSE2
       for (; i <= r.x1 && (i & 3) != 0; ++i) one(i);
       for (; i + 3 <= r.x1; i += 4) {
@@ -375,11 +442,10 @@ class CoverageGrid {
     if (dirty_.empty()) return;
     for (int ty = dirty_.y0 / tile; ty <= dirty_.y1 / tile; ++ty)
       for (int tx = dirty_.x0 / tile; tx <= dirty_.x1 / tile; ++tx) {
-        float v = std::numeric_limits<float>::infinity();
-        for (int j = ty * tile; j < std::min(height_, (ty + 1) * tile); ++j)
-          for (int i = tx * tile; i < std::min(width_, (tx + 1) * tile); ++i)
-            v = std::min(v, depth_[static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(i)]);
-        tile_depth_[static_cast<std::size_t>(ty) * static_cast<std::size_t>(tiles_x_) + static_cast<std::size_t>(tx)] = v;
+        const int j0 = ty * tile, j1 = std::min(height_, (ty + 1) * tile);
+        const int i0 = tx * tile, i1 = std::min(width_, (tx + 1) * tile);
+        tile_depth_[static_cast<std::size_t>(ty) * static_cast<std::size_t>(tiles_x_) + static_cast<std::size_t>(tx)] =
+            tile_minimum(j0, j1, i0, i1);
       }
   }
 
@@ -524,6 +590,77 @@ class CoverageGrid {
     return true;
   }
 
+  // The smallest depth over rows [j0, j1) and columns [i0, i1). Depths are never NaN (frozen
+  // bounds and 0), so the minimum does not depend on the order it is taken in.
+  [[nodiscard]] float tile_minimum(int j0, int j1, int i0, int i1) const {
+    float v = std::numeric_limits<float>::infinity();
+#if CULLKIT_HAS_SSE2
+    static_assert(tile == 8, "a tile row is two groups of four cells");
+    if (i1 - i0 == tile) {
+      __m128 m = _mm_set1_ps(v);
+      for (int j = j0; j < j1; ++j) {
+        const float* row = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + i0;
+        m = _mm_min_ps(m, _mm_min_ps(_mm_loadu_ps(row), _mm_loadu_ps(row + 4)));
+      }
+      m = _mm_min_ps(m, _mm_shuffle_ps(m, m, 0x4E));  // lanes 2, 3, 0, 1
+      m = _mm_min_ps(m, _mm_shuffle_ps(m, m, 0xB1));  // lanes 1, 0, 3, 2
+      return _mm_cvtss_f32(m);
+    }
+#endif
+    for (int j = j0; j < j1; ++j)
+      for (int i = i0; i < i1; ++i)
+        v = std::min(v, depth_[static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(i)]);
+    return v;
+  }
+
+  // row[i] = min(row[i], max(lowest, start + slope * (i - i0 + step0))) for i in [i0, i1]: a plane's
+  // bound along a row. The lanes compute exactly what the scalar tail does (the same float
+  // operations on the same exact integer steps; min and max pick the same operand for NaN).
+  static void lower_row_sloped(float* row, int i0, int i1, int step0, float start, float slope, float lowest) {
+    int i = i0;
+#if CULLKIT_COVERAGE_AVX2
+    if (i + 7 <= i1) {
+      const __m256 low = _mm256_set1_ps(lowest), a = _mm256_set1_ps(slope), s = _mm256_set1_ps(start),
+                   eight = _mm256_set1_ps(8.0f);
+      __m256 steps = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(step0), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
+      for (; i + 7 <= i1; i += 8) {
+        const __m256 v = _mm256_max_ps(_mm256_add_ps(s, _mm256_mul_ps(a, steps)), low);
+        _mm256_storeu_ps(row + i, _mm256_min_ps(v, _mm256_loadu_ps(row + i)));
+        steps = _mm256_add_ps(steps, eight);
+      }
+    }
+#endif
+#if CULLKIT_HAS_SSE2
+    if (i + 3 <= i1) {
+      const __m128 low = _mm_set1_ps(lowest), a = _mm_set1_ps(slope), s = _mm_set1_ps(start), four = _mm_set1_ps(4.0f);
+      __m128 steps = _mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(step0 + (i - i0)), _mm_setr_epi32(0, 1, 2, 3)));
+      for (; i + 3 <= i1; i += 4) {
+        const __m128 v = _mm_max_ps(_mm_add_ps(s, _mm_mul_ps(a, steps)), low);
+        _mm_storeu_ps(row + i, _mm_min_ps(v, _mm_loadu_ps(row + i)));
+        steps = _mm_add_ps(steps, four);
+      }
+    }
+#endif
+    for (; i <= i1; ++i) {
+      const float v = std::max(lowest, start + slope * static_cast<float>(step0 + (i - i0)));
+      row[i] = std::min(row[i], v);
+    }
+  }
+
+  // row[i] = min(row[i], lowest) for i in [i0, i1].
+  static void lower_row_flat(float* row, int i0, int i1, float lowest) {
+    int i = i0;
+#if CULLKIT_COVERAGE_AVX2
+    const __m256 low8 = _mm256_set1_ps(lowest);
+    for (; i + 7 <= i1; i += 8) _mm256_storeu_ps(row + i, _mm256_min_ps(low8, _mm256_loadu_ps(row + i)));
+#endif
+#if CULLKIT_HAS_SSE2
+    const __m128 low = _mm_set1_ps(lowest);
+    for (; i + 3 <= i1; i += 4) _mm_storeu_ps(row + i, _mm_min_ps(low, _mm_loadu_ps(row + i)));
+#endif
+    for (; i <= i1; ++i) row[i] = std::min(row[i], lowest);
+  }
+
   // True when every cell of row j in [i0, i1] is covered (0 <= i0 <= i1 < width).
   [[nodiscard]] bool row_frozen(int j, int i0, int i1) const {
     const std::uint64_t* w = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
@@ -561,6 +698,10 @@ class CoverageGrid {
     }
   }
 
+  static std::size_t bits_in_nibble(int v) {  // 0 <= v < 16
+    return (0x4332322132212110ull >> (4 * v)) & 15u;
+  }
+
   static int lowest_bit(std::uint64_t v) {  // v != 0
 #if defined(__GNUC__) || defined(__clang__)
     return __builtin_ctzll(v);
@@ -595,9 +736,27 @@ class CoverageGrid {
     std::int32_t* count = count_.data() + base;
     std::int32_t run = 0;
     int i = i0;
+#if CULLKIT_COVERAGE_AVX2
+    // Eight cells at a time: a prefix sum within each half, the low half's total added to the high
+    // half, plus the carry so far (exact integer sums, as the scalar loop's).
+    __m256i carry8 = _mm256_setzero_si256();
+    const __m256i zero8 = _mm256_setzero_si256(), last_lane = _mm256_set1_epi32(7);
+    for (; i + 7 <= i1; i += 8) {
+      __m256i d = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(diff + i));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(diff + i), zero8);
+      d = _mm256_add_epi32(d, _mm256_slli_si256(d, 4));
+      d = _mm256_add_epi32(d, _mm256_slli_si256(d, 8));
+      d = _mm256_add_epi32(d, _mm256_shuffle_epi32(_mm256_permute2x128_si256(d, d, 0x08), 0xFF));
+      d = _mm256_add_epi32(d, carry8);
+      const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), _mm256_add_epi32(c, d));
+      carry8 = _mm256_permutevar8x32_epi32(d, last_lane);
+    }
+    run = _mm256_cvtsi256_si32(carry8);
+#endif
 #if CULLKIT_HAS_SSE2
     // Four cells at a time: an in-register prefix sum (two shifted adds) plus the carry so far.
-    __m128i carry = _mm_setzero_si128();
+    __m128i carry = _mm_set1_epi32(run);
     const __m128i zero = _mm_setzero_si128();
     for (; i + 3 <= i1; i += 4) {
       __m128i d = _mm_loadu_si128(reinterpret_cast<const __m128i*>(diff + i));
@@ -617,6 +776,13 @@ class CoverageGrid {
       count[i] += run;
     }
     if (run == 0) return i;
+#if CULLKIT_COVERAGE_AVX2
+    const __m256i add8 = _mm256_set1_epi32(run);
+    for (; i + 8 <= width_; i += 8) {
+      const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), _mm256_add_epi32(c, add8));
+    }
+#endif
 #if CULLKIT_HAS_SSE2
     const __m128i add = _mm_set1_epi32(run);
     for (; i + 4 <= width_; i += 4) {
@@ -678,6 +844,7 @@ class CoverageGrid {
       if (k >= width_) continue;
       const int i = k < 0.0 ? 0 : static_cast<int>(k);
       mark(j, i, i);
+      band_crossings_ = true;
       diff_[static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(i)] += sign;
     }
   }
@@ -718,6 +885,7 @@ class CoverageGrid {
   std::vector<std::uint64_t> frozen_bits_;   // per row, a bit per covered (frozen) cell
   std::vector<int> band_lo_, band_hi_, band_rows_;  // per row: cells changed in the current band
   int band_row_count_ = 0;                          // rows listed in band_rows_
+  bool band_crossings_ = false;                     // some crossing was added to diff_ in this band
   std::vector<int> used_lo_, used_hi_, used_rows_;  // per row: cells whose counters or bound changed since clear_dirty
   int used_row_count_ = 0;                          // rows listed in used_rows_
   CellRect dirty_{0, 0, -1, -1};
