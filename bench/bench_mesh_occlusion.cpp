@@ -25,8 +25,8 @@
 //                  of each camera's fastest of `reps`, in this thread's CPU time where the platform has
 //                  it (a shared machine's preemption then does not count). Two builds with the same hash
 //                  gave the same answers.
-//   --phases       implies --hash: also where the time of `cull` goes, per named step (an extra,
-//                  separately timed pass with the step probes on; shares of that pass times the median above).
+//                  Where the time of `cull` goes: run `perf record -g` on a --hash run (the library
+//                  carries no timers of its own).
 //   --moc          the culler against Intel's Masked Occlusion Culling (built when CMake's CULLKIT_MOC_DIR
 //                  names its sources; otherwise the flag says so and exits), alternately per camera, best
 //                  of `reps` each, this thread's CPU time. MOC per frame, as the acceptance race runs it:
@@ -76,7 +76,6 @@
 #if CULLKIT_BENCH_MOC
 #include "moc_peer.hpp"
 #endif
-#include "cullkit/detail/mesh_occlusion/phase_times.hpp"
 
 using namespace cullkit;
 using namespace mesh_occlusion_test;
@@ -528,7 +527,7 @@ support::Scene split_edges(const support::Scene& in, float len) {
   return out;
 }
 
-// ---- --hash / --phases: the culler alone, its answers as a hash and its time per step ----
+// ---- --hash: the culler alone, its answers as a hash and its time ----
 
 /// This thread's CPU time in ms (wall time where POSIX thread clocks are missing).
 double thread_ms() {
@@ -542,14 +541,14 @@ double thread_ms() {
 }
 
 struct Flags {
-  bool reasons = false, hash = false, phases = false, engine = false, moc = false;
+  bool reasons = false, hash = false, engine = false, moc = false;
   std::string scene;
   int grid_width = 0, grid_height = 0;
   float split_edges = 0.0f;
 };
 
 void culler_only(const std::string& name, const CullScene& cs, const std::vector<Camera>& cams, int reps,
-                 const MeshOcclusionParams& given, const Flags& flags) {
+                 const MeshOcclusionParams& given) {
   namespace mo = cullkit::detail::mesh_occlusion;
   const ObjectMap map(cs.scene);
   const auto t_build = Clock::now();
@@ -582,26 +581,6 @@ void culler_only(const std::string& name, const CullScene& cs, const std::vector
   std::printf("hash,%s,%dx%d,%016llx,kept_pairs=%zu,kept_pct=%.3f,occluder_triangles=%.0f,culler_ms=%s\n", name.c_str(),
               params.grid_width, params.grid_height, static_cast<unsigned long long>(hash), pairs, 100 * share / n,
               occluder_triangles / n, ms_text(ms).c_str());
-  if (!flags.phases) return;
-  mo::PhaseTimes& times = mo::phase_times();
-  times = mo::PhaseTimes{};
-  times.enabled = true;
-  for (const Camera& cam : cams)
-    for (int r = 0; r < reps; ++r) culler.cull(cam, context, kept);
-  times.enabled = false;
-  static const char* const names[mo::phase_count] = {"frustum walk", "object boxes", "occluder choice",
-                                                     "triangle setup and sort", "vertex projection", "bands",
-                                                     "depths", "counts", "edge marking", "band ends",
-                                                     "patch grids", "finish", "box occluders", "object tests"};
-  std::uint64_t sum = 0;
-  for (std::uint64_t t : times.ticks) sum += t;
-  const double median = spread(ms).median;
-  for (int p = 0; p < mo::phase_count; ++p) {
-    // Each tick is charged to one step (vertex projection is taken out of the steps that call it).
-    const std::uint64_t t = times.ticks[p];
-    const double part = sum ? static_cast<double>(t) / static_cast<double>(sum) : 0.0;
-    std::printf("phase,%s,%s,%.1f%%,%.3f ms\n", name.c_str(), names[p], 100 * part, part * median);
-  }
 }
 
 
@@ -922,7 +901,6 @@ int main(int argc, char** argv) {
     if (arg.rfind("--", 0) == 0) {
       if (arg == "--reasons") flags.reasons = true;
       else if (arg == "--hash") flags.hash = true;
-      else if (arg == "--phases") flags.hash = flags.phases = true;
       else if (arg == "--engine") flags.engine = true;
       else if (arg == "--moc") flags.moc = true;
       else if (arg.rfind("--scene=", 0) == 0) flags.scene = arg.substr(8);
@@ -939,7 +917,7 @@ int main(int argc, char** argv) {
     const int v = std::atoi(argv[i]);
     if (v <= 0 || positional >= 4) {
       std::fprintf(stderr,
-                   "usage: %s [cameras=60] [width=1920] [height=1080] [reps=3] [--reasons] [--hash] [--phases] "
+                   "usage: %s [cameras=60] [width=1920] [height=1080] [reps=3] [--reasons] [--hash] "
                    "[--moc] [--scene=TEXT] [--grid=WxH] [--split-edges=LEN] [--engine]\n",
                    argv[0]);
       return 2;
@@ -993,7 +971,7 @@ int main(int argc, char** argv) {
       const CullScene cs(std::move(scene));
       const auto cams = walk(walk_spec(name, cs.scene, cs.embree, seed), cs.scene, cs.embree, cameras, 4, width, height,
                              seed + 1);
-      culler_only(name, cs, cams, reps, params, flags);
+      culler_only(name, cs, cams, reps, params);
       return;
     }
     const bool generated = name == "city" || name == "office";

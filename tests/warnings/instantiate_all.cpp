@@ -64,6 +64,13 @@ void cullkit_instantiate_all(const std::vector<EngineVertex>& vertices, const st
   const BspTree<EngineVertex, std::uint16_t> bsp(mesh);
   bsp.back_to_front(camera.eye, out);
 
+  PortalGraph graph;
+  const std::uint32_t room = graph.add_cell();
+  graph.set_cell_bounds(room, objects.empty() ? Aabb{} : objects.front().world);
+  PortalScratch portal_scratch;
+  std::vector<PortalView> cells;
+  graph.visible_cells(room, camera.eye, frustum, cells, portal_scratch);
+
   std::vector<float> depth(objects.size(), 0.0f);
   order_back_to_front(depth.data(), depth.size(), out);
 }

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "../../config.hpp"
+#include "../bits.hpp"
 #if CULLKIT_HAS_SSE2
 #include <emmintrin.h>
 #endif
@@ -702,30 +703,8 @@ class CoverageGrid {
     return (0x4332322132212110ull >> (4 * v)) & 15u;
   }
 
-  static int lowest_bit(std::uint64_t v) {  // v != 0
-#if defined(__GNUC__) || defined(__clang__)
-    return __builtin_ctzll(v);
-#else
-    int n = 0;
-    while (!(v & 1)) {
-      v >>= 1;
-      ++n;
-    }
-    return n;
-#endif
-  }
-  static int highest_bit(std::uint64_t v) {  // v != 0
-#if defined(__GNUC__) || defined(__clang__)
-    return 63 - __builtin_clzll(v);
-#else
-    int n = 63;
-    while (!(v >> 63)) {
-      v <<= 1;
-      --n;
-    }
-    return n;
-#endif
-  }
+  static int lowest_bit(std::uint64_t v) { return detail::lowest_bit(v); }    // v != 0
+  static int highest_bit(std::uint64_t v) { return detail::highest_bit(v); }  // v != 0
 
   // Adds the running sum of the row's crossings (diff_, cleared on the way) to its counts, from i0
   // through i1, and on to the row's end while the sum is not zero: a crossing beyond the last column

@@ -17,7 +17,6 @@
 #include "../../occlusion_tree.hpp"
 #include "coverage.hpp"
 #include "index.hpp"
-#include "phase_times.hpp"
 #include "view.hpp"
 
 namespace cullkit {
@@ -134,12 +133,10 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
 
 inline const Projected& project_vertex(const MeshIndex& index, Scratch& s, std::uint32_t v) {
   if (s.vertex_stamp[v] != s.frame) {
-    PhaseProbe probe;
     s.vertex_stamp[v] = s.frame;
     s.vertex_slot[v] = static_cast<std::uint32_t>(s.projected.size());
     const glm::vec3& p = index.positions[v];
     s.projected.push_back(s.view.project(p.x, p.y, p.z));
-    probe.next(phase_project);
   }
   return s.projected[s.vertex_slot[v]];
 }

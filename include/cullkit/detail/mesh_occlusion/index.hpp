@@ -154,7 +154,7 @@ inline std::size_t pair_edges(const std::vector<std::uint32_t>& corners, std::ve
   const std::size_t edge_count = corners.size();
   twins.assign(edge_count, none);
   std::size_t live = 0;
-  for (std::size_t t = 0; t < edge_count / 3; ++t) live += corners[3 * t] != none ? 3 : 0;
+  for (std::size_t t = 0; t < edge_count / 3; ++t) live += corners[3 * t] != none ? 3u : 0u;
   return pair_listed_edges(corners, twins, live, [&](auto&& visit) {
     for (std::size_t t = 0; t < edge_count / 3; ++t)
       if (corners[3 * t] != none)

@@ -16,7 +16,6 @@
 #include "coverage.hpp"
 #include "frame.hpp"
 #include "index.hpp"
-#include "phase_times.hpp"
 
 namespace cullkit {
 namespace detail {
@@ -171,8 +170,8 @@ inline void gather_triangles(const MeshIndex& index, Scratch& s) {
   const PatchSet& ps = index.patches;
   for (std::size_t q = 0; q < s.occluders.size(); ++q) {
     const Patch& patch = ps.patches[s.occluders[q].second];
-    for (std::uint32_t k = patch.first; k < patch.first + patch.count; ++k) {
-      const std::uint32_t t = ps.triangles[k];
+    for (std::uint32_t member = patch.first; member < patch.first + patch.count; ++member) {
+      const std::uint32_t t = ps.triangles[member];
       const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
       // Objects may overlap: a triangle goes in once.
       if (c[0] == none || s.triangle_stamp[t] == s.frame) continue;
@@ -256,16 +255,14 @@ inline void gather_triangles(const MeshIndex& index, Scratch& s) {
 /// would be (`inner`, `twin_band`: per triangle edge, as insert_run finds them; the shared
 /// part is the same segment on both sides), and its edge along the clipping line as outline.
 inline void insert_clipped(CoverageGrid& grid, const ClippedPolygon& poly, int orient, unsigned inner,
-                           const std::uint32_t* twin_band, std::uint32_t my_band, PhaseProbe& probe) {
+                           const std::uint32_t* twin_band, std::uint32_t my_band) {
   const int n = poly.n;
   const auto skipped = [&](int k) { return poly.edge[k] >= 0 && ((inner >> poly.edge[k]) & 1u); };
-  probe.next(phase_bands);
   for (int f = 1; f + 1 < n; ++f) {
     const double x[3] = {poly.x[0], poly.x[f], poly.x[f + 1]}, y[3] = {poly.y[0], poly.y[f], poly.y[f + 1]};
     const double w[3] = {poly.w[0], poly.w[f], poly.w[f + 1]};
     grid.add_depth(x, y, w);
   }
-  probe.next(phase_depth);
   for (int f = 1; f + 1 < n; ++f) {
     const double x[3] = {poly.x[0], poly.x[f], poly.x[f + 1]}, y[3] = {poly.y[0], poly.y[f], poly.y[f + 1]};
     // Fan edge 0 -> f is the polygon's edge 0 only for the first triangle, f + 1 -> 0 its last edge
@@ -275,7 +272,6 @@ inline void insert_clipped(CoverageGrid& grid, const ClippedPolygon& poly, int o
     skip |= f + 2 == n ? (skipped(n - 1) ? 4u : 0u) : 4u;
     grid.add_count(x, y, orient, skip);
   }
-  probe.next(phase_counts);
   for (int k = 0; k < n; ++k) {
     const int l = k + 1 == n ? 0 : k + 1;
     const int e = poly.edge[k];
@@ -287,7 +283,6 @@ inline void insert_clipped(CoverageGrid& grid, const ClippedPolygon& poly, int o
     if (twin_band[e] < my_band) grid.touch_edge(poly.x[l], poly.y[l], poly.x[k], poly.y[k], orient, -1);
     else grid.touch_edge(poly.x[k], poly.y[k], poly.x[l], poly.y[l], orient, 1);
   }
-  probe.next(phase_edges);
 }
 
 /// A gathered occluder triangle's projected corners, or its clipped polygon's (up to 4); returns
@@ -327,7 +322,6 @@ inline std::size_t insert_run(const MeshIndex& index, const MeshOcclusionParams&
                               const std::pair<std::uint32_t, std::uint32_t>* first,
                               const std::pair<std::uint32_t, std::uint32_t>* last, RunMembers members,
                               std::size_t& inserted) {
-  PhaseProbe probe;
   const int orient = s.view.orient;
   const float ratio = 1.0f + std::max(0.0f, params.depth_band_ratio);
   const std::size_t count = static_cast<std::size_t>(last - first);
@@ -361,7 +355,6 @@ inline std::size_t insert_run(const MeshIndex& index, const MeshOcclusionParams&
       const int n = corners_of(t, x, y, w);
       if (grid.all_frozen(x, y, n)) members.stamp[t] = 0;
     }
-    probe.next(phase_bands);
     for (std::size_t i = begin; i < end; ++i) {
       const std::uint32_t t = first[i].second;
       if (!members.has(t)) continue;
@@ -375,18 +368,15 @@ inline std::size_t insert_run(const MeshIndex& index, const MeshOcclusionParams&
         if (twin_band[k] == my_band) inner |= 1u << k;
       }
       if (any_clipped && s.clip_stamp[t] == s.frame) {
-        insert_clipped(grid, s.clipped[s.clip_slot[t]], orient, inner, twin_band, my_band, probe);
+        insert_clipped(grid, s.clipped[s.clip_slot[t]], orient, inner, twin_band, my_band);
         continue;
       }
       double x[3], y[3], w[3];
       corners_of(t, x, y, w);
-      probe.next(phase_bands);
       grid.add_depth(x, y, w);
-      probe.next(phase_depth);
       // An edge shared within the band adds crossings from both triangles that cancel bit for bit
       // (the same endpoints, the same arithmetic, opposite signs): both leave them out.
       grid.add_count(x, y, orient, inner);
-      probe.next(phase_counts);
       for (int k = 0; k < 3; ++k) {
         const int l = k == 2 ? 0 : k + 1;
         if ((inner >> k) & 1u) continue;  // cancels within the band
@@ -395,10 +385,8 @@ inline std::size_t insert_run(const MeshIndex& index, const MeshOcclusionParams&
         if (twin_band[k] < my_band) grid.touch_edge(x[l], y[l], x[k], y[k], orient, -1);
         else grid.touch_edge(x[k], y[k], x[l], y[l], orient, 1);
       }
-      probe.next(phase_edges);
     }
     covered += grid.end_band();
-    probe.next(phase_end_band);
   }
   return covered;
 }
@@ -466,7 +454,6 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
   radix_sort(s.patch_order, s.patch_sort_buffer);
   const int orient = s.view.orient;
   std::size_t covered = 0, inserted = 0;
-  PhaseProbe probe;
   for (const auto& entry : s.patch_order) {
     const std::uint32_t q = entry.second;
     const std::uint32_t b = s.patch_first[q], e = s.patch_first[q + 1];
@@ -492,13 +479,10 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
     // can change nothing there. When that is all of them, it is skipped whole (as if no occluder).
     s.patch_grid.reset(s.grid.width(), s.grid.height());
     const bool open = s.patch_grid.seed_frozen(s.grid, s.grid.cells_of(xmin, ymin, xmax, ymax), static_cast<float>(1.0 / wmin));
-    probe.next(phase_patches);
     if (!open) continue;
     const RunMembers members{s.member_stamp, s.member_value};
     insert_run(index, params, s, s.patch_grid, s.by_patch.data() + b, s.by_patch.data() + e, members, inserted);
-    probe.restart();  // insert_run charged its own steps
     s.grid.absorb(s.patch_grid);
-    probe.next(phase_patches);
     for (std::uint32_t i = b; i < e; ++i) {
       const std::uint32_t t = s.by_patch[i].second;
       if (!members.has(t)) continue;  // dropped over covered cells
@@ -512,10 +496,8 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
         s.grid.touch_edge(x0, y0, x1, y1, orient, -1);  // this patch's
       }
     }
-    probe.next(phase_edges);
     covered += s.grid.end_band();
     if (params.patch_layers) s.grid.take_nearer(s.patch_grid);
-    probe.next(phase_end_band);
   }
   s.stats.occluder_triangles += inserted;
   return covered;

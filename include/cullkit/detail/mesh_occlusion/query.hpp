@@ -17,7 +17,6 @@
 #if CULLKIT_CORE_BODIES
 #include "object_tests.hpp"
 #include "occluders.hpp"
-#include "phase_times.hpp"
 #endif
 
 namespace cullkit {
@@ -47,8 +46,6 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
                           MovingScratch* m) {
   out.clear();
   if (moving == nullptr || m == nullptr) moving_count = 0;
-  PhaseProbe probe;
-  if (probe.on()) ++phase_times().calls;
   MeshOcclusionStats& stats = s.stats;
   stats = MeshOcclusionStats{};
   s.frustum = frustum_of(camera);
@@ -64,10 +61,8 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
   // hides itself.
   if (!s.view.enabled || (s.in_frustum.size() < 2 && moving_count == 0)) {
     out.insert(out.end(), s.in_frustum.begin(), s.in_frustum.end());
-    probe.next(phase_frustum);
     return false;
   }
-  probe.next(phase_frustum);
   // Occluders are clipped beyond a level set by the extent of the usable objects (the tree's root).
   if (!index.tree.nodes().empty()) {
     const Aabb& all = index.tree.nodes().front().bounds;
@@ -80,29 +75,21 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
   s.grid.reset(params.grid_width, params.grid_height);
   s.boxes.resize(s.in_frustum.size());
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) s.boxes[i] = project_box(s.view, index.bounds[s.in_frustum[i]]);
-  probe.next(phase_boxes);
   choose_occluders(index, params, s);
-  probe.next(phase_choose);
   gather_triangles(index, s);
-  probe.next(phase_gather);
   stats.occluders_used = s.occluders.size();
   stats.cells_covered = insert_patches(index, params, s);
-  probe.restart();  // insert_patches charged its own steps
   if (moving_count > 0) {
     stats.cells_covered += insert_moving(params, moving, moving_count, s, *m);
-    probe.restart();  // insert_run charged its own steps
   }
   s.grid.finish();
-  probe.next(phase_finish);
   s.view_eye = camera.eye;
   insert_box_occluders(index, params, camera, s);
-  probe.next(phase_box_occluders);
 
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
     if (object_hidden(index, params, s, i)) ++stats.objects_hidden;
     else out.push_back(s.in_frustum[i]);
   }
-  probe.next(phase_tests);
   return true;
 }
 
