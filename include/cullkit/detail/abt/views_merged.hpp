@@ -59,7 +59,7 @@ class AbtMergedPlanes {
       planes_of_[v] = 0;
       for (std::uint32_t rest = frusta[v].active_mask(); rest != 0; rest &= rest - 1u) {
         const Plane& p = frusta[v].plane(abt_lowest_bit(rest));
-        const std::uint32_t u = find_or_add(p);
+        const std::uint32_t u = find_or_add(p, planes_of_[v]);
         if (u == capacity) return false;
         planes_of_[v] |= std::uint32_t{1} << u;
       }
@@ -107,8 +107,11 @@ class AbtMergedPlanes {
     return std::fabs(a - b) <= merge_tolerance * std::fmax(std::fabs(a), std::fabs(b));
   }
 
-  std::uint32_t find_or_add(const Plane& p) noexcept {
+  // A plane merges only with another view's: two planes of one view stay two (a degenerate matrix
+  // can give a view two nearly equal planes, and one view's answer must stay its single cull's).
+  std::uint32_t find_or_add(const Plane& p, std::uint32_t own) noexcept {
     for (std::uint32_t u = 0; u < count_; ++u) {
+      if ((own >> u) & 1u) continue;
       const float tilt = std::fmax(std::fabs(nx_[u] - p.normal.x),
                                    std::fmax(std::fabs(ny_[u] - p.normal.y), std::fabs(nz_[u] - p.normal.z)));
       if (!(tilt <= merge_tolerance)) continue;
