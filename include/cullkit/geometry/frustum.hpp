@@ -159,7 +159,7 @@ class Frustum {
     const glm::vec3 e = (box.max - box.min) * 0.5f;
     PlaneMask out = mask;
     for (int i = 0; i < max_planes; ++i) {
-      if (!((mask >> i) & 1u)) continue;
+      if (((mask >> i) & 1) == 0) continue;
       const Plane& p = planes_[i];
       const float dc = glm::dot(p.normal, c) + p.d;
       const float r = std::fabs(p.normal.x) * e.x + std::fabs(p.normal.y) * e.y +
@@ -184,7 +184,7 @@ class Frustum {
     if (!(s.radius >= 0.0f)) return Containment::outside;  // the empty sphere
     PlaneMask out = mask;
     for (int i = 0; i < max_planes; ++i) {
-      if (!((mask >> i) & 1u)) continue;
+      if (((mask >> i) & 1) == 0) continue;
       const Plane& p = planes_[i];
       const float dc = glm::dot(p.normal, s.center) + p.d;
       const float slack = tolerance(p, s.center, s.radius);
