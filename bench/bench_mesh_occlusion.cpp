@@ -958,19 +958,17 @@ int main(int argc, char** argv) {
       engine_frame(name, cs, see_through, spec, cams, reps, params);
       return;
     }
+    // The culler alone (--hash) or against MOC (--moc), on the walk's cameras.
+    if (flags.hash || flags.moc) {
+      const CullScene cs(std::move(scene));
+      const auto cams = walk(walk_spec(name, cs.scene, cs.embree, seed), cs.scene, cs.embree, cameras, 4, width, height,
+                             seed + 1);
 #if CULLKIT_BENCH_MOC
-    if (flags.moc) {
-      const CullScene cs(std::move(scene));
-      const auto cams = walk(walk_spec(name, cs.scene, cs.embree, seed), cs.scene, cs.embree, cameras, 4, width, height,
-                             seed + 1);
-      moc_race(name, cs, cams, reps, params);
-      return;
-    }
+      if (flags.moc) {
+        moc_race(name, cs, cams, reps, params);
+        return;
+      }
 #endif
-    if (flags.hash) {
-      const CullScene cs(std::move(scene));
-      const auto cams = walk(walk_spec(name, cs.scene, cs.embree, seed), cs.scene, cs.embree, cameras, 4, width, height,
-                             seed + 1);
       culler_only(name, cs, cams, reps, params);
       return;
     }

@@ -1,0 +1,284 @@
+// cullkit/detail/mesh_occlusion/coverage_rows.hpp: the row kernels of CoverageGrid (coverage.hpp),
+// the loops that run over the cells of one grid row: freezing covered cells, adding a patch's grid
+// into the union, taking nearer bounds, lowering depth bounds along a row, accumulating crossings and
+// the per-tile minimum. Each has its scalar form and, where the compiler targets them, SSE2 and AVX2
+// forms with the same comparisons and float operations, so the answers never depend on the build.
+// Included by coverage.hpp after the class; not on its own.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "coverage.hpp"
+
+namespace cullkit {
+namespace detail {
+namespace mesh_occlusion {
+
+inline std::size_t CoverageGrid::freeze(int j, int a, int b) {
+  const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+  const std::int32_t* count = count_.data() + base;
+  const std::int32_t* block = block_.data() + base;
+  const float* bound = bound_.data() + base;
+  float* depth = depth_.data() + base;
+  std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+  std::size_t covered = 0;
+  const auto one = [&](int i) {
+    if (count[i] - block[i] >= 1 && depth[i] == 0.0f) {
+      depth[i] = bound[i];
+      frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
+      ++covered;
+    }
+  };
+  int i = a;
+#if CULLKIT_COVERAGE_AVX2
+  for (; i <= b && (i & 7) != 0; ++i) one(i);
+  const __m256i zero8_i = _mm256_setzero_si256();
+  const __m256 zero8_f = _mm256_setzero_ps();
+  for (; i + 7 <= b; i += 8) {
+    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i));
+    const __m256i k = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(block + i));
+    const __m256 d = _mm256_loadu_ps(depth + i);
+    const __m256 fresh = _mm256_and_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_sub_epi32(c, k), zero8_i)),
+                                       _mm256_cmp_ps(d, zero8_f, _CMP_EQ_OQ));
+    const int mask = _mm256_movemask_ps(fresh);
+    if (mask == 0) continue;
+    _mm256_storeu_ps(depth + i, _mm256_blendv_ps(d, _mm256_loadu_ps(bound + i), fresh));
+    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+    covered += bits_in_nibble(mask & 15) + bits_in_nibble(mask >> 4);
+  }
+#endif
+#if CULLKIT_HAS_SSE2
+  // Groups of four aligned on the row (a word of frozen bits holds 16 of them): the same
+  // comparisons, four at once.
+  for (; i <= b && (i & 3) != 0; ++i) one(i);
+  const __m128i zero_i = _mm_setzero_si128();
+  const __m128 zero_f = _mm_setzero_ps();
+  for (; i + 3 <= b; i += 4) {
+    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i));
+    const __m128i k = _mm_loadu_si128(reinterpret_cast<const __m128i*>(block + i));
+    const __m128 d = _mm_loadu_ps(depth + i);
+    const __m128 fresh = _mm_and_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(_mm_sub_epi32(c, k), zero_i)), _mm_cmpeq_ps(d, zero_f));
+    const int mask = _mm_movemask_ps(fresh);
+    if (mask == 0) continue;
+    _mm_storeu_ps(depth + i, _mm_or_ps(_mm_and_ps(fresh, _mm_loadu_ps(bound + i)), _mm_andnot_ps(fresh, d)));
+    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+    covered += bits_in_nibble(mask);
+  }
+#endif
+  for (; i <= b; ++i) one(i);
+  return covered;
+}
+
+inline void CoverageGrid::absorb(const CoverageGrid& patch) {
+  if (patch.dirty_.empty()) return;
+  grow(dirty_, patch.dirty_);
+  for (int n = 0; n < patch.used_row_count_; ++n) {
+    const int j = patch.used_rows_[static_cast<std::size_t>(n)];
+    const int i0 = patch.used_lo_[static_cast<std::size_t>(j)], i1 = patch.used_hi_[static_cast<std::size_t>(j)];
+    const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+    std::int32_t* count = count_.data() + base;
+    std::int32_t* block = block_.data() + base;
+    float* bound = bound_.data() + base;
+    const std::int32_t* from_count = patch.count_.data() + base;
+    const std::int32_t* from_block = patch.block_.data() + base;
+    const float* from_bound = patch.bound_.data() + base;
+    int i = i0;
+#if CULLKIT_COVERAGE_AVX2
+    for (; i + 7 <= i1; i += 8) {
+      const auto at = [i](const std::int32_t* p) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + i)); };
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), _mm256_add_epi32(at(count), at(from_count)));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(block + i), _mm256_add_epi32(at(block), at(from_block)));
+      _mm256_storeu_ps(bound + i, _mm256_min_ps(_mm256_loadu_ps(from_bound + i), _mm256_loadu_ps(bound + i)));
+    }
+#endif
+#if CULLKIT_HAS_SSE2
+    for (; i + 3 <= i1; i += 4) {
+      const auto at = [i](const std::int32_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + i)); };
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(count + i), _mm_add_epi32(at(count), at(from_count)));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(block + i), _mm_add_epi32(at(block), at(from_block)));
+      // min(bound, from) as std::min takes it: `from` where it is smaller, else `bound`.
+      _mm_storeu_ps(bound + i, _mm_min_ps(_mm_loadu_ps(from_bound + i), _mm_loadu_ps(bound + i)));
+    }
+#endif
+    for (; i <= i1; ++i) {
+      count[i] += from_count[i];
+      block[i] += from_block[i];
+      bound[i] = std::min(bound[i], from_bound[i]);
+    }
+    mark(j, i0, i1);
+  }
+}
+
+inline void CoverageGrid::take_nearer(const CoverageGrid& patch) {
+  const CellRect& r = patch.fresh_;  // the cells the patch's own bands covered
+  if (r.empty()) return;
+  grow(dirty_, r);
+  for (int j = r.y0; j <= r.y1; ++j) {
+    const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+    const float* from = patch.depth_.data() + base;
+    float* to = depth_.data() + base;
+    std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+    const auto one = [&](int i) {
+      if (!(from[i] > to[i])) return;
+      to[i] = from[i];
+      frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
+    };
+    int i = r.x0;
+#if CULLKIT_COVERAGE_AVX2
+    for (; i <= r.x1 && (i & 7) != 0; ++i) one(i);
+    for (; i + 7 <= r.x1; i += 8) {
+      const __m256 a = _mm256_loadu_ps(from + i), b = _mm256_loadu_ps(to + i);
+      const __m256 nearer = _mm256_cmp_ps(a, b, _CMP_GT_OQ);
+      const int mask = _mm256_movemask_ps(nearer);
+      if (mask == 0) continue;
+      _mm256_storeu_ps(to + i, _mm256_blendv_ps(b, a, nearer));
+      frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+    }
+#endif
+#if CULLKIT_HAS_SSE2
+    for (; i <= r.x1 && (i & 3) != 0; ++i) one(i);
+    for (; i + 3 <= r.x1; i += 4) {
+      const __m128 a = _mm_loadu_ps(from + i), b = _mm_loadu_ps(to + i);
+      const __m128 nearer = _mm_cmpgt_ps(a, b);
+      const int mask = _mm_movemask_ps(nearer);
+      if (mask == 0) continue;
+      _mm_storeu_ps(to + i, _mm_or_ps(_mm_and_ps(nearer, a), _mm_andnot_ps(nearer, b)));
+      frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+    }
+#endif
+    for (; i <= r.x1; ++i) one(i);
+  }
+}
+
+inline float CoverageGrid::tile_minimum(int j0, int j1, int i0, int i1) const {
+  float v = std::numeric_limits<float>::infinity();
+#if CULLKIT_HAS_SSE2
+  static_assert(tile == 8, "a tile row is two groups of four cells");
+  if (i1 - i0 == tile) {
+    __m128 m = _mm_set1_ps(v);
+    for (int j = j0; j < j1; ++j) {
+      const float* row = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + i0;
+      m = _mm_min_ps(m, _mm_min_ps(_mm_loadu_ps(row), _mm_loadu_ps(row + 4)));
+    }
+    m = _mm_min_ps(m, _mm_shuffle_ps(m, m, 0x4E));  // lanes 2, 3, 0, 1
+    m = _mm_min_ps(m, _mm_shuffle_ps(m, m, 0xB1));  // lanes 1, 0, 3, 2
+    return _mm_cvtss_f32(m);
+  }
+#endif
+  for (int j = j0; j < j1; ++j)
+    for (int i = i0; i < i1; ++i)
+      v = std::min(v, depth_[static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(i)]);
+  return v;
+}
+
+inline void CoverageGrid::lower_row_sloped(float* row, int i0, int i1, int step0, float start, float slope, float lowest) {
+  int i = i0;
+#if CULLKIT_COVERAGE_AVX2
+  if (i + 7 <= i1) {
+    const __m256 low = _mm256_set1_ps(lowest), a = _mm256_set1_ps(slope), s = _mm256_set1_ps(start),
+                 eight = _mm256_set1_ps(8.0f);
+    __m256 steps = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(step0), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
+    for (; i + 7 <= i1; i += 8) {
+      const __m256 v = _mm256_max_ps(_mm256_add_ps(s, _mm256_mul_ps(a, steps)), low);
+      _mm256_storeu_ps(row + i, _mm256_min_ps(v, _mm256_loadu_ps(row + i)));
+      steps = _mm256_add_ps(steps, eight);
+    }
+  }
+#endif
+#if CULLKIT_HAS_SSE2
+  if (i + 3 <= i1) {
+    const __m128 low = _mm_set1_ps(lowest), a = _mm_set1_ps(slope), s = _mm_set1_ps(start), four = _mm_set1_ps(4.0f);
+    __m128 steps = _mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(step0 + (i - i0)), _mm_setr_epi32(0, 1, 2, 3)));
+    for (; i + 3 <= i1; i += 4) {
+      const __m128 v = _mm_max_ps(_mm_add_ps(s, _mm_mul_ps(a, steps)), low);
+      _mm_storeu_ps(row + i, _mm_min_ps(v, _mm_loadu_ps(row + i)));
+      steps = _mm_add_ps(steps, four);
+    }
+  }
+#endif
+  for (; i <= i1; ++i) {
+    const float v = std::max(lowest, start + slope * static_cast<float>(step0 + (i - i0)));
+    row[i] = std::min(row[i], v);
+  }
+}
+
+inline void CoverageGrid::lower_row_flat(float* row, int i0, int i1, float lowest) {
+  int i = i0;
+#if CULLKIT_COVERAGE_AVX2
+  const __m256 low8 = _mm256_set1_ps(lowest);
+  for (; i + 7 <= i1; i += 8) _mm256_storeu_ps(row + i, _mm256_min_ps(low8, _mm256_loadu_ps(row + i)));
+#endif
+#if CULLKIT_HAS_SSE2
+  const __m128 low = _mm_set1_ps(lowest);
+  for (; i + 3 <= i1; i += 4) _mm_storeu_ps(row + i, _mm_min_ps(low, _mm_loadu_ps(row + i)));
+#endif
+  for (; i <= i1; ++i) row[i] = std::min(row[i], lowest);
+}
+
+inline int CoverageGrid::accumulate_row(std::size_t base, int i0, int i1) {
+  std::int32_t* diff = diff_.data() + base;
+  std::int32_t* count = count_.data() + base;
+  std::int32_t run = 0;
+  int i = i0;
+#if CULLKIT_COVERAGE_AVX2
+  // Eight cells at a time: a prefix sum within each half, the low half's total added to the high
+  // half, plus the carry so far (exact integer sums, as the scalar loop's).
+  __m256i carry8 = _mm256_setzero_si256();
+  const __m256i zero8 = _mm256_setzero_si256(), last_lane = _mm256_set1_epi32(7);
+  for (; i + 7 <= i1; i += 8) {
+    __m256i d = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(diff + i));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(diff + i), zero8);
+    d = _mm256_add_epi32(d, _mm256_slli_si256(d, 4));
+    d = _mm256_add_epi32(d, _mm256_slli_si256(d, 8));
+    d = _mm256_add_epi32(d, _mm256_shuffle_epi32(_mm256_permute2x128_si256(d, d, 0x08), 0xFF));
+    d = _mm256_add_epi32(d, carry8);
+    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), _mm256_add_epi32(c, d));
+    carry8 = _mm256_permutevar8x32_epi32(d, last_lane);
+  }
+  run = _mm256_cvtsi256_si32(carry8);
+#endif
+#if CULLKIT_HAS_SSE2
+  // Four cells at a time: an in-register prefix sum (two shifted adds) plus the carry so far.
+  __m128i carry = _mm_set1_epi32(run);
+  const __m128i zero = _mm_setzero_si128();
+  for (; i + 3 <= i1; i += 4) {
+    __m128i d = _mm_loadu_si128(reinterpret_cast<const __m128i*>(diff + i));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(diff + i), zero);
+    d = _mm_add_epi32(d, _mm_slli_si128(d, 4));
+    d = _mm_add_epi32(d, _mm_slli_si128(d, 8));
+    d = _mm_add_epi32(d, carry);
+    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(count + i), _mm_add_epi32(c, d));
+    carry = _mm_shuffle_epi32(d, 0xFF);
+  }
+  run = _mm_cvtsi128_si32(carry);
+#endif
+  for (; i <= i1; ++i) {
+    run += diff[i];
+    diff[i] = 0;
+    count[i] += run;
+  }
+  if (run == 0) return i;
+#if CULLKIT_COVERAGE_AVX2
+  const __m256i add8 = _mm256_set1_epi32(run);
+  for (; i + 8 <= width_; i += 8) {
+    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), _mm256_add_epi32(c, add8));
+  }
+#endif
+#if CULLKIT_HAS_SSE2
+  const __m128i add = _mm_set1_epi32(run);
+  for (; i + 4 <= width_; i += 4) {
+    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(count + i), _mm_add_epi32(c, add));
+  }
+#endif
+  for (; i < width_; ++i) count[i] += run;
+  return i;
+}
+
+}  // namespace mesh_occlusion
+}  // namespace detail
+}  // namespace cullkit
