@@ -3,6 +3,7 @@
 //  stereo_*   two eyes 6.4 cm apart: one cull_views call (reference) against two AdaptiveBinaryTree
 //             culls and two Bullet btDbvt k-DOP culls, on the same boxes, in this process.
 //  cascades_* four shadow-cascade-like frusta (nested depth slices of one view): the same race.
+//  light_cascades_* the four slices' light-space boxes for a directional light: the same race.
 //  casters_*  the shadow-caster volume of a view culled through cull(ConvexVolume), against the
 //             view frustum alone (what it costs to keep the off-screen casters).
 //  refit_*    one frame of motion: plain refit (reference), repairing refit, full rebuild; the
@@ -117,6 +118,28 @@ void stereo_and_cascades(const std::string& scene, const std::vector<Aabb>& boxe
     cascades.push_back(Frustum::from_matrix(p * view_matrix(eye, target), DepthRange::zero_to_one));
   }
   views_race("cascades_" + scene, boxes, cascades);
+  // Cascades as a renderer builds them for a directional light: each depth slice's corners fitted
+  // by a box in the light's space, the box stretched towards the sun to catch the casters. All
+  // four boxes share the light's orientation, so their 24 planes have 6 normals but 24 offsets.
+  std::vector<Frustum> light_cascades;
+  {
+    const glm::vec3 sun_dir = glm::normalize(glm::vec3(0.6f, -0.5f, 0.3f));
+    const glm::mat4 light_view = glm::lookAtRH(glm::vec3(0.0f), sun_dir, glm::vec3(0, 1, 0));
+    for (int c = 0; c < 4; ++c) {
+      const glm::mat4 p = glm::perspectiveRH_ZO(glm::radians(70.0f), 16.0f / 9.0f, splits[c], splits[c + 1]);
+      const glm::mat4 slice_to_world = glm::inverse(p * view_matrix(eye, target));
+      glm::vec3 lo(HUGE_VALF), hi(-HUGE_VALF);
+      for (int k = 0; k < 8; ++k) {
+        const glm::vec4 q = slice_to_world * glm::vec4((k & 1) ? 1.0f : -1.0f, (k & 2) ? 1.0f : -1.0f, (k & 4) ? 1.0f : 0.0f, 1.0f);
+        const glm::vec3 in_light = glm::vec3(light_view * glm::vec4(glm::vec3(q) / q.w, 1.0f));
+        lo = glm::min(lo, in_light);
+        hi = glm::max(hi, in_light);
+      }
+      const glm::mat4 o = glm::orthoRH_ZO(lo.x, hi.x, lo.y, hi.y, -hi.z - 500.0f, -lo.z);
+      light_cascades.push_back(Frustum::from_matrix(o * light_view, DepthRange::zero_to_one));
+    }
+  }
+  views_race("light_cascades_" + scene, boxes, light_cascades);
 
   // Shadow casters of the first eye for a low sun: the volume against the frustum alone.
   const AdaptiveBinaryTree<Aabb> abt(boxes.data(), boxes.size());

@@ -249,7 +249,7 @@ CULLKIT_FORCEINLINE std::uint32_t abt_views_node(const AbtViewPlanes& vp, const 
 inline void abt_views_leaf(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes, std::uint32_t alive,
                            std::uint32_t straddling, const std::uint32_t* masks, std::uint32_t begin,
                            std::uint32_t end, const std::uint32_t* order, const AbtDynamic& dyn,
-                           std::vector<std::uint32_t>& out, std::vector<std::uint32_t>& view_bits) {
+                           AbtViewsOutput& out) {
   constexpr std::uint32_t lanes = AbtLeafBoxes::lanes;
   const std::uint32_t inside_views = alive & ~straddling;
   std::uint32_t outside[32];
@@ -268,7 +268,7 @@ inline void abt_views_leaf(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes, s
       boxes.classify_lanes(&vp.frustum(std::uint32_t(v)).plane(0), masks[v], base, outside[v], cross);
     }
 #endif
-    abt_emit_lanes(base, end, straddling, outside, inside_views, order, dyn, out, view_bits);
+    abt_emit_lanes(base, end, straddling, outside, inside_views, order, dyn, out);
   }
 }
 
@@ -276,8 +276,7 @@ inline void abt_views_leaf(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes, s
 /// Objects [begin, end) of the pending part (inserted since the last rebuild), for every view.
 inline void abt_views_pending(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes, std::uint32_t all,
                               std::uint32_t begin, std::uint32_t end, const std::uint32_t* order,
-                              const AbtDynamic& dyn, std::vector<std::uint32_t>& out,
-                              std::vector<std::uint32_t>& view_bits) {
+                              const AbtDynamic& dyn, AbtViewsOutput& out) {
   if (begin >= end) return;
   std::uint32_t masks[32];
   std::uint32_t straddling = 0;
@@ -286,28 +285,20 @@ inline void abt_views_pending(const AbtViewPlanes& vp, const AbtLeafBoxes& boxes
     if (masks[v] != 0) straddling |= std::uint32_t{1} << v;
   }
   if (straddling == 0) {
-    out.insert(out.end(), order + begin, order + end);
-    view_bits.insert(view_bits.end(), end - begin, all);
+    out.put_range(order, begin, end, all);
     return;
   }
-  abt_views_leaf(vp, boxes, all, straddling, masks, begin, end, order, dyn, out, view_bits);
+  abt_views_leaf(vp, boxes, all, straddling, masks, begin, end, order, dyn, out);
 }
 
 template <std::uint32_t StackSize>
-void abt_cull_views(const std::vector<AbtNode>& tree, const std::vector<std::uint32_t>& order_v,
-                    const AbtLeafBoxes& boxes, const AbtDynamic& dyn, std::uint32_t scan_below,
-                    const Frustum* frusta, std::uint32_t views, std::vector<std::uint32_t>& out,
-                    std::vector<std::uint32_t>& view_bits) {
-  AbtMergedPlanes merged;
-  if (merged.assign(frusta, views)) {
-    abt_cull_views_merged<StackSize>(merged, views, tree, order_v, boxes, dyn, scan_below, out, view_bits);
-    return;
-  }
+void abt_cull_views_per_view(const std::vector<AbtNode>& tree, const std::vector<std::uint32_t>& order_v,
+                             const AbtLeafBoxes& boxes, const AbtDynamic& dyn, std::uint32_t scan_below,
+                             const Frustum* frusta, std::uint32_t views, AbtViewsOutput& out) {
   const AbtViewPlanes vp(frusta, views);
   const std::uint32_t all = views >= 32 ? ~std::uint32_t{0} : ((std::uint32_t{1} << views) - 1u);
   const std::uint32_t* order = order_v.data();
-  abt_views_pending(vp, boxes, all, dyn.tree_end, static_cast<std::uint32_t>(order_v.size()), order, dyn, out,
-                    view_bits);
+  abt_views_pending(vp, boxes, all, dyn.tree_end, static_cast<std::uint32_t>(order_v.size()), order, dyn, out);
   if (tree.empty()) return;
   const AbtNode* nodes = tree.data();
   struct Entry {
@@ -340,19 +331,17 @@ void abt_cull_views(const std::vector<AbtNode>& tree, const std::vector<std::uin
     }
     if (straddling == 0) {  // inside every view still alive: one range, one mask
       if (!dyn.node_has_holes(k)) {
-        out.insert(out.end(), order + node.begin, order + node.end);
-        view_bits.insert(view_bits.end(), node.count(), alive);
+        out.put_range(order, node.begin, node.end, alive);
       } else {
         dyn.live_runs(node.begin, node.end, [&](std::uint32_t b, std::uint32_t e) {
-          out.insert(out.end(), order + b, order + e);
-          view_bits.insert(view_bits.end(), e - b, alive);
+          out.put_range(order, b, e, alive);
           return true;
         });
       }
       continue;
     }
     if (node.is_leaf() || node.count() <= scan_below) {
-      abt_views_leaf(vp, boxes, alive, straddling, masks, node.begin, node.end, order, dyn, out, view_bits);
+      abt_views_leaf(vp, boxes, alive, straddling, masks, node.begin, node.end, order, dyn, out);
       continue;
     }
     const std::uint32_t left = node.left;
@@ -367,6 +356,21 @@ void abt_cull_views(const std::vector<AbtNode>& tree, const std::vector<std::uin
       r.masks[v] = l.masks[v] = static_cast<PlaneMask>(masks[v]);
     }
   }
+}
+
+/// The multi-view cull: the merged walk when the views' planes fit, else the per-view walk.
+template <std::uint32_t StackSize>
+void abt_cull_views(const std::vector<AbtNode>& tree, const std::vector<std::uint32_t>& order_v,
+                    const AbtLeafBoxes& boxes, const AbtDynamic& dyn, std::uint32_t scan_below,
+                    const Frustum* frusta, std::uint32_t views, std::vector<std::uint32_t>& out,
+                    std::vector<std::uint32_t>& view_bits) {
+  AbtViewsOutput writer(out, view_bits);
+  AbtMergedPlanes merged;
+  if (merged.assign(frusta, views))
+    abt_cull_views_merged<StackSize>(merged, views, tree, order_v, boxes, dyn, scan_below, writer);
+  else
+    abt_cull_views_per_view<StackSize>(tree, order_v, boxes, dyn, scan_below, frusta, views, writer);
+  writer.finish();
 }
 
 }  // namespace cullkit::detail
