@@ -534,27 +534,23 @@ support::Scene split_edges(const support::Scene& in, float len) {
 
 // ---- --hash: the culler alone, its answers as a hash and its time ----
 
-/// This thread's CPU time in ms (wall time where POSIX thread clocks are missing).
-double thread_ms() {
-#if defined(CLOCK_THREAD_CPUTIME_ID)
+#if defined(CLOCK_THREAD_CPUTIME_ID) && defined(CLOCK_PROCESS_CPUTIME_ID)
+/// A POSIX CPU clock in ms.
+double clock_ms(clockid_t clock) {
   timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  clock_gettime(clock, &t);
   return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
-#else
-  return std::chrono::duration<double, std::milli>(Clock::now().time_since_epoch()).count();
-#endif
 }
+/// This thread's CPU time in ms.
+double thread_ms() { return clock_ms(CLOCK_THREAD_CPUTIME_ID); }
+/// The process's CPU time in ms, all threads.
+double process_ms() { return clock_ms(CLOCK_PROCESS_CPUTIME_ID); }
+#else
+// Wall time where POSIX CPU clocks are missing.
+double thread_ms() { return std::chrono::duration<double, std::milli>(Clock::now().time_since_epoch()).count(); }
+double process_ms() { return thread_ms(); }
+#endif
 
-/// The process's CPU time in ms, all threads (wall time where POSIX process clocks are missing).
-double process_ms() {
-#if defined(CLOCK_PROCESS_CPUTIME_ID)
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
-#else
-  return std::chrono::duration<double, std::milli>(Clock::now().time_since_epoch()).count();
-#endif
-}
 
 struct Flags {
   unsigned threads = 0;  // --threads=N: one thread against N
@@ -600,10 +596,24 @@ void culler_only(const std::string& name, const CullScene& cs, const std::vector
               occluder_triangles / n, ms_text(ms).c_str());
 }
 
+/// A TaskRunner that runs the tasks one after the other on the calling thread and adds up the
+/// thread CPU time spent inside them: the part of a cull that runs on tasks.
+struct TimedTasks {
+  double ms = 0;
+  static void dispatch(void* self, std::size_t count, void (*run)(void*, std::size_t), void* job) {
+    const double t0 = thread_ms();
+    for (std::size_t i = 0; i < count; ++i) run(job, i);
+    static_cast<TimedTasks*>(self)->ms += thread_ms() - t0;
+  }
+};
+
 /// --threads=N: the culler with one thread and with N (MeshOcclusionParams::threads, the library's
 /// pool), alternately per camera, best of `reps` each, in wall time; the hashes of both answers
 /// (they must be equal), both medians, the ratio of the medians and of the sums over the cameras,
-/// and the N-thread cull's CPU time per frame (all threads, median of each camera's best).
+/// and the N-thread cull's CPU time per frame (all threads, median of each camera's best). Then,
+/// in this thread's CPU time (which a loaded machine's preemption does not inflate), the share of
+/// a cull that runs on tasks, and the ratio N threads would give if those tasks split perfectly
+/// and cost nothing to hand out (serial + tasks / N over the one-thread time, sums over the cameras).
 void culler_threads(const std::string& name, const CullScene& cs, const std::vector<Camera>& cams, int reps,
                     const MeshOcclusionParams& given, unsigned threads) {
   const ObjectMap map(cs.scene);
@@ -641,10 +651,37 @@ void culler_threads(const std::string& name, const CullScene& cs, const std::vec
     sum_one += wall_one[c];
     sum_many += wall_many[c];
   }
-  std::printf("threads,%s,%u,%016llx,%016llx,%s,one_ms=%s,many_ms=%s,median_ratio=%.3f,sum_ratio=%.3f,many_cpu_ms=%s\n",
+  TimedTasks timed;
+  MeshOcclusionParams split = many;
+  split.task_runner = TaskRunner{TimedTasks::dispatch, &timed};
+  const MeshOcclusionCuller<glm::vec3> culler_split(cs.scene.mesh(), map.objects.data(), map.objects.size(), split);
+  MeshOcclusionContext context_split;
+  double cpu_one = 0, cpu_split = 0, cpu_tasks = 0;
+  for (const Camera& cam : cams) {
+    double best_one = 1e300, best_split = 1e300, best_tasks = 0;
+    for (int r = 0; r < reps; ++r) {
+      double t0 = thread_ms();
+      culler_one.cull(cam, context_one, kept_one);
+      best_one = std::min(best_one, thread_ms() - t0);
+      timed.ms = 0;
+      t0 = thread_ms();
+      culler_split.cull(cam, context_split, kept_many);
+      const double t = thread_ms() - t0;
+      if (t < best_split) {
+        best_split = t;
+        best_tasks = timed.ms;
+      }
+    }
+    cpu_one += best_one;
+    cpu_split += best_split;
+    cpu_tasks += best_tasks;
+  }
+  std::printf("threads,%s,%u,%016llx,%016llx,%s,one_ms=%s,many_ms=%s,median_ratio=%.3f,sum_ratio=%.3f,many_cpu_ms=%s,"
+              "task_share=%.3f,ideal_ratio=%.3f\n",
               name.c_str(), threads, static_cast<unsigned long long>(hash_one), static_cast<unsigned long long>(hash_many),
               same ? "same" : "DIFFERENT", ms_text(wall_one).c_str(), ms_text(wall_many).c_str(), ratio(wall_many, wall_one),
-              sum_one > 0 ? sum_many / sum_one : 0.0, ms_text(cpu_many).c_str());
+              sum_one > 0 ? sum_many / sum_one : 0.0, ms_text(cpu_many).c_str(), cpu_split > 0 ? cpu_tasks / cpu_split : 0.0,
+              cpu_one > 0 ? (cpu_split - cpu_tasks + cpu_tasks / threads) / cpu_one : 0.0);
 }
 
 // ---- --engine: the parts of an engine frame ----

@@ -93,6 +93,7 @@ struct Scratch {
   // in `in_frustum` (1: hidden), written by whichever task tests the object.
   std::vector<TaskScratch> tasks;
   std::vector<std::uint8_t> hidden;
+  std::vector<std::uint32_t> corner_list;  // occluder corners given a slot in `projected`, in slot order
 };
 
 

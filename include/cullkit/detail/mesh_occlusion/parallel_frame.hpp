@@ -1,10 +1,10 @@
 // cullkit/detail/mesh_occlusion/parallel_frame.hpp: the parts of a frame of MeshOcclusionCuller::cull
 // that run on several tasks (MeshOcclusionParams::threads), through the caller's TaskRunner or the
 // library's pool: the projection of the objects' boxes (with the patch boxes the occluder choice
-// reads) and the object tests against the finished grid.
+// reads), the projection of the occluders' corners, and the object tests against the finished grid.
 //
-// Why the answer cannot depend on the tasks: each object's box, each patch's box and each object's
-// test is a function of the frame's view and finished grid alone, computed by the same code in
+// Why the answer cannot depend on the tasks: each object's box, each patch's box, each corner and
+// each object's test is a function of the frame's view and finished grid alone, computed by the same code in
 // every task; a task writes only the slots of the objects it took and its own caches. The occluder
 // insertion, whose order decides the grid, stays on the calling thread.
 #pragma once
@@ -33,6 +33,7 @@ namespace mesh_occlusion {
 /// varies from one rectangle to hundreds of triangles.
 inline constexpr std::size_t box_batch = 256;
 inline constexpr std::size_t test_batch = 16;
+inline constexpr std::size_t corner_batch = 512;
 
 /// Tasks for a frame of `objects` objects in the frustum: MeshOcclusionParams::threads resolved,
 /// and no more than there are batches of object tests.
@@ -145,6 +146,41 @@ inline void project_boxes_on_tasks(const MeshIndex& index, const MeshOcclusionPa
         if (p1 - p0 < 2 || !index.objects[o].occludes || screen_cells(s.boxes[i], s.grid) < min_cells) continue;
         for (std::uint32_t p = p0; p < p1; ++p)
           if (s.frustum.classify(ps.patches[p].box) != Containment::outside) patch_box(index, s, p);
+      }
+  });
+}
+
+/// The corners of the chosen occluders' triangles projected on `tasks` tasks into the frame's
+/// cache, so that gather_triangles (on the calling thread) finds them there: the slots are given
+/// out here, in the order the occluders list them, and each is filled by one task with what
+/// project_vertex would put there (the same view, its final clipping level included). Call after
+/// choose_occluders.
+inline void project_occluder_corners_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
+                                              unsigned tasks) {
+  const PatchSet& ps = index.patches;
+  const std::size_t first_slot = s.projected.size();
+  s.corner_list.clear();
+  for (const auto& occluder : s.occluders) {
+    const Patch& patch = ps.patches[occluder.second];
+    for (std::uint32_t member = patch.first; member < patch.first + patch.count; ++member) {
+      const std::uint32_t* c = &index.corners[3 * std::size_t(ps.triangles[member])];
+      if (c[0] == none) continue;
+      for (int k = 0; k < 3; ++k) {
+        if (s.vertex_stamp[c[k]] == s.frame) continue;
+        s.vertex_stamp[c[k]] = s.frame;
+        s.vertex_slot[c[k]] = static_cast<std::uint32_t>(first_slot + s.corner_list.size());
+        s.corner_list.push_back(c[k]);
+      }
+    }
+  }
+  s.projected.resize(first_slot + s.corner_list.size());
+  BatchCounter batches(s.corner_list.size(), corner_batch);
+  run_each_task(params.task_runner, tasks, [&](std::size_t) {
+    std::size_t first, last;
+    while (batches.claim(first, last))
+      for (std::size_t j = first; j < last; ++j) {
+        const glm::vec3& p = index.positions[s.corner_list[j]];
+        s.projected[first_slot + j] = s.view.project(p.x, p.y, p.z);
       }
   });
 }

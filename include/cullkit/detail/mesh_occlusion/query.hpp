@@ -81,6 +81,7 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
   else
     for (std::size_t i = 0; i < s.in_frustum.size(); ++i) s.boxes[i] = project_box(s.view, index.bounds[s.in_frustum[i]]);
   choose_occluders(index, params, s);
+  if (tasks > 1) project_occluder_corners_on_tasks(index, params, s, tasks);
   gather_triangles(index, s);
   stats.occluders_used = s.occluders.size();
   stats.cells_covered = insert_patches(index, params, s);
