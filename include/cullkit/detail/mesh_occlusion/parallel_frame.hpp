@@ -46,6 +46,11 @@ inline unsigned frame_tasks(const MeshOcclusionParams& params, std::size_t objec
 class BatchCounter {
  public:
   BatchCounter(std::size_t count, std::size_t batch) : count_(count), batch_(batch) {}
+  /// `tasks`, or fewer when there are fewer batches (a task with nothing to take would only cost its
+  /// hand-out); at least 1.
+  [[nodiscard]] unsigned tasks_for(unsigned tasks) const {
+    return static_cast<unsigned>(std::max<std::size_t>(1, std::min<std::size_t>(tasks, (count_ + batch_ - 1) / batch_)));
+  }
   /// The next batch [first, last); false when none is left.
   bool claim(std::size_t& first, std::size_t& last) {
     const std::size_t b = next_.fetch_add(1, std::memory_order_relaxed);
@@ -60,9 +65,14 @@ class BatchCounter {
   std::atomic<std::size_t> next_{0};
 };
 
-/// Calls run(task) once for every task in [0, tasks) through `runner` (on any threads, in any order).
+/// Calls run(task) once for every task in [0, tasks) through `runner` (on any threads, in any order);
+/// one task runs on the calling thread directly.
 template <class Run>
 void run_each_task(const TaskRunner& runner, unsigned tasks, const Run& run) {
+  if (tasks == 1) {
+    run(std::size_t{0});
+    return;
+  }
   run_tasks(runner, tasks, [](void* job, std::size_t task) { (*static_cast<const Run*>(job))(task); },
             const_cast<void*>(static_cast<const void*>(&run)));
 }
@@ -136,7 +146,7 @@ inline void project_boxes_on_tasks(const MeshIndex& index, const MeshOcclusionPa
       std::max(1.0, params.min_occluder_screen_fraction * double(s.grid.width()) * double(s.grid.height()));
   const PatchSet& ps = index.patches;
   BatchCounter batches(s.in_frustum.size(), box_batch);
-  run_each_task(params.task_runner, tasks, [&](std::size_t) {
+  run_each_task(params.task_runner, batches.tasks_for(tasks), [&](std::size_t) {
     std::size_t first, last;
     while (batches.claim(first, last))
       for (std::size_t i = first; i < last; ++i) {
@@ -175,7 +185,7 @@ inline void project_occluder_corners_on_tasks(const MeshIndex& index, const Mesh
   }
   s.projected.resize(first_slot + s.corner_list.size());
   BatchCounter batches(s.corner_list.size(), corner_batch);
-  run_each_task(params.task_runner, tasks, [&](std::size_t) {
+  run_each_task(params.task_runner, batches.tasks_for(tasks), [&](std::size_t) {
     std::size_t first, last;
     while (batches.claim(first, last))
       for (std::size_t j = first; j < last; ++j) {
@@ -194,7 +204,7 @@ inline std::size_t test_objects_on_tasks(const MeshIndex& index, const MeshOcclu
   s.hidden.resize(n);
   if (s.tasks.size() < tasks) s.tasks.resize(tasks);
   BatchCounter batches(n, test_batch);
-  run_each_task(params.task_runner, tasks, [&](std::size_t task) {
+  run_each_task(params.task_runner, batches.tasks_for(tasks), [&](std::size_t task) {
     TaskScratch& own = s.tasks[task];
     begin_task_frame(index, own);
     TaskFrame f{s, own, s.grid, s.view, s.frustum, s.in_frustum, s.boxes};
