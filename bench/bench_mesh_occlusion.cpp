@@ -36,6 +36,11 @@
 //                  projected box (a box reaching the near plane is kept). MOC's time is all of that; the
 //                  culler's is `cull` (its own frustum walk included). Per scene: both medians (min-max),
 //                  the ratio of medians and both kept shares of the scene's triangles.
+//   --threads=N    the culler alone with one thread and with N (N >= 2, through the library's pool),
+//                  alternately per camera, best of `reps` each, in wall time: per scene, both answers'
+//                  hashes and whether they are the same, both medians (min-max), the ratio of the medians
+//                  and of the sums over the cameras, and the N-thread cull's CPU time per frame (all
+//                  threads).
 //   --scene=TEXT   only the scenes whose name contains TEXT (each scene keeps the cameras of a full run).
 //   --grid=WxH     the culler's grid size; overrides GW and GH.
 //   --split-edges=LEN  the real scenes with every edge longer than LEN (scene units) split at its midpoint,
@@ -529,18 +534,26 @@ support::Scene split_edges(const support::Scene& in, float len) {
 
 // ---- --hash: the culler alone, its answers as a hash and its time ----
 
-/// This thread's CPU time in ms (wall time where POSIX thread clocks are missing).
-double thread_ms() {
-#if defined(CLOCK_THREAD_CPUTIME_ID)
+#if defined(CLOCK_THREAD_CPUTIME_ID) && defined(CLOCK_PROCESS_CPUTIME_ID)
+/// A POSIX CPU clock in ms.
+double clock_ms(clockid_t clock) {
   timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  clock_gettime(clock, &t);
   return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
-#else
-  return std::chrono::duration<double, std::milli>(Clock::now().time_since_epoch()).count();
-#endif
 }
+/// This thread's CPU time in ms.
+double thread_ms() { return clock_ms(CLOCK_THREAD_CPUTIME_ID); }
+/// The process's CPU time in ms, all threads.
+double process_ms() { return clock_ms(CLOCK_PROCESS_CPUTIME_ID); }
+#else
+// Wall time where POSIX CPU clocks are missing.
+double thread_ms() { return std::chrono::duration<double, std::milli>(Clock::now().time_since_epoch()).count(); }
+double process_ms() { return thread_ms(); }
+#endif
+
 
 struct Flags {
+  unsigned threads = 0;  // --threads=N: one thread against N
   bool reasons = false, hash = false, engine = false, moc = false;
   std::string scene;
   int grid_width = 0, grid_height = 0;
@@ -583,6 +596,93 @@ void culler_only(const std::string& name, const CullScene& cs, const std::vector
               occluder_triangles / n, ms_text(ms).c_str());
 }
 
+/// A TaskRunner that runs the tasks one after the other on the calling thread and adds up the
+/// thread CPU time spent inside them: the part of a cull that runs on tasks.
+struct TimedTasks {
+  double ms = 0;
+  static void dispatch(void* self, std::size_t count, void (*run)(void*, std::size_t), void* job) {
+    const double t0 = thread_ms();
+    for (std::size_t i = 0; i < count; ++i) run(job, i);
+    static_cast<TimedTasks*>(self)->ms += thread_ms() - t0;
+  }
+};
+
+/// --threads=N: the culler with one thread and with N (MeshOcclusionParams::threads, the library's
+/// pool), alternately per camera, best of `reps` each, in wall time; the hashes of both answers
+/// (they must be equal), both medians, the ratio of the medians and of the sums over the cameras,
+/// and the N-thread cull's CPU time per frame (all threads, median of each camera's best). Then,
+/// in this thread's CPU time (which a loaded machine's preemption does not inflate), the share of
+/// a cull that runs on tasks, and the ratio N threads would give if those tasks split perfectly
+/// and cost nothing to hand out (serial + tasks / N over the one-thread time, sums over the cameras).
+void culler_threads(const std::string& name, const CullScene& cs, const std::vector<Camera>& cams, int reps,
+                    const MeshOcclusionParams& given, unsigned threads) {
+  const ObjectMap map(cs.scene);
+  MeshOcclusionParams one = given, many = given;
+  one.threads = 1;
+  many.threads = threads;
+  const MeshOcclusionCuller<glm::vec3> culler_one(cs.scene.mesh(), map.objects.data(), map.objects.size(), one);
+  const MeshOcclusionCuller<glm::vec3> culler_many(cs.scene.mesh(), map.objects.data(), map.objects.size(), many);
+  MeshOcclusionContext context_one, context_many;
+  std::vector<std::uint32_t> kept_one, kept_many;
+  std::vector<double> wall_one, wall_many, cpu_many;
+  std::uint64_t hash_one = 1469598103934665603ull, hash_many = hash_one;
+  bool same = true;
+  for (const Camera& cam : cams) {
+    double best_one = 1e300, best_many = 1e300, best_cpu = 1e300;
+    for (int r = 0; r < reps; ++r) {
+      auto t0 = Clock::now();
+      culler_one.cull(cam, context_one, kept_one);
+      best_one = std::min(best_one, ms_since(t0));
+      const double c0 = process_ms();
+      t0 = Clock::now();
+      culler_many.cull(cam, context_many, kept_many);
+      best_many = std::min(best_many, ms_since(t0));
+      best_cpu = std::min(best_cpu, process_ms() - c0);
+    }
+    wall_one.push_back(best_one);
+    wall_many.push_back(best_many);
+    cpu_many.push_back(best_cpu);
+    same = same && kept_one == kept_many;  // the same objects in the same order
+    for (std::uint32_t o : kept_one) hash_one = (hash_one ^ o) * 1099511628211ull;
+    for (std::uint32_t o : kept_many) hash_many = (hash_many ^ o) * 1099511628211ull;
+  }
+  double sum_one = 0, sum_many = 0;
+  for (std::size_t c = 0; c < cams.size(); ++c) {
+    sum_one += wall_one[c];
+    sum_many += wall_many[c];
+  }
+  TimedTasks timed;
+  MeshOcclusionParams split = many;
+  split.task_runner = TaskRunner{TimedTasks::dispatch, &timed};
+  const MeshOcclusionCuller<glm::vec3> culler_split(cs.scene.mesh(), map.objects.data(), map.objects.size(), split);
+  MeshOcclusionContext context_split;
+  double cpu_one = 0, cpu_split = 0, cpu_tasks = 0;
+  for (const Camera& cam : cams) {
+    double best_one = 1e300, best_split = 1e300, best_tasks = 0;
+    for (int r = 0; r < reps; ++r) {
+      double t0 = thread_ms();
+      culler_one.cull(cam, context_one, kept_one);
+      best_one = std::min(best_one, thread_ms() - t0);
+      timed.ms = 0;
+      t0 = thread_ms();
+      culler_split.cull(cam, context_split, kept_many);
+      const double t = thread_ms() - t0;
+      if (t < best_split) {
+        best_split = t;
+        best_tasks = timed.ms;
+      }
+    }
+    cpu_one += best_one;
+    cpu_split += best_split;
+    cpu_tasks += best_tasks;
+  }
+  std::printf("threads,%s,%u,%016llx,%016llx,%s,one_ms=%s,many_ms=%s,median_ratio=%.3f,sum_ratio=%.3f,many_cpu_ms=%s,"
+              "task_share=%.3f,ideal_ratio=%.3f\n",
+              name.c_str(), threads, static_cast<unsigned long long>(hash_one), static_cast<unsigned long long>(hash_many),
+              same ? "same" : "DIFFERENT", ms_text(wall_one).c_str(), ms_text(wall_many).c_str(), ratio(wall_many, wall_one),
+              sum_one > 0 ? sum_many / sum_one : 0.0, ms_text(cpu_many).c_str(), cpu_split > 0 ? cpu_tasks / cpu_split : 0.0,
+              cpu_one > 0 ? (cpu_split - cpu_tasks + cpu_tasks / threads) / cpu_one : 0.0);
+}
 
 // ---- --engine: the parts of an engine frame ----
 
@@ -904,6 +1004,8 @@ int main(int argc, char** argv) {
       else if (arg == "--engine") flags.engine = true;
       else if (arg == "--moc") flags.moc = true;
       else if (arg.rfind("--scene=", 0) == 0) flags.scene = arg.substr(8);
+      else if (arg.rfind("--threads=", 0) == 0 && std::atoi(arg.c_str() + 10) >= 2)
+        flags.threads = static_cast<unsigned>(std::atoi(arg.c_str() + 10));
       else if (arg.rfind("--split-edges=", 0) == 0 && (flags.split_edges = std::strtof(arg.c_str() + 14, nullptr)) > 0.0f) {
       }
       else if (arg.rfind("--grid=", 0) == 0 && std::sscanf(arg.c_str() + 7, "%dx%d", &flags.grid_width, &flags.grid_height) == 2 &&
@@ -918,7 +1020,7 @@ int main(int argc, char** argv) {
     if (v <= 0 || positional >= 4) {
       std::fprintf(stderr,
                    "usage: %s [cameras=60] [width=1920] [height=1080] [reps=3] [--reasons] [--hash] "
-                   "[--moc] [--scene=TEXT] [--grid=WxH] [--split-edges=LEN] [--engine]\n",
+                   "[--moc] [--threads=N] [--scene=TEXT] [--grid=WxH] [--split-edges=LEN] [--engine]\n",
                    argv[0]);
       return 2;
     }
@@ -959,7 +1061,7 @@ int main(int argc, char** argv) {
       return;
     }
     // The culler alone (--hash) or against MOC (--moc), on the walk's cameras.
-    if (flags.hash || flags.moc) {
+    if (flags.hash || flags.moc || flags.threads > 0) {
       const CullScene cs(std::move(scene));
       const auto cams = walk(walk_spec(name, cs.scene, cs.embree, seed), cs.scene, cs.embree, cameras, 4, width, height,
                              seed + 1);
@@ -969,7 +1071,8 @@ int main(int argc, char** argv) {
         return;
       }
 #endif
-      culler_only(name, cs, cams, reps, params);
+      if (flags.threads > 0) culler_threads(name, cs, cams, reps, params, flags.threads);
+      else culler_only(name, cs, cams, reps, params);
       return;
     }
     const bool generated = name == "city" || name == "office";
@@ -1005,7 +1108,7 @@ int main(int argc, char** argv) {
       run(file, flags.split_edges > 0.0f ? split_edges(*s, flags.split_edges) : std::move(*s), scene_seed);
     }
   }
-  if (flags.hash || flags.engine || flags.moc) return 0;
+  if (flags.hash || flags.engine || flags.moc || flags.threads > 0) return 0;
   print(rows);
   if (flags.reasons) print_reasons(rows, reasons);
   long false_culls = 0;

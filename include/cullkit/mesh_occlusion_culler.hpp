@@ -38,7 +38,8 @@ namespace cullkit {
 
 /// Caller-owned working memory for `MeshOcclusionCuller::cull`. Reusing one context makes the warm
 /// path allocation-free (buffers only grow). One context per thread: a context must not be used by
-/// two `cull` calls at once. A context may be used with different cullers.
+/// two `cull` calls at once. A context may be used with different cullers. A cull on several tasks
+/// (MeshOcclusionParams::threads) keeps each task's memory here too.
 class MeshOcclusionContext {
  public:
   MeshOcclusionContext() = default;
@@ -150,7 +151,10 @@ class MeshOcclusionCuller {
   }
 
   /// As above, with caller-owned working memory: no allocation once `context` and `out` have grown
-  /// to this scene's needs. `context.stats()` then describes this call.
+  /// to this scene's needs. `context.stats()` then describes this call. With `params().threads`
+  /// other than 1, parts of the call run as tasks on `params().task_runner` (or the library's
+  /// pool), each with its own memory in `context`; the call returns when all have, and the answer
+  /// is the one-thread answer (see MeshOcclusionParams::threads).
   void cull(const Camera& camera, MeshOcclusionContext& context, std::vector<std::uint32_t>& out) const {
     cull(camera, context, out, nullptr, 0);
   }

@@ -3,6 +3,8 @@ cullkit_add_test(test_mesh_occlusion_fusion SOURCES ${CMAKE_CURRENT_LIST_DIR}/te
 cullkit_add_test(test_mesh_occlusion_bruteforce SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_bruteforce.cpp TIMEOUT 300)
 find_package(Threads REQUIRED)
 cullkit_add_test(test_mesh_occlusion_input SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_input.cpp LIBS Threads::Threads)
+# One cull on several tasks gives the one-thread answer, on every job system and task order.
+cullkit_add_test(test_mesh_occlusion_threads SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_threads.cpp LIBS Threads::Threads TIMEOUT 300)
 # A warm context allocates nothing per frame, on generated and real scenes.
 cullkit_add_test(test_mesh_occlusion_warm_frames SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_warm_frames.cpp TIMEOUT 300)
 # MeshOcclusionCuller against Embree on real and generated scenes.

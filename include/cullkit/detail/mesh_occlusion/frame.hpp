@@ -41,6 +41,18 @@ struct ClippedPolygon {
   int n;
 };
 
+/// Working memory of one task of a cull on several threads (parallel_frame.hpp): the corners and
+/// patch boxes it projects itself, per vertex and per patch (valid where the stamp equals `frame`).
+/// Sized by the index, not by the objects a task happens to take, so a warm context never grows
+/// whichever way the objects fall to the tasks.
+struct TaskScratch {
+  const void* owner = nullptr;  // the index the caches fit
+  std::uint32_t frame = 0;
+  std::vector<std::uint32_t> vertex_stamp, patch_stamp;
+  std::vector<Projected> projected;
+  std::vector<BoxView> patch_boxes;
+};
+
 /// Per-thread working memory of a query; only grows.
 struct Scratch {
   MeshOcclusionStats stats;
@@ -77,6 +89,11 @@ struct Scratch {
   std::vector<std::pair<float, std::uint32_t>> box_candidates;  // (screen cells, object)
   std::vector<Aabb> box_occluders;
   OcclusionTree box_tree{glm::vec3(0.0f)};  // the solid boxes' hidden region, when box_occluders is not empty
+  // A cull on several threads: each task's own memory, and the object tests' answers by position
+  // in `in_frustum` (1: hidden), written by whichever task tests the object.
+  std::vector<TaskScratch> tasks;
+  std::vector<std::uint8_t> hidden;
+  std::vector<std::uint32_t> corner_list;  // occluder corners given a slot in `projected`, in slot order
 };
 
 

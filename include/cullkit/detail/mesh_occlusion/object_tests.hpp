@@ -29,7 +29,8 @@ namespace mesh_occlusion {
 /// can be drawn (near-plane value at least -drawable_level: a margin on the near side this time), cut to
 /// the grid's rectangle on screen, has its rectangle hidden at that part's nearest depth. 1/w is
 /// affine on screen over the triangle's plane, so the cut interpolates it exactly up to rounding.
-inline bool crossing_triangle_hidden(const MeshIndex& index, const Scratch& s, const std::uint32_t* c) {
+template <class Frame>  // Scratch, or a task's view of it (parallel_frame.hpp)
+inline bool crossing_triangle_hidden(const MeshIndex& index, const Frame& s, const std::uint32_t* c) {
   const View& view = s.view;
   const glm::vec3 &p0 = index.positions[c[0]], &p1 = index.positions[c[1]], &p2 = index.positions[c[2]];
   const Aabb box{glm::min(p0, glm::min(p1, p2)), glm::max(p0, glm::max(p1, p2))};
@@ -126,7 +127,8 @@ inline bool crossing_triangle_hidden(const MeshIndex& index, const Scratch& s, c
 
 /// True when each of the patch's triangles is clearly back-facing (no ray sees its front) or hidden
 /// by its own screen rectangle at its own nearest depth. Corners are projected as for occluders.
-inline bool patch_triangles_hidden(const MeshIndex& index, Scratch& s, const Patch& patch) {
+template <class Frame>  // Scratch, or a task's view of it (parallel_frame.hpp)
+inline bool patch_triangles_hidden(const MeshIndex& index, Frame& s, const Patch& patch) {
   for (std::uint32_t k = patch.first; k < patch.first + patch.count; ++k) {
     const std::uint32_t* c = &index.corners[3 * std::size_t(index.patches.triangles[k])];
     BoxView b{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, HUGE_VAL, true};
@@ -270,7 +272,8 @@ inline void insert_box_occluders(const MeshIndex& index, const MeshOcclusionPara
 /// patches, each patch by its box or, for a patch of at most `object_test_triangles` triangles, by
 /// its triangles. Every triangle that can be seen is in some patch, so the object is hidden when all
 /// of its patches are. An object with no patch (only degenerate triangles) rests on its box.
-inline bool object_hidden(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, std::size_t i) {
+template <class Frame>  // Scratch, or a task's view of it (parallel_frame.hpp)
+inline bool object_hidden(const MeshIndex& index, const MeshOcclusionParams& params, Frame& s, std::size_t i) {
   const std::uint32_t o = s.in_frustum[i];
   if (box_hidden(s, s.boxes[i], index.bounds[o])) return true;
   const PatchSet& ps = index.patches;

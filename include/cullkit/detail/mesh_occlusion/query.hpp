@@ -1,7 +1,8 @@
 // cullkit/detail/mesh_occlusion/query.hpp: one frame of MeshOcclusionCuller::cull, as named steps:
 // frustum walk, object boxes on screen, occluder choice, occluder bands into the coverage grid
 // (occluders.hpp), moving occluders into the same grid (moving.hpp), object tests
-// (object_tests.hpp). The steps are compiled only where the frame's definition is
+// (object_tests.hpp). The boxes and the object tests run on several tasks when the parameters ask
+// for threads (parallel_frame.hpp). The steps are compiled only where the frame's definition is
 // (CULLKIT_SEPARATE_CORE, config.hpp).
 #pragma once
 
@@ -17,6 +18,7 @@
 #if CULLKIT_CORE_BODIES
 #include "object_tests.hpp"
 #include "occluders.hpp"
+#include "parallel_frame.hpp"
 #endif
 
 namespace cullkit {
@@ -74,8 +76,12 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
   begin_frame(index, s);
   s.grid.reset(params.grid_width, params.grid_height);
   s.boxes.resize(s.in_frustum.size());
-  for (std::size_t i = 0; i < s.in_frustum.size(); ++i) s.boxes[i] = project_box(s.view, index.bounds[s.in_frustum[i]]);
+  const unsigned tasks = frame_tasks(params, s.in_frustum.size());
+  if (tasks > 1) project_boxes_on_tasks(index, params, s, tasks);
+  else
+    for (std::size_t i = 0; i < s.in_frustum.size(); ++i) s.boxes[i] = project_box(s.view, index.bounds[s.in_frustum[i]]);
   choose_occluders(index, params, s);
+  if (tasks > 1) project_occluder_corners_on_tasks(index, params, s, tasks);
   gather_triangles(index, s);
   stats.occluders_used = s.occluders.size();
   stats.cells_covered = insert_patches(index, params, s);
@@ -86,6 +92,10 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
   s.view_eye = camera.eye;
   insert_box_occluders(index, params, camera, s);
 
+  if (tasks > 1) {
+    stats.objects_hidden = test_objects_on_tasks(index, params, s, tasks, out);
+    return true;
+  }
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
     if (object_hidden(index, params, s, i)) ++stats.objects_hidden;
     else out.push_back(s.in_frustum[i]);
