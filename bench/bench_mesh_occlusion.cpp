@@ -317,7 +317,7 @@ Row measure(const std::string& name, const CullScene& cs, const std::vector<Came
   const auto t_build = Clock::now();
   const MeshOcclusionCuller<glm::vec3> culler(cs.scene.mesh(), map.objects.data(), map.objects.size(), params);
   row.build_ms = ms_since(t_build);
-  print_build(name, culler.build_stats(), row.build_ms);
+  print_build(name, culler.stats(), row.build_ms);
   std::unique_ptr<ReasonProbe> probe;
   if (reasons) probe = std::make_unique<ReasonProbe>(cs.scene, map, params);
   MeshOcclusionContext context;
@@ -566,7 +566,7 @@ void culler_only(const std::string& name, const CullScene& cs, const std::vector
   const ObjectMap map(cs.scene);
   const auto t_build = Clock::now();
   const MeshOcclusionCuller<glm::vec3> culler(cs.scene.mesh(), map.objects.data(), map.objects.size(), given);
-  print_build(name, culler.build_stats(), ms_since(t_build));
+  print_build(name, culler.stats(), ms_since(t_build));
   const MeshOcclusionParams& params = culler.params();  // as clamped
   MeshOcclusionContext context;
   std::vector<std::uint32_t> kept;

@@ -206,8 +206,12 @@ class MeshOcclusionCuller {
     return index_.bounds[object];
   }
 
-  /// What the constructor found.
-  [[nodiscard]] const MeshOcclusionBuildStats& build_stats() const noexcept { return index_.build_stats; }
+  /// What the constructor found (as every container's `stats()`; a cull's own counts are in
+  /// `MeshOcclusionContext::stats()`).
+  [[nodiscard]] const MeshOcclusionBuildStats& stats() const noexcept { return index_.build_stats; }
+  /// The former name of `stats()`.
+  [[deprecated("use stats(), the name every container gives what its build found")]] [[nodiscard]]
+  const MeshOcclusionBuildStats& build_stats() const noexcept { return index_.build_stats; }
   /// Objects given to the constructor.
   [[nodiscard]] std::size_t object_count() const noexcept { return index_.object_count; }
   /// The parameters in use (after clamping).

@@ -137,8 +137,8 @@ void check_moc(const Scene& city, const Interleaved& buf) {
       objects.data(), objects.size());
   const MeshOcclusionCuller s16(buf.mesh16, objects.data(), objects.size());
   const MeshOcclusionCuller<glm::vec3> s32(buf.mesh32, objects.data(), objects.size(), MeshOcclusionParams{});
-  for (const auto* st : {&narrow.build_stats(), &s16.build_stats(), &s32.build_stats()})
-    CHECK(same(*st, plain.build_stats()));
+  for (const auto* st : {&narrow.stats(), &s16.stats(), &s32.stats()})
+    CHECK(same(*st, plain.stats()));
   CHECK_MSG(moc_answers(narrow, cams) == want, "MOC: MeshView<uint16_t> differs");
   CHECK_MSG(moc_answers(s16, cams) == want, "MOC: StridedMesh uint16 differs");
   CHECK_MSG(moc_answers(s32, cams) == want, "MOC: StridedMesh uint32 differs");
@@ -207,7 +207,7 @@ void check_out_of_range(const Scene& scene) {
   CHECK(nci.triangle_class(0) == -1 && nci.triangle_class(2) == -1 && nci.triangle_class(1) >= 0);
   const MeshObject whole{0, static_cast<std::uint32_t>(scene.triangle_count())};
   const MeshOcclusionCuller<glm::vec3> moc(m, &whole, 1);
-  CHECK(moc.build_stats().triangles_unusable == 2);
+  CHECK(moc.stats().triangles_unusable == 2);
   const BspTree<glm::vec3> bsp(m);
   CHECK(bsp.stats().dropped_bad_index == 2);
   for (const BspFragment& f : bsp.fragments()) CHECK(f.triangle != 0 && f.triangle != 2);

@@ -194,7 +194,7 @@ int main() {
       cullkit::MeshOcclusionParams uncut = params;
       uncut.cut_tjunctions = false;
       const cullkit::MeshOcclusionCuller<glm::vec3> control(s.mesh(), s.objects.data(), s.objects.size(), uncut);
-      CHECK(culler.build_stats().triangles_cut == 1 && control.build_stats().triangles_cut == 0);
+      CHECK(culler.stats().triangles_cut == 1 && control.stats().triangles_cut == 0);
       std::size_t control_failed = 0;
       for (const auto& [cam, ns] : cameras) {
         control.cull(cam, context, visible);

@@ -74,13 +74,13 @@ int main() {
     std::vector<std::uint32_t> out = {7};
     empty.cull(front_camera(), out);
     CHECK(out.empty());
-    CHECK(empty.build_stats().triangles == 0 && empty.object_count() == 0);
+    CHECK(empty.stats().triangles == 0 && empty.object_count() == 0);
     // Objects but no mesh: every object is unusable, so reported.
     const cullkit::MeshObject objects[2] = {{0, 0}, {0, 3}};
     const cullkit::MeshOcclusionCuller<glm::vec3> no_mesh(cullkit::MeshView<glm::vec3>{nullptr, 0, nullptr, 0}, objects, 2);
     no_mesh.cull(front_camera(), out);
     CHECK(sorted(out) == (std::vector<std::uint32_t>{0, 1}));
-    CHECK(no_mesh.build_stats().objects_unusable == 2);
+    CHECK(no_mesh.stats().objects_unusable == 2);
   }
   // An object with no triangles, and one whose range leaves the mesh: always reported.
   {
@@ -109,14 +109,14 @@ int main() {
     TestScene s = base;
     s.indices[3 * 14 + 1] = 100000;  // a triangle of the second cube (triangles 2..13 are cube 1)
     const cullkit::MeshOcclusionCuller<glm::vec3> culler(s.mesh(), s.objects.data(), s.objects.size());
-    CHECK(culler.build_stats().triangles_unusable == 1 && culler.build_stats().objects_unusable == 1);
+    CHECK(culler.stats().triangles_unusable == 1 && culler.stats().objects_unusable == 1);
     std::vector<std::uint32_t> out;
     culler.cull(front_camera(), out);
     CHECK(sorted(out) == (std::vector<std::uint32_t>{0, 2}));
     // A trailing partial triangle is ignored.
     s.indices.push_back(0);
     const cullkit::MeshOcclusionCuller<glm::vec3> partial(s.mesh(), s.objects.data(), s.objects.size());
-    CHECK(partial.build_stats().triangles == s.indices.size() / 3);
+    CHECK(partial.stats().triangles == s.indices.size() / 3);
   }
   // Overlapping objects (the wall twice, and one of its triangles a third time): the same
   // answer as without the copies.
@@ -133,7 +133,7 @@ int main() {
     TestScene s = base;
     s.positions[s.indices[1]] = s.positions[s.indices[0]];  // wall triangle 0 loses its area
     const cullkit::MeshOcclusionCuller<glm::vec3> culler(s.mesh(), s.objects.data(), s.objects.size());
-    CHECK(culler.build_stats().triangles_degenerate == 1);
+    CHECK(culler.stats().triangles_degenerate == 1);
     std::vector<std::uint32_t> out;
     culler.cull(front_camera(), out);
     CHECK(std::find(out.begin(), out.end(), 0u) != out.end());

@@ -97,8 +97,8 @@ int main() {
   }
   const MeshOcclusionCuller<glm::vec3> from_instances(instances.data(), instances.size(), objects.data(), objects.size());
   const MeshOcclusionCuller<glm::vec3> from_hand(level.mesh(), objects.data(), objects.size());
-  const auto& a = from_instances.build_stats();
-  const auto& b = from_hand.build_stats();
+  const auto& a = from_instances.stats();
+  const auto& b = from_hand.stats();
   CHECK_MSG(a.triangles == b.triangles && a.welded_vertices == b.welded_vertices && a.shared_edges == b.shared_edges &&
                 a.triangles_unusable == b.triangles_unusable && a.objects_unusable == b.objects_unusable,
             "instances and the same level by hand build differently: %zu/%zu welded, %zu/%zu shared edges", a.welded_vertices,
@@ -149,7 +149,7 @@ int main() {
   bad[5].model[0][3] = 0.5f;
   bad[9].model = glm::mat4(std::numeric_limits<float>::quiet_NaN());
   const MeshOcclusionCuller<glm::vec3> with_bad(bad.data(), bad.size(), objects.data(), objects.size());
-  CHECK(with_bad.build_stats().objects_unusable == 2);
+  CHECK(with_bad.stats().objects_unusable == 2);
   CHECK(is_empty(with_bad.object_bounds(5)) && is_empty(with_bad.object_bounds(9)));
   std::vector<std::uint32_t> out;
   with_bad.cull(camera_at(glm::vec3(0, 500, 0), 0.0f, 1.5f), out);

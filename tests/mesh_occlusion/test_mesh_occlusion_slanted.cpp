@@ -62,7 +62,7 @@ void run_variant(const Variant& v, std::uint64_t seed) {
       mesh_oracle::grid_quads(s, glm::vec3(x, y, -2.0f), glm::vec3(0, 0, -10), glm::vec3(2.5f, 0, 0), 1, 1);
     }
   const cullkit::MeshOcclusionCuller<glm::vec3> culler(s.mesh(), s.objects.data(), s.objects.size(), {});
-  if (v.tjunctions) CHECK_MSG(culler.build_stats().triangles_cut > 0, "%s: no triangle cut at a T-junction", v.name);
+  if (v.tjunctions) CHECK_MSG(culler.stats().triangles_cut > 0, "%s: no triangle cut at a T-junction", v.name);
   cullkit::MeshOcclusionContext context;
   std::vector<std::uint32_t> visible;
   std::size_t must = 0, must_failed = 0, seen_below = 0, hidden = 0;

@@ -136,7 +136,7 @@ std::size_t cuts_of_wall(bool off, bool near_end) {
     s.triangle({x0, ys[k], 0}, {4, ys[k + 1], 0}, {x1, ys[k + 1], 0});
   }
   const cullkit::MeshOcclusionCuller<glm::vec3> culler(s.mesh(), s.objects.data(), s.objects.size());
-  return culler.build_stats().tjunction_corners;
+  return culler.stats().tjunction_corners;
 }
 
 }  // namespace
