@@ -56,9 +56,8 @@ class CoverageGrid {
       width_ = width;
       height_ = height;
       const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-      count_.assign(n, 0);
+      net_.assign(n, 0);
       diff_.assign(n, 0);
-      block_.assign(n, 0);
       bound_.assign(n, std::numeric_limits<float>::infinity());
       depth_.assign(n, 0.0f);
       tiles_x_ = (width + tile - 1) / tile;
@@ -106,8 +105,9 @@ class CoverageGrid {
   /// An outline edge joins (delta +1) or leaves (delta -1) the outline: `from` -> `to` as its own
   /// triangle runs, `orient` the sign of front-facing areas. Every cell the segment touches (with a
   /// margin) whose centre lies on the edge's inner side (towards its triangle) gets `delta` added
-  /// to its outline counter; where the side is too close to call, 2 * delta. The arithmetic runs
-  /// on the endpoints sorted, so the edge's removal subtracts exactly what its addition added.
+  /// to its outline counter, which is kept subtracted from the cell's count (`net_`); where the
+  /// side is too close to call, 2 * delta. The arithmetic runs on the endpoints sorted, so the
+  /// edge's removal gives back exactly what its addition took.
   ///
   /// Why the inner side only: a segment from the cell centre to any point of the cell crosses each
   /// outline edge at most once, and crossing an edge changes the count by one: down when leaving its
@@ -147,7 +147,7 @@ class CoverageGrid {
       // leaves the outline later skips it too, as it is still covered then).
       if (!unfrozen_span(j, i0, i1)) continue;
       mark(j, i0, i1);
-      std::int32_t* row = block_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+      std::int32_t* row = net_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
       const double qy = j + 0.5 - ya;
       for (int i = i0; i <= i1; ++i) {
         const double qx = i + 0.5 - xa;
@@ -155,7 +155,7 @@ class CoverageGrid {
         const double tol = near_line + rounding * (std::fabs(qx) + std::fabs(qy));
         // Branch-free: which side a centre falls on is data, not a pattern.
         const int inner = s * side > 0.0 ? delta : 0;
-        row[i] += std::fabs(s) <= tol ? 2 * delta : inner;
+        row[i] -= std::fabs(s) <= tol ? 2 * delta : inner;
       }
     }
   }
@@ -587,8 +587,7 @@ class CoverageGrid {
       const auto j = static_cast<std::size_t>(used_rows_[static_cast<std::size_t>(n)]);
       const std::size_t base = j * static_cast<std::size_t>(width_);
       const auto b = static_cast<std::ptrdiff_t>(base) + used_lo_[j], e = static_cast<std::ptrdiff_t>(base) + used_hi_[j] + 1;
-      std::fill(count_.begin() + b, count_.begin() + e, 0);
-      std::fill(block_.begin() + b, block_.begin() + e, 0);
+      std::fill(net_.begin() + b, net_.begin() + e, 0);
       std::fill(bound_.begin() + b, bound_.begin() + e, std::numeric_limits<float>::infinity());
       used_lo_[j] = width_;
       used_hi_[j] = -1;
@@ -606,7 +605,9 @@ class CoverageGrid {
   }
 
   int width_ = 0, height_ = 0, tiles_x_ = 0, tiles_y_ = 0;
-  std::vector<std::int32_t> count_, diff_, block_;
+  // Per cell, the count at its centre minus its outline counter (touch_edge), kept as one number:
+  // the cell is covered when it is at least one, and a patch's grid adds into the union's by a sum.
+  std::vector<std::int32_t> net_, diff_;
   std::vector<float> bound_;   // running lower bound of 1/w over the triangles touching the cell
   std::vector<float> depth_;   // frozen lower bound of 1/w at the first hit; 0: not covered
   std::vector<float> tile_depth_;
