@@ -1,6 +1,6 @@
 // cullkit/detail/mesh_occlusion/coverage_rows.hpp: the row kernels of CoverageGrid (coverage.hpp),
 // the loops that run over the cells of one grid row: freezing covered cells, adding a patch's grid
-// into the union, taking nearer bounds, lowering depth bounds along a row, accumulating crossings and
+// into the union (and taking its nearer bounds), lowering depth bounds along a row, accumulating crossings and
 // the per-tile minimum. Each has its scalar form and, where the compiler targets them, SSE2 and AVX2
 // forms with the same comparisons and float operations, so the answers never depend on the build.
 // Included by coverage.hpp after the class; not on its own.
@@ -67,9 +67,10 @@ inline std::size_t CoverageGrid::freeze(int j, int a, int b) {
   return covered;
 }
 
-inline void CoverageGrid::absorb(const CoverageGrid& patch) {
-  if (patch.dirty_.empty()) return;
+inline std::size_t CoverageGrid::absorb(const CoverageGrid& patch, bool layers) {
+  if (patch.dirty_.empty()) return 0;
   grow(dirty_, patch.dirty_);
+  std::size_t covered = 0;
   for (int n = 0; n < patch.used_row_count_; ++n) {
     const int j = patch.used_rows_[static_cast<std::size_t>(n)];
     const int i0 = patch.used_lo_[static_cast<std::size_t>(j)], i1 = patch.used_hi_[static_cast<std::size_t>(j)];
@@ -98,49 +99,45 @@ inline void CoverageGrid::absorb(const CoverageGrid& patch) {
       net[i] += from_net[i];
       bound[i] = std::min(bound[i], from_bound[i]);
     }
-    mark(j, i0, i1);
+    use(j, i0, i1);
+    covered += freeze(j, i0, i1);
+    if (layers) take_nearer(j, i0, i1, patch.depth_.data() + base);
   }
+  return covered;
 }
 
-inline void CoverageGrid::take_nearer(const CoverageGrid& patch) {
-  const CellRect& r = patch.fresh_;  // the cells the patch's own bands covered
-  if (r.empty()) return;
-  grow(dirty_, r);
-  for (int j = r.y0; j <= r.y1; ++j) {
-    const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-    const float* from = patch.depth_.data() + base;
-    float* to = depth_.data() + base;
-    std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
-    const auto one = [&](int i) {
-      if (!(from[i] > to[i])) return;
-      to[i] = from[i];
-      frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
-    };
-    int i = r.x0;
+inline void CoverageGrid::take_nearer(int j, int i0, int i1, const float* from) {
+  float* to = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+  std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+  const auto one = [&](int i) {
+    if (!(from[i] > to[i])) return;
+    to[i] = from[i];
+    frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
+  };
+  int i = i0;
 #if CULLKIT_COVERAGE_AVX2
-    for (; i <= r.x1 && (i & 7) != 0; ++i) one(i);
-    for (; i + 7 <= r.x1; i += 8) {
-      const __m256 a = _mm256_loadu_ps(from + i), b = _mm256_loadu_ps(to + i);
-      const __m256 nearer = _mm256_cmp_ps(a, b, _CMP_GT_OQ);
-      const int mask = _mm256_movemask_ps(nearer);
-      if (mask == 0) continue;
-      _mm256_storeu_ps(to + i, _mm256_blendv_ps(b, a, nearer));
-      frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
-    }
+  for (; i <= i1 && (i & 7) != 0; ++i) one(i);
+  for (; i + 7 <= i1; i += 8) {
+    const __m256 a = _mm256_loadu_ps(from + i), b = _mm256_loadu_ps(to + i);
+    const __m256 nearer = _mm256_cmp_ps(a, b, _CMP_GT_OQ);
+    const int mask = _mm256_movemask_ps(nearer);
+    if (mask == 0) continue;
+    _mm256_storeu_ps(to + i, _mm256_blendv_ps(b, a, nearer));
+    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+  }
 #endif
 #if CULLKIT_HAS_SSE2
-    for (; i <= r.x1 && (i & 3) != 0; ++i) one(i);
-    for (; i + 3 <= r.x1; i += 4) {
-      const __m128 a = _mm_loadu_ps(from + i), b = _mm_loadu_ps(to + i);
-      const __m128 nearer = _mm_cmpgt_ps(a, b);
-      const int mask = _mm_movemask_ps(nearer);
-      if (mask == 0) continue;
-      _mm_storeu_ps(to + i, _mm_or_ps(_mm_and_ps(nearer, a), _mm_andnot_ps(nearer, b)));
-      frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
-    }
-#endif
-    for (; i <= r.x1; ++i) one(i);
+  for (; i <= i1 && (i & 3) != 0; ++i) one(i);
+  for (; i + 3 <= i1; i += 4) {
+    const __m128 a = _mm_loadu_ps(from + i), b = _mm_loadu_ps(to + i);
+    const __m128 nearer = _mm_cmpgt_ps(a, b);
+    const int mask = _mm_movemask_ps(nearer);
+    if (mask == 0) continue;
+    _mm_storeu_ps(to + i, _mm_or_ps(_mm_and_ps(nearer, a), _mm_andnot_ps(nearer, b)));
+    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
   }
+#endif
+  for (; i <= i1; ++i) one(i);
 }
 
 inline float CoverageGrid::tile_minimum(int j0, int j1, int i0, int i1) const {
