@@ -1,7 +1,9 @@
 // The coverage grid on its own, against points. Random fans of front-facing triangles (their inner
 // edges shared, so they fuse) and loose triangles, with corners on a lattice of quarter cells, go in
-// as the culler inserts one band: depth bounds, counts without the shared edges, outline edges. So
-// edges run exactly through cell centres and corners, where the grid's margins decide. Then every
+// as the culler inserts them: one band (depth bounds, counts without the shared edges, outline
+// edges), or two patches, each fan split between them, each patch in a grid of its own seeded from
+// the union, added into the union, and the edges the patches share taken out of the union's outline.
+// So edges run exactly through cell centres and corners, where the grid's margins decide. Then every
 // cell the grid calls covered is checked at 17 x 17 points over its closed square (the lattice of
 // sixteenths: every containment test below is exact in double): each point must lie in some
 // triangle, and the cell's depth bound must be no nearer than the nearest triangle through the
@@ -23,7 +25,8 @@ namespace {
 
 struct Triangle {
   double x[3], y[3], w[3];
-  unsigned inner;  // edges shared with another triangle of the set (bit k: corner k to the next)
+  int twin[3];  // per edge (corner k to the next), the triangle of the set sharing it, or -1
+  int patch;
 };
 
 double area2(const Triangle& t) {
@@ -71,24 +74,28 @@ void add_fan(std::vector<Triangle>& set, Rng& rng, int width, int height) {
     Triangle t{{cx, ring[std::size_t(k)].second.first, ring[std::size_t(l)].second.first},
                {cy, ring[std::size_t(k)].second.second, ring[std::size_t(l)].second.second},
                {wc, wr[std::size_t(k)], wr[std::size_t(l)]},
-               0u};
+               {-1, -1, -1},
+               0};
     if (!(area2(t) > 0.0)) {
       set.resize(first);  // a fold: the fan would overlap itself; keep it simple and drop it
       return;
     }
     set.push_back(t);
   }
-  const std::size_t count = set.size() - first;
+  const int count = static_cast<int>(set.size() - first);
   // Edge 0 (centre -> ring k) is shared with the previous triangle, edge 2 (ring l -> centre) with
-  // the next.
-  for (std::size_t k = 0; k < count; ++k) {
-    if (k > 0 || closed) set[first + k].inner |= 1u;
-    if (k + 1 < count || closed) set[first + k].inner |= 4u;
+  // the next. The fan's first `split` triangles go to patch 0, the others to patch 1.
+  const int split = rng.range(0, count);
+  for (int k = 0; k < count; ++k) {
+    Triangle& t = set[first + std::size_t(k)];
+    if (k > 0 || closed) t.twin[0] = static_cast<int>(first) + (k > 0 ? k - 1 : count - 1);
+    if (k + 1 < count || closed) t.twin[2] = static_cast<int>(first) + (k + 1 < count ? k + 1 : 0);
+    t.patch = k < split ? 0 : 1;
   }
 }
 
 void add_loose(std::vector<Triangle>& set, Rng& rng, int width, int height) {
-  Triangle t{};
+  Triangle t{{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {-1, -1, -1}, rng.range(0, 1)};
   for (int k = 0; k < 3; ++k) {
     t.x[k] = lattice(rng, width);
     t.y[k] = lattice(rng, height);
@@ -106,25 +113,68 @@ struct Tally {
   long covered = 0, points = 0, failures = 0;
 };
 
-void one_case(Rng& rng, dmo::CoverageGrid& grid, Tally& tally, int index) {
+// Inserts the triangles of `patch` (-1: all) into `grid` as one band: an edge shared with another
+// member leaves no crossings and no mark; every other edge is outline.
+void insert_band(dmo::CoverageGrid& grid, const std::vector<Triangle>& set, int patch) {
+  const auto member = [&](int t) { return t >= 0 && (patch < 0 || set[std::size_t(t)].patch == patch); };
+  for (const Triangle& t : set) {
+    if (patch >= 0 && t.patch != patch) continue;
+    unsigned inner = 0;
+    for (int k = 0; k < 3; ++k) inner |= member(t.twin[k]) ? 1u << k : 0u;
+    grid.add_depth(t.x, t.y, t.w);
+    grid.add_count(t.x, t.y, 1, inner);  // orient +1: front faces have positive area here
+    for (int k = 0; k < 3; ++k) {
+      if ((inner >> k) & 1u) continue;
+      const int l = k == 2 ? 0 : k + 1;
+      grid.touch_edge(t.x[k], t.y[k], t.x[l], t.y[l], 1, 1);
+    }
+  }
+  grid.end_band();
+}
+
+// Patch 0, then patch 1, each in a grid of its own added into the union, as the culler does.
+void insert_patches(dmo::CoverageGrid& grid, dmo::CoverageGrid& own, const std::vector<Triangle>& set) {
+  for (int patch = 0; patch < 2; ++patch) {
+    double xmin = HUGE_VAL, ymin = HUGE_VAL, xmax = -HUGE_VAL, ymax = -HUGE_VAL, wmin = HUGE_VAL;
+    for (const Triangle& t : set) {
+      if (t.patch != patch) continue;
+      for (int k = 0; k < 3; ++k) {
+        xmin = std::min(xmin, t.x[k]);
+        xmax = std::max(xmax, t.x[k]);
+        ymin = std::min(ymin, t.y[k]);
+        ymax = std::max(ymax, t.y[k]);
+        wmin = std::min(wmin, t.w[k]);
+      }
+    }
+    if (!(xmin <= xmax)) continue;
+    own.reset(grid.width(), grid.height());
+    if (!own.seed_frozen(grid, grid.cells_of(xmin, ymin, xmax, ymax), static_cast<float>(1.0 / wmin))) continue;
+    insert_band(own, set, patch);
+    grid.absorb(own, true);
+    if (patch == 1) {
+      for (const Triangle& t : set) {
+        if (t.patch != 1) continue;
+        for (int k = 0; k < 3; ++k) {
+          if (t.twin[k] < 0 || set[std::size_t(t.twin[k])].patch != 0) continue;
+          const int l = k == 2 ? 0 : k + 1;
+          grid.touch_edge(t.x[l], t.y[l], t.x[k], t.y[k], 1, -1);  // patch 0's edge, as its triangle runs
+          grid.touch_edge(t.x[k], t.y[k], t.x[l], t.y[l], 1, -1);
+        }
+      }
+    }
+    grid.end_band();
+  }
+}
+
+void one_case(Rng& rng, dmo::CoverageGrid& grid, dmo::CoverageGrid& own, Tally& tally, int index) {
   const int width = 24, height = 16;
   grid.reset(width, height);
   std::vector<Triangle> set;
   const int fans = rng.range(1, 3), loose = rng.range(0, 3);
   for (int k = 0; k < fans; ++k) add_fan(set, rng, width, height);
   for (int k = 0; k < loose; ++k) add_loose(set, rng, width, height);
-  // One band, as the culler inserts it: depth bounds, counts without the shared edges, and the
-  // outline edges (orient +1: front faces have positive area here).
-  for (const Triangle& t : set) {
-    grid.add_depth(t.x, t.y, t.w);
-    grid.add_count(t.x, t.y, 1, t.inner);
-    for (int k = 0; k < 3; ++k) {
-      if ((t.inner >> k) & 1u) continue;
-      const int l = k == 2 ? 0 : k + 1;
-      grid.touch_edge(t.x[k], t.y[k], t.x[l], t.y[l], 1, 1);
-    }
-  }
-  grid.end_band();
+  if (index % 2 == 0) insert_band(grid, set, -1);
+  else insert_patches(grid, own, set);
   grid.finish();
   for (int j = 0; j < height; ++j)
     for (int i = 0; i < width; ++i) {
@@ -152,10 +202,10 @@ void one_case(Rng& rng, dmo::CoverageGrid& grid, Tally& tally, int index) {
 
 int main() {
   Rng rng(20261128);
-  dmo::CoverageGrid grid;
+  dmo::CoverageGrid grid, own;
   Tally tally;
   const int cases = 1500;
-  for (int c = 0; c < cases; ++c) one_case(rng, grid, tally, c);
+  for (int c = 0; c < cases; ++c) one_case(rng, grid, own, tally, c);
   std::printf("%d cases: %ld covered cells checked at %ld points, %ld wrong\n", cases, tally.covered, tally.points,
               tally.failures);
   CHECK(tally.covered > 20000);  // the check has cells to fail on
