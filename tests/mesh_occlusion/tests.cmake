@@ -19,3 +19,5 @@ cullkit_add_test(test_mesh_occlusion_tjunctions SOURCES ${CMAKE_CURRENT_LIST_DIR
 cullkit_add_test(test_mesh_occlusion_layers SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_layers.cpp TIMEOUT 300)
 # Objects long in depth behind a slanted occluder: hidden cell by cell, not by their rectangle.
 cullkit_add_test(test_mesh_occlusion_slanted SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_slanted.cpp TIMEOUT 300)
+# The coverage grid alone against points: fans and loose triangles on a quarter-cell lattice.
+cullkit_add_test(test_mesh_occlusion_coverage_grid SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_coverage_grid.cpp)

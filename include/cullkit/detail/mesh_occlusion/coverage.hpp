@@ -56,9 +56,8 @@ class CoverageGrid {
       width_ = width;
       height_ = height;
       const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-      count_.assign(n, 0);
+      net_.assign(n, 0);
       diff_.assign(n, 0);
-      block_.assign(n, 0);
       bound_.assign(n, std::numeric_limits<float>::infinity());
       depth_.assign(n, 0.0f);
       tiles_x_ = (width + tile - 1) / tile;
@@ -76,7 +75,6 @@ class CoverageGrid {
       band_row_count_ = 0;
       band_crossings_ = false;
       dirty_ = CellRect{width, height, -1, -1};
-      fresh_ = dirty_;
       return;
     }
     clear_dirty();
@@ -106,8 +104,9 @@ class CoverageGrid {
   /// An outline edge joins (delta +1) or leaves (delta -1) the outline: `from` -> `to` as its own
   /// triangle runs, `orient` the sign of front-facing areas. Every cell the segment touches (with a
   /// margin) whose centre lies on the edge's inner side (towards its triangle) gets `delta` added
-  /// to its outline counter; where the side is too close to call, 2 * delta. The arithmetic runs
-  /// on the endpoints sorted, so the edge's removal subtracts exactly what its addition added.
+  /// to its outline counter, which is kept subtracted from the cell's count (`net_`); where the
+  /// side is too close to call, 2 * delta. The arithmetic runs on the endpoints sorted, so the
+  /// edge's removal gives back exactly what its addition took.
   ///
   /// Why the inner side only: a segment from the cell centre to any point of the cell crosses each
   /// outline edge at most once, and crossing an edge changes the count by one: down when leaving its
@@ -147,7 +146,7 @@ class CoverageGrid {
       // leaves the outline later skips it too, as it is still covered then).
       if (!unfrozen_span(j, i0, i1)) continue;
       mark(j, i0, i1);
-      std::int32_t* row = block_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+      std::int32_t* row = net_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
       const double qy = j + 0.5 - ya;
       for (int i = i0; i <= i1; ++i) {
         const double qx = i + 0.5 - xa;
@@ -155,7 +154,7 @@ class CoverageGrid {
         const double tol = near_line + rounding * (std::fabs(qx) + std::fabs(qy));
         // Branch-free: which side a centre falls on is data, not a pattern.
         const int inner = s * side > 0.0 ? delta : 0;
-        row[i] += std::fabs(s) <= tol ? 2 * delta : inner;
+        row[i] -= std::fabs(s) <= tol ? 2 * delta : inner;
       }
     }
   }
@@ -231,9 +230,7 @@ class CoverageGrid {
       const int last = band_crossings_ ? accumulate_row(base, i0, i1) - 1 : i1;
       grow(dirty_, CellRect{i0, j, last, j});
       use(j, i0, last);
-      const std::size_t fresh = freeze(j, i0, last);
-      if (fresh != 0) grow(fresh_, CellRect{i0, j, last, j});
-      covered += fresh;
+      covered += freeze(j, i0, last);
     }
     band_row_count_ = 0;
     band_crossings_ = false;
@@ -253,7 +250,6 @@ class CoverageGrid {
   bool seed_frozen(const CoverageGrid& main, const CellRect& r, float nearest) {
     if (r.empty()) return false;
     grow(dirty_, r);
-    fresh_ = CellRect{width_, height_, -1, -1};
     bool open = false;
     for (int j = r.y0; j <= r.y1; ++j) {
       const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
@@ -298,14 +294,17 @@ class CoverageGrid {
     return open;
   }
 
-  /// Adds `patch` (a grid of the same size, after its last band) into this one: its counts, outline
-  /// counters and running bounds over every cell it changed, which this grid's next end_band scans.
-  void absorb(const CoverageGrid& patch);
-
-  /// Where `patch` (a grid of the same size, after its last band) has a cell covered with a nearer
-  /// bound than this grid's, takes it: either set of occluders bounds the depth of every ray through
-  /// the cell, so the nearer bound holds.
-  void take_nearer(const CoverageGrid& patch);
+  /// Adds `patch` (a grid of the same size, after its last band) into this one, in one pass over
+  /// every cell it changed: its counts, outline counters and running bounds; then the cells this
+  /// grid now covers freeze at its running bound; then, with `layers`, a cell the patch covers with
+  /// a nearer bound takes the patch's (either set of occluders bounds the depth of every ray through
+  /// the cell, so the nearer bound holds). Returns the cells newly covered by the counts.
+  ///
+  /// Freezing here, before the caller takes shared edges out of the outline and ends the band, gives
+  /// what freezing after it would: taking an edge out only raises counts, and bounds do not change.
+  /// Taking the patch's bound before those later freezes does too: the running bound here is at
+  /// most the patch's last running bound, which is at most the bound the patch froze the cell at.
+  std::size_t absorb(const CoverageGrid& patch, bool layers);
 
   /// After the last band: per-tile minimum of the frozen inverse depths (0 where uncovered).
   void finish() {
@@ -473,6 +472,10 @@ class CoverageGrid {
   // row[i] = min(row[i], lowest) for i in [i0, i1].
   static void lower_row_flat(float* row, int i0, int i1, float lowest);
 
+  // Cells [i0, i1] of row j take the inverse depth in `from` (another grid's row) where it is larger,
+  // and count as covered.
+  void take_nearer(int j, int i0, int i1, const float* from);
+
   // True when every cell of row j in [i0, i1] is covered (0 <= i0 <= i1 < width).
   [[nodiscard]] bool row_frozen(int j, int i0, int i1) const {
     const std::uint64_t* w = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
@@ -580,15 +583,13 @@ class CoverageGrid {
 
   // Returns the touched part of the grid to the empty state.
   void clear_dirty() {
-    fresh_ = CellRect{width_, height_, -1, -1};
     // Counters and bounds where they were used; depths and covered bits over the changed rectangle
-    // (seed_frozen and take_nearer write those across it).
+    // (seed_frozen and absorb write those across it).
     for (int n = 0; n < used_row_count_; ++n) {
       const auto j = static_cast<std::size_t>(used_rows_[static_cast<std::size_t>(n)]);
       const std::size_t base = j * static_cast<std::size_t>(width_);
       const auto b = static_cast<std::ptrdiff_t>(base) + used_lo_[j], e = static_cast<std::ptrdiff_t>(base) + used_hi_[j] + 1;
-      std::fill(count_.begin() + b, count_.begin() + e, 0);
-      std::fill(block_.begin() + b, block_.begin() + e, 0);
+      std::fill(net_.begin() + b, net_.begin() + e, 0);
       std::fill(bound_.begin() + b, bound_.begin() + e, std::numeric_limits<float>::infinity());
       used_lo_[j] = width_;
       used_hi_[j] = -1;
@@ -606,7 +607,9 @@ class CoverageGrid {
   }
 
   int width_ = 0, height_ = 0, tiles_x_ = 0, tiles_y_ = 0;
-  std::vector<std::int32_t> count_, diff_, block_;
+  // Per cell, the count at its centre minus its outline counter (touch_edge), kept as one number:
+  // the cell is covered when it is at least one, and a patch's grid adds into the union's by a sum.
+  std::vector<std::int32_t> net_, diff_;
   std::vector<float> bound_;   // running lower bound of 1/w over the triangles touching the cell
   std::vector<float> depth_;   // frozen lower bound of 1/w at the first hit; 0: not covered
   std::vector<float> tile_depth_;
@@ -618,7 +621,6 @@ class CoverageGrid {
   std::vector<int> used_lo_, used_hi_, used_rows_;  // per row: cells whose counters or bound changed since clear_dirty
   int used_row_count_ = 0;                          // rows listed in used_rows_
   CellRect dirty_{0, 0, -1, -1};
-  CellRect fresh_{0, 0, -1, -1};  // since seed_frozen: the rows' ranges where end_band covered cells
 };
 
 }  // namespace mesh_occlusion

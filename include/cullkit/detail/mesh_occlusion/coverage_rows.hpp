@@ -1,6 +1,6 @@
 // cullkit/detail/mesh_occlusion/coverage_rows.hpp: the row kernels of CoverageGrid (coverage.hpp),
 // the loops that run over the cells of one grid row: freezing covered cells, adding a patch's grid
-// into the union, taking nearer bounds, lowering depth bounds along a row, accumulating crossings and
+// into the union (and taking its nearer bounds), lowering depth bounds along a row, accumulating crossings and
 // the per-tile minimum. Each has its scalar form and, where the compiler targets them, SSE2 and AVX2
 // forms with the same comparisons and float operations, so the answers never depend on the build.
 // Included by coverage.hpp after the class; not on its own.
@@ -17,14 +17,13 @@ namespace mesh_occlusion {
 
 inline std::size_t CoverageGrid::freeze(int j, int a, int b) {
   const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-  const std::int32_t* count = count_.data() + base;
-  const std::int32_t* block = block_.data() + base;
+  const std::int32_t* net = net_.data() + base;
   const float* bound = bound_.data() + base;
   float* depth = depth_.data() + base;
   std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
   std::size_t covered = 0;
   const auto one = [&](int i) {
-    if (count[i] - block[i] >= 1 && depth[i] == 0.0f) {
+    if (net[i] >= 1 && depth[i] == 0.0f) {
       depth[i] = bound[i];
       frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
       ++covered;
@@ -36,10 +35,9 @@ inline std::size_t CoverageGrid::freeze(int j, int a, int b) {
   const __m256i zero8_i = _mm256_setzero_si256();
   const __m256 zero8_f = _mm256_setzero_ps();
   for (; i + 7 <= b; i += 8) {
-    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i));
-    const __m256i k = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(block + i));
+    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(net + i));
     const __m256 d = _mm256_loadu_ps(depth + i);
-    const __m256 fresh = _mm256_and_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_sub_epi32(c, k), zero8_i)),
+    const __m256 fresh = _mm256_and_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(c, zero8_i)),
                                        _mm256_cmp_ps(d, zero8_f, _CMP_EQ_OQ));
     const int mask = _mm256_movemask_ps(fresh);
     if (mask == 0) continue;
@@ -55,10 +53,9 @@ inline std::size_t CoverageGrid::freeze(int j, int a, int b) {
   const __m128i zero_i = _mm_setzero_si128();
   const __m128 zero_f = _mm_setzero_ps();
   for (; i + 3 <= b; i += 4) {
-    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i));
-    const __m128i k = _mm_loadu_si128(reinterpret_cast<const __m128i*>(block + i));
+    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(net + i));
     const __m128 d = _mm_loadu_ps(depth + i);
-    const __m128 fresh = _mm_and_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(_mm_sub_epi32(c, k), zero_i)), _mm_cmpeq_ps(d, zero_f));
+    const __m128 fresh = _mm_and_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(c, zero_i)), _mm_cmpeq_ps(d, zero_f));
     const int mask = _mm_movemask_ps(fresh);
     if (mask == 0) continue;
     _mm_storeu_ps(depth + i, _mm_or_ps(_mm_and_ps(fresh, _mm_loadu_ps(bound + i)), _mm_andnot_ps(fresh, d)));
@@ -70,85 +67,77 @@ inline std::size_t CoverageGrid::freeze(int j, int a, int b) {
   return covered;
 }
 
-inline void CoverageGrid::absorb(const CoverageGrid& patch) {
-  if (patch.dirty_.empty()) return;
+inline std::size_t CoverageGrid::absorb(const CoverageGrid& patch, bool layers) {
+  if (patch.dirty_.empty()) return 0;
   grow(dirty_, patch.dirty_);
+  std::size_t covered = 0;
   for (int n = 0; n < patch.used_row_count_; ++n) {
     const int j = patch.used_rows_[static_cast<std::size_t>(n)];
     const int i0 = patch.used_lo_[static_cast<std::size_t>(j)], i1 = patch.used_hi_[static_cast<std::size_t>(j)];
     const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-    std::int32_t* count = count_.data() + base;
-    std::int32_t* block = block_.data() + base;
+    std::int32_t* net = net_.data() + base;
     float* bound = bound_.data() + base;
-    const std::int32_t* from_count = patch.count_.data() + base;
-    const std::int32_t* from_block = patch.block_.data() + base;
+    const std::int32_t* from_net = patch.net_.data() + base;
     const float* from_bound = patch.bound_.data() + base;
     int i = i0;
 #if CULLKIT_COVERAGE_AVX2
     for (; i + 7 <= i1; i += 8) {
       const auto at = [i](const std::int32_t* p) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + i)); };
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), _mm256_add_epi32(at(count), at(from_count)));
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(block + i), _mm256_add_epi32(at(block), at(from_block)));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(net + i), _mm256_add_epi32(at(net), at(from_net)));
       _mm256_storeu_ps(bound + i, _mm256_min_ps(_mm256_loadu_ps(from_bound + i), _mm256_loadu_ps(bound + i)));
     }
 #endif
 #if CULLKIT_HAS_SSE2
     for (; i + 3 <= i1; i += 4) {
       const auto at = [i](const std::int32_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + i)); };
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(count + i), _mm_add_epi32(at(count), at(from_count)));
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(block + i), _mm_add_epi32(at(block), at(from_block)));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(net + i), _mm_add_epi32(at(net), at(from_net)));
       // min(bound, from) as std::min takes it: `from` where it is smaller, else `bound`.
       _mm_storeu_ps(bound + i, _mm_min_ps(_mm_loadu_ps(from_bound + i), _mm_loadu_ps(bound + i)));
     }
 #endif
     for (; i <= i1; ++i) {
-      count[i] += from_count[i];
-      block[i] += from_block[i];
+      net[i] += from_net[i];
       bound[i] = std::min(bound[i], from_bound[i]);
     }
-    mark(j, i0, i1);
+    use(j, i0, i1);
+    covered += freeze(j, i0, i1);
+    if (layers) take_nearer(j, i0, i1, patch.depth_.data() + base);
   }
+  return covered;
 }
 
-inline void CoverageGrid::take_nearer(const CoverageGrid& patch) {
-  const CellRect& r = patch.fresh_;  // the cells the patch's own bands covered
-  if (r.empty()) return;
-  grow(dirty_, r);
-  for (int j = r.y0; j <= r.y1; ++j) {
-    const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-    const float* from = patch.depth_.data() + base;
-    float* to = depth_.data() + base;
-    std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
-    const auto one = [&](int i) {
-      if (!(from[i] > to[i])) return;
-      to[i] = from[i];
-      frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
-    };
-    int i = r.x0;
+inline void CoverageGrid::take_nearer(int j, int i0, int i1, const float* from) {
+  float* to = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+  std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+  const auto one = [&](int i) {
+    if (!(from[i] > to[i])) return;
+    to[i] = from[i];
+    frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
+  };
+  int i = i0;
 #if CULLKIT_COVERAGE_AVX2
-    for (; i <= r.x1 && (i & 7) != 0; ++i) one(i);
-    for (; i + 7 <= r.x1; i += 8) {
-      const __m256 a = _mm256_loadu_ps(from + i), b = _mm256_loadu_ps(to + i);
-      const __m256 nearer = _mm256_cmp_ps(a, b, _CMP_GT_OQ);
-      const int mask = _mm256_movemask_ps(nearer);
-      if (mask == 0) continue;
-      _mm256_storeu_ps(to + i, _mm256_blendv_ps(b, a, nearer));
-      frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
-    }
+  for (; i <= i1 && (i & 7) != 0; ++i) one(i);
+  for (; i + 7 <= i1; i += 8) {
+    const __m256 a = _mm256_loadu_ps(from + i), b = _mm256_loadu_ps(to + i);
+    const __m256 nearer = _mm256_cmp_ps(a, b, _CMP_GT_OQ);
+    const int mask = _mm256_movemask_ps(nearer);
+    if (mask == 0) continue;
+    _mm256_storeu_ps(to + i, _mm256_blendv_ps(b, a, nearer));
+    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+  }
 #endif
 #if CULLKIT_HAS_SSE2
-    for (; i <= r.x1 && (i & 3) != 0; ++i) one(i);
-    for (; i + 3 <= r.x1; i += 4) {
-      const __m128 a = _mm_loadu_ps(from + i), b = _mm_loadu_ps(to + i);
-      const __m128 nearer = _mm_cmpgt_ps(a, b);
-      const int mask = _mm_movemask_ps(nearer);
-      if (mask == 0) continue;
-      _mm_storeu_ps(to + i, _mm_or_ps(_mm_and_ps(nearer, a), _mm_andnot_ps(nearer, b)));
-      frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
-    }
-#endif
-    for (; i <= r.x1; ++i) one(i);
+  for (; i <= i1 && (i & 3) != 0; ++i) one(i);
+  for (; i + 3 <= i1; i += 4) {
+    const __m128 a = _mm_loadu_ps(from + i), b = _mm_loadu_ps(to + i);
+    const __m128 nearer = _mm_cmpgt_ps(a, b);
+    const int mask = _mm_movemask_ps(nearer);
+    if (mask == 0) continue;
+    _mm_storeu_ps(to + i, _mm_or_ps(_mm_and_ps(nearer, a), _mm_andnot_ps(nearer, b)));
+    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
   }
+#endif
+  for (; i <= i1; ++i) one(i);
 }
 
 inline float CoverageGrid::tile_minimum(int j0, int j1, int i0, int i1) const {
@@ -218,7 +207,7 @@ inline void CoverageGrid::lower_row_flat(float* row, int i0, int i1, float lowes
 
 inline int CoverageGrid::accumulate_row(std::size_t base, int i0, int i1) {
   std::int32_t* diff = diff_.data() + base;
-  std::int32_t* count = count_.data() + base;
+  std::int32_t* count = net_.data() + base;
   std::int32_t run = 0;
   int i = i0;
 #if CULLKIT_COVERAGE_AVX2

@@ -214,9 +214,8 @@ inline std::size_t insert_moving(const MeshOcclusionParams& params, const Moving
     std::size_t inserted = 0;
     insert_run(m.index, params, m.s, s.patch_grid, m.s.triangles.data(), m.s.triangles.data() + m.s.triangles.size(),
                members, inserted);
-    s.grid.absorb(s.patch_grid);
+    covered += s.grid.absorb(s.patch_grid, params.patch_layers);
     covered += s.grid.end_band();
-    if (params.patch_layers) s.grid.take_nearer(s.patch_grid);
     s.stats.occluder_triangles += inserted;
     s.stats.moving_triangles += inserted;
   }

@@ -482,7 +482,7 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
     if (!open) continue;
     const RunMembers members{s.member_stamp, s.member_value};
     insert_run(index, params, s, s.patch_grid, s.by_patch.data() + b, s.by_patch.data() + e, members, inserted);
-    s.grid.absorb(s.patch_grid);
+    covered += s.grid.absorb(s.patch_grid, params.patch_layers);
     for (std::uint32_t i = b; i < e; ++i) {
       const std::uint32_t t = s.by_patch[i].second;
       if (!members.has(t)) continue;  // dropped over covered cells
@@ -497,7 +497,6 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
       }
     }
     covered += s.grid.end_band();
-    if (params.patch_layers) s.grid.take_nearer(s.patch_grid);
   }
   s.stats.occluder_triangles += inserted;
   return covered;
