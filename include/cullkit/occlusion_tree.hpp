@@ -196,7 +196,7 @@ class OcclusionTree {
     eye_ok_ = detail::finite3(eye);
     eye_scale_ = eye_ok_ ? detail::norm1(eye) : 0.0f;
     nodes_.clear();
-    seams_.clear();
+    seams_.clear(eye);
     occluder_serial_ = 0;
     stats_ = OcclusionStats{};
     root_ = visible_leaf;

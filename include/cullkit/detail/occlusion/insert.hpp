@@ -121,7 +121,7 @@ struct OcclusionInsert {
     }
     OcclusionChain& chain = t.current_;
     chain = OcclusionChain{};
-    chain.edge_count = beam_edges(t, frag);
+    chain.edge_count = beam_edges(t, frag, polygon);
     if (chain.edge_count == 0) return false;
     chain.is_box = false;
     chain.closing[0] = own;
@@ -151,7 +151,7 @@ struct OcclusionInsert {
     }
     OcclusionChain& chain = t.current_;
     chain = OcclusionChain{};
-    chain.edge_count = beam_edges(t, frag);
+    chain.edge_count = beam_edges(t, frag, proxy.corners);
     if (chain.edge_count == 0) return false;
     chain.is_box = true;
     for (int f = 0; f < proxy.face_count; ++f) {
@@ -177,14 +177,15 @@ struct OcclusionInsert {
   // The occluder's beam planes into the chain's edges, longest edge (in angle) first: a query passing
   // beside the occluder is most likely outside a long edge, so it leaves the chain after fewer steps.
   // (The chain's region does not depend on the order.)
-  static std::size_t beam_edges(Tree& t, const ConvexPolygon& outline) {
+  // `world` holds the outline's corners in world coordinates (the seams name edges by them).
+  static std::size_t beam_edges(Tree& t, const ConvexPolygon& outline, const glm::vec3* world) {
     OcclusionChain& chain = t.current_;
     float angles[ConvexPolygon::capacity];  // 1 - cos of each edge's angle: same order as the angle
-    glm::vec3 corners[ConvexPolygon::capacity];
-    const std::size_t n = beam_planes(outline, t.params_.min_angle, chain.edges, angles, corners);
+    std::uint32_t sources[ConvexPolygon::capacity];
+    const std::size_t n = beam_planes(outline, t.params_.min_angle, chain.edges, angles, sources);
     ++t.occluder_serial_;
     for (std::size_t i = 0; i < n; ++i)
-      chain.edge_seams[i] = edge_seam(t, chain.edges[i], corners[i], corners[(i + 1) % n]);
+      chain.edge_seams[i] = edge_seam(t, chain.edges[i], world[sources[i]], world[sources[(i + 1) % n]]);
     for (std::size_t i = 1; i < n; ++i) {
       const Plane plane = chain.edges[i];
       const std::uint32_t seam = chain.edge_seams[i];
@@ -202,15 +203,14 @@ struct OcclusionInsert {
     return n;
   }
 
-  // The seam code (OcclusionNode::seam) of the edge plane through the eye and a-b.
+  // The seam code (OcclusionNode::seam) of the edge plane through the eye and the edge with world
+  // corners a-b: its edge id, and whether the plane's normal agrees with the edge's canonical normal
+  // (parallel vectors: the sign of their dot product is certain).
   static std::uint32_t edge_seam(Tree& t, const Plane& plane, const glm::vec3& a, const glm::vec3& b) {
-    bool forward = false;  // cross(a, b) is the seam's canonical normal
-    const SeamKey key = seam_key(a, b, forward);
-    const std::uint32_t id = t.seams_.use(key, t.occluder_serial_);
+    const std::uint32_t id = t.seams_.use(a, b, t.occluder_serial_);
     if (id >= Tree::no_seam / 2) return Tree::no_seam;
-    const glm::dvec3 ab = glm::cross(glm::dvec3(a), glm::dvec3(b));
-    const bool along_ab = glm::dot(glm::dvec3(plane.normal), ab) > 0.0;
-    return 2 * id + (along_ab == forward ? 1u : 0u);
+    const bool agrees = glm::dot(glm::dvec3(plane.normal), t.seams_.canonical_normal(id)) > 0.0;
+    return 2 * id + (agrees ? 1u : 0u);
   }
 
   [[nodiscard]] static std::uint32_t slot_value(const Tree& t, std::uint32_t parent, bool inside) {

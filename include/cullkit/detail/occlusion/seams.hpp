@@ -24,7 +24,11 @@
 #include <cstring>
 #include <vector>
 
+#include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
+#include <glm/ext/vector_double3.hpp>
+
+#include "exact_orientation.hpp"
 
 namespace cullkit::detail {
 
@@ -54,23 +58,20 @@ struct SeamKey {
   return false;
 }
 
-/// The key of the plane through the eye (origin) and the edge a-b (eye-relative corners), and
-/// whether the plane's canonical normal is cross(a, b) (`forward`) or cross(b, a). For an axis
-/// plane, the canonical normal is +axis and `forward` says whether cross(a, b) points that way.
-[[nodiscard]] inline SeamKey seam_key(const glm::vec3& a, const glm::vec3& b, bool& forward) noexcept {
+/// The key of the edge a-b (world corners) whose plane passes through `eye`: its two corners in
+/// canonical order, or, for an edge whose corners both have coordinate `axis` exactly equal to the
+/// eye's, the axis plane through the eye.
+[[nodiscard]] inline SeamKey seam_key(const glm::vec3& a, const glm::vec3& b, const glm::vec3& eye) noexcept {
   SeamKey key{};
   for (int axis = 0; axis < 3; ++axis) {
-    if (a[axis] == 0.0f && b[axis] == 0.0f) {
+    if (a[axis] == eye[axis] && b[axis] == eye[axis]) {
       // Marker words that no finite corner has (NaN patterns), then the axis.
       key.bits[0] = 0x7FC0FFEEu;
       key.bits[1] = static_cast<std::uint32_t>(axis);
-      const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-      const double along = double(a[a1]) * double(b[a2]) - double(a[a2]) * double(b[a1]);
-      forward = along > 0.0;
       return key;
     }
   }
-  forward = corner_before(a, b);
+  const bool forward = corner_before(a, b);
   const glm::vec3& lo = forward ? a : b;
   const glm::vec3& hi = forward ? b : a;
   for (int i = 0; i < 3; ++i) {
@@ -80,63 +81,188 @@ struct SeamKey {
   return key;
 }
 
-/// Seam ids by key: a flat open-addressing hash table (no allocation once warm; `clear` keeps the
-/// memory). Each id remembers the first occluder that used it and whether a second one did.
+/// The corners of an edge key (world; meaningless for an axis-plane key).
+inline void key_corners(const SeamKey& key, glm::vec3& lo, glm::vec3& hi) noexcept {
+  float f[6];
+  std::memcpy(f, key.bits, sizeof f);
+  lo = glm::vec3(f[0], f[1], f[2]);
+  hi = glm::vec3(f[3], f[4], f[5]);
+}
+
+[[nodiscard]] inline bool is_axis_key(const SeamKey& key) noexcept { return key.bits[0] == 0x7FC0FFEEu; }
+
+/// Edges by key, and the planes they lie in. Every distinct edge key gets an id of its own; edges that
+/// span one plane through the eye (collinear edges of a regular grid, found through a shared corner
+/// and an exact orientation test) are linked to one plane, its `root`, so that a query assumption
+/// about one holds at all of them. Flat open-addressing tables (no allocation once warm; `clear`
+/// keeps the memory). Each plane remembers the first occluder that used it and whether another did.
 class SeamTable {
  public:
   static constexpr std::uint32_t none = 0xFFFFFFFFu;
 
-  void clear() {
+  /// Empties the table for a new eye (world coordinates).
+  void clear(const glm::vec3& eye) {
+    eye_ = eye;
     std::fill(slots_.begin(), slots_.end(), none);
+    std::fill(corner_slots_.begin(), corner_slots_.end(), none);
+    keys_.clear();
+    root_.clear();
+    flip_.clear();
     owner_.clear();
     shared_.clear();
-    keys_.clear();
+    corner_ids_.clear();
   }
 
-  /// The id of `key`, added if new; marks it shared when `occluder` differs from its first user.
-  std::uint32_t use(const SeamKey& key, std::uint32_t occluder) {
+  /// The id of the edge (a, b) (world corners), added if new; marks its plane shared when
+  /// `occluder` differs from the plane's first user.
+  std::uint32_t use(const glm::vec3& a, const glm::vec3& b, std::uint32_t occluder) {
+    const SeamKey key = seam_key(a, b, eye_);
     if (2 * (keys_.size() + 1) > slots_.size()) grow();
     const std::uint32_t mask = static_cast<std::uint32_t>(slots_.size() - 1);
-    for (std::uint32_t s = hash(key) & mask;; s = (s + 1) & mask) {
+    std::uint32_t s = hash(key.bits, 6) & mask;
+    for (; slots_[s] != none; s = (s + 1) & mask) {
       const std::uint32_t id = slots_[s];
-      if (id == none) {
-        slots_[s] = static_cast<std::uint32_t>(keys_.size());
-        keys_.push_back(key);
-        owner_.push_back(occluder);
-        shared_.push_back(0);
-        return slots_[s];
-      }
       if (keys_[id] == key) {
-        if (owner_[id] != occluder) shared_[id] = 1;
+        mark_user(root_[id], occluder);
         return id;
+      }
+    }
+    const auto id = static_cast<std::uint32_t>(keys_.size());
+    slots_[s] = id;
+    keys_.push_back(key);
+    root_.push_back(id);
+    flip_.push_back(0);
+    owner_.push_back(occluder);
+    shared_.push_back(0);
+    if (!is_axis_key(key)) {
+      link_coplanar(id, a, b);
+      add_corner(a, id);
+      add_corner(b, id);
+    }
+    mark_user(root_[id], occluder);
+    return id;
+  }
+
+  /// The plane of edge `id` (the id of its first edge).
+  [[nodiscard]] std::uint32_t root(std::uint32_t id) const noexcept { return root_[id]; }
+  /// 1 if the canonical normal of edge `id` is opposite to that of its plane's root.
+  [[nodiscard]] std::uint32_t flip(std::uint32_t id) const noexcept { return flip_[id]; }
+  /// True if two different occluders use the plane of edge `id`.
+  [[nodiscard]] bool shared(std::uint32_t id) const noexcept { return id < root_.size() && shared_[root_[id]] != 0; }
+  [[nodiscard]] std::size_t size() const noexcept { return keys_.size(); }
+  [[nodiscard]] const SeamKey& key(std::uint32_t id) const noexcept { return keys_[id]; }
+  [[nodiscard]] const glm::vec3& eye() const noexcept { return eye_; }
+
+  /// The canonical normal of edge `id`: cross(lo - eye, hi - eye) of its corners in canonical order,
+  /// or +axis for an axis-plane key. An edge plane's `inside` is the canonical side when its normal
+  /// agrees.
+  [[nodiscard]] glm::dvec3 canonical_normal(std::uint32_t id) const noexcept {
+    const SeamKey& key = keys_[id];
+    if (is_axis_key(key)) {
+      glm::dvec3 n(0.0);
+      n[static_cast<int>(key.bits[1])] = 1.0;
+      return n;
+    }
+    glm::vec3 lo, hi;
+    key_corners(key, lo, hi);
+    const glm::dvec3 e(eye_);
+    return glm::cross(glm::dvec3(lo) - e, glm::dvec3(hi) - e);
+  }
+
+ private:
+  [[nodiscard]] static std::uint32_t hash(const std::uint32_t* words, int count) noexcept {
+    std::uint64_t h = 0x9E3779B97F4A7C15ull;
+    for (int i = 0; i < count; ++i) h = (h ^ words[i]) * 0xFF51AFD7ED558CCDull;
+    return static_cast<std::uint32_t>(h ^ (h >> 29));
+  }
+  [[nodiscard]] static SeamKey corner_key(const glm::vec3& p) noexcept {
+    SeamKey k{};
+    for (int i = 0; i < 3; ++i) k.bits[i] = float_bits(p[i]);
+    return k;
+  }
+
+  void mark_user(std::uint32_t root, std::uint32_t occluder) {
+    if (owner_[root] != occluder) shared_[root] = 1;
+  }
+
+  // Links the new edge `id` (a, b) to the plane of every earlier edge that shares a corner with it and
+  // spans the same plane through the eye, exactly; planes found that way are merged into one.
+  void link_coplanar(std::uint32_t id, const glm::vec3& a, const glm::vec3& b) {
+    const glm::dvec3 normal = canonical_normal(id);
+    for (const glm::vec3& p : {a, b}) {
+      const SeamKey ck = corner_key(p);
+      if (corner_slots_.empty()) return;
+      const std::uint32_t mask = static_cast<std::uint32_t>(corner_slots_.size() - 1);
+      for (std::uint32_t s = hash(ck.bits, 3) & mask; corner_slots_[s] != none; s = (s + 1) & mask) {
+        const CornerEntry& e = corner_ids_[corner_slots_[s]];
+        if (e.bits[0] != ck.bits[0] || e.bits[1] != ck.bits[1] || e.bits[2] != ck.bits[2]) continue;
+        const std::uint32_t other = root_[e.id];
+        if (other == root_[id]) continue;
+        glm::vec3 lo, hi;
+        key_corners(keys_[e.id], lo, hi);
+        if (orientation_sign(eye_, lo, hi, a) != 0 || orientation_sign(eye_, lo, hi, b) != 0) continue;
+        // Parallel normals: the sign of their dot product is certain.
+        const std::uint32_t relative = glm::dot(normal, canonical_normal(other)) < 0.0 ? 1u : 0u;
+        merge(other, root_[id], relative ^ flip_[id]);
       }
     }
   }
 
-  /// True if two different occluders use seam `id`.
-  [[nodiscard]] bool shared(std::uint32_t id) const noexcept { return id < shared_.size() && shared_[id] != 0; }
-
- private:
-  [[nodiscard]] static std::uint32_t hash(const SeamKey& key) noexcept {
-    std::uint64_t h = 0x9E3779B97F4A7C15ull;
-    for (std::uint32_t w : key.bits) h = (h ^ w) * 0xFF51AFD7ED558CCDull;
-    return static_cast<std::uint32_t>(h ^ (h >> 29));
+  // Every edge of plane `gone` joins plane `kept`; `relative` is 1 if their canonical normals are opposite.
+  void merge(std::uint32_t kept, std::uint32_t gone, std::uint32_t relative) {
+    const std::uint8_t was_shared = shared_[gone] != 0 || owner_[gone] != owner_[kept] ? 1 : 0;
+    for (std::size_t i = 0; i < root_.size(); ++i) {
+      if (root_[i] != gone) continue;
+      root_[i] = kept;
+      flip_[i] = static_cast<std::uint8_t>(flip_[i] ^ relative);
+    }
+    shared_[kept] = static_cast<std::uint8_t>(shared_[kept] | was_shared);
   }
+
+  void add_corner(const glm::vec3& p, std::uint32_t id) {
+    if (2 * (corner_ids_.size() + 1) > corner_slots_.size()) grow_corners();
+    const SeamKey ck = corner_key(p);
+    const std::uint32_t mask = static_cast<std::uint32_t>(corner_slots_.size() - 1);
+    std::uint32_t s = hash(ck.bits, 3) & mask;
+    while (corner_slots_[s] != none) s = (s + 1) & mask;
+    corner_slots_[s] = static_cast<std::uint32_t>(corner_ids_.size());
+    corner_ids_.push_back(CornerEntry{{ck.bits[0], ck.bits[1], ck.bits[2]}, id});
+  }
+
   void grow() {
     const std::size_t size = slots_.empty() ? 64 : 2 * slots_.size();
     slots_.assign(size, none);
     const std::uint32_t mask = static_cast<std::uint32_t>(size - 1);
     for (std::uint32_t id = 0; id < keys_.size(); ++id) {
-      std::uint32_t s = hash(keys_[id]) & mask;
+      std::uint32_t s = hash(keys_[id].bits, 6) & mask;
       while (slots_[s] != none) s = (s + 1) & mask;
       slots_[s] = id;
     }
   }
+  void grow_corners() {
+    const std::size_t size = corner_slots_.empty() ? 128 : 2 * corner_slots_.size();
+    corner_slots_.assign(size, none);
+    const std::uint32_t mask = static_cast<std::uint32_t>(size - 1);
+    for (std::uint32_t i = 0; i < corner_ids_.size(); ++i) {
+      std::uint32_t s = hash(corner_ids_[i].bits, 3) & mask;
+      while (corner_slots_[s] != none) s = (s + 1) & mask;
+      corner_slots_[s] = i;
+    }
+  }
 
-  std::vector<std::uint32_t> slots_;  // id per slot, or none
-  std::vector<SeamKey> keys_;
-  std::vector<std::uint32_t> owner_;  // first occluder (insertion serial) per id
-  std::vector<std::uint8_t> shared_;  // used by a second occluder
+  struct CornerEntry {
+    std::uint32_t bits[3];  // the corner, bit for bit
+    std::uint32_t id;       // an edge that has it
+  };
+  glm::vec3 eye_ = glm::vec3(0.0f);
+  std::vector<std::uint32_t> slots_;         // edge id per slot, or none
+  std::vector<SeamKey> keys_;                // per edge id
+  std::vector<std::uint32_t> root_;          // per edge id: its plane (an edge id)
+  std::vector<std::uint8_t> flip_;           // per edge id: canonical normal opposite to its root's
+  std::vector<std::uint32_t> owner_;         // per plane: first occluder (insertion serial)
+  std::vector<std::uint8_t> shared_;         // per plane: used by a second occluder
+  std::vector<std::uint32_t> corner_slots_;  // index into corner_ids_ per slot, or none
+  std::vector<CornerEntry> corner_ids_;
 };
 
 }  // namespace cullkit::detail

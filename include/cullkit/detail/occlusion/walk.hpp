@@ -220,10 +220,12 @@ struct OcclusionWalk {
   // <= m going outside, each assuming its side. Each point then has a copy on its true side, and a
   // copy meeting the other occluder's plane of the same seam keeps the band instead of losing it
   // to "visible".
-  [[nodiscard]] static SeamStep seam_step(const Node& node, float m, Fragment& cur, Fragment* stack, int& top,
+  [[nodiscard]] static SeamStep seam_step(const SeamTable& seams, const Node& node, float m, Fragment& cur, Fragment* stack, int& top,
                                           Fragment& alt) {
-    const std::uint32_t id = node.seam >> 1;
-    const std::uint32_t node_side = node.seam & 1u;  // the canonical side this node's inside is
+    // Assumptions name the plane (the root of the node's edge), on the root's canonical sides.
+    const std::uint32_t edge = node.seam >> 1;
+    const std::uint32_t id = seams.root(edge);
+    const std::uint32_t node_side = (node.seam & 1u) ^ seams.flip(edge);  // the canonical side this node's inside is
     for (std::uint32_t k = 0; k < cur.assumed_count; ++k) {
       if ((cur.assumed[k] >> 1) != id) continue;
       cur.ref = (cur.assumed[k] & 1u) == node_side ? node.inside : node.outside;
@@ -242,7 +244,7 @@ struct OcclusionWalk {
       cur.ref = node.outside;
       return SeamStep::moved;
     }
-    if (cur.assumed_count >= max_seam_assumptions || top >= stack_size) return SeamStep::ordinary;
+    if (top >= stack_size) return SeamStep::ordinary;
     Fragment scratch;
     Fragment& in_copy = stack[top];
     // The inside copy: the part at distance >= -m (all of it unless the fragment crosses `outer`).
@@ -259,12 +261,131 @@ struct OcclusionWalk {
     }
     copy_assumptions(cur, in_copy);
     copy_assumptions(cur, alt);
-    in_copy.assumed[in_copy.assumed_count++] = 2 * id + node_side;
-    alt.assumed[alt.assumed_count++] = 2 * id + (1u - node_side);
+    add_assumption(seams, in_copy, 2 * id + node_side, edge);
+    add_assumption(seams, alt, 2 * id + (1u - node_side), edge);
     in_copy.ref = node.inside;
     alt.ref = node.outside;
     ++top;
     return SeamStep::copies;
+  }
+
+  // Adds an assumption. A full list first forgets one that the others imply (see
+  // `implied_assumption`), else its oldest one. Any subset of a copy's assumptions is true of every
+  // point the copy stands for, so forgetting one is safe: at a later node of that seam the copy
+  // measures again (and may split), and a vacuity test on fewer assumptions finds less.
+  static void add_assumption(const SeamTable& seams, Fragment& f, std::uint32_t code, std::uint32_t edge) noexcept {
+    if (f.assumed_count == max_seam_assumptions) {
+      const std::uint32_t implied = implied_assumption(seams, f);
+      for (std::uint32_t k = implied == max_seam_assumptions ? 1 : implied + 1; k < max_seam_assumptions; ++k) {
+        f.assumed[k - 1] = f.assumed[k];
+        f.assumed_edge[k - 1] = f.assumed_edge[k];
+      }
+      --f.assumed_count;
+    }
+    f.assumed[f.assumed_count] = code;
+    f.assumed_edge[f.assumed_count] = edge;
+    ++f.assumed_count;
+  }
+
+  // The assumptions of `f` whose edges have corner `v`, as the other corner W of each edge and the
+  // sign that makes cross(V, W) the normal of the assumed half-space. Returns how many.
+  static std::uint32_t assumptions_at(const SeamTable& seams, const Fragment& f, const glm::vec3& v,
+                                      glm::vec3* other, int* turn, std::uint32_t* index) noexcept {
+    std::uint32_t count = 0;
+    for (std::uint32_t j = 0; j < f.assumed_count; ++j) {
+      const std::uint32_t edge = f.assumed_edge[j];
+      const SeamKey& key = seams.key(edge);
+      if (is_axis_key(key)) continue;
+      glm::vec3 lo, hi;
+      key_corners(key, lo, hi);
+      const bool v_is_lo = same_point(lo, v);
+      if (!v_is_lo && !same_point(hi, v)) continue;
+      // The side relative to the edge's canonical normal cross(lo, hi); cross(V, W) is that normal
+      // when V is lo and its opposite when V is hi.
+      const bool positive = (((f.assumed[j] & 1u) ^ seams.flip(edge)) != 0);
+      other[count] = v_is_lo ? hi : lo;
+      turn[count] = (positive == v_is_lo) ? 1 : -1;
+      index[count] = j;
+      ++count;
+    }
+    return count;
+  }
+
+  // Which way the normal of assumed half-space j lies from that of i around the corner v: 1
+  // counter-clockwise within a half turn, -1 clockwise, 0 parallel. With V = v - eye and
+  // W = w - eye the normals are turn * cross(V, W), and
+  // V . (cross(V, W_i) x cross(V, W_j)) = |V|^2 det[V; W_i; W_j].
+  [[nodiscard]] static int normal_turn(const SeamTable& seams, const glm::vec3& v, const glm::vec3* other,
+                                       const int* turn, std::uint32_t i, std::uint32_t j) noexcept {
+    return turn[i] * turn[j] * orientation_sign(seams.eye(), v, other[i], other[j]);
+  }
+
+  // An assumption implied by two others at a corner they share (its normal strictly between theirs,
+  // which are less than a half turn apart: their half-spaces' intersection lies in its own), or
+  // max_seam_assumptions. Around a mesh corner a copy keeps the two that bound its sector.
+  [[nodiscard]] static std::uint32_t implied_assumption(const SeamTable& seams, const Fragment& f) noexcept {
+    glm::vec3 other[max_seam_assumptions];
+    int turn[max_seam_assumptions];
+    std::uint32_t index[max_seam_assumptions];
+    for (std::uint32_t k = 0; k < f.assumed_count; ++k) {
+      const SeamKey& key = seams.key(f.assumed_edge[k]);
+      if (is_axis_key(key)) continue;
+      glm::vec3 lo, hi;
+      key_corners(key, lo, hi);
+      for (const glm::vec3& v : {lo, hi}) {
+        const std::uint32_t count = assumptions_at(seams, f, v, other, turn, index);
+        if (count < 3) continue;
+        for (std::uint32_t j = 0; j < count; ++j)
+          for (std::uint32_t a = 0; a < count; ++a) {
+            if (a == j || normal_turn(seams, v, other, turn, a, j) <= 0) continue;
+            for (std::uint32_t b = 0; b < count; ++b) {
+              if (b == j || b == a) continue;
+              if (normal_turn(seams, v, other, turn, j, b) > 0 && normal_turn(seams, v, other, turn, a, b) > 0) return index[j];
+            }
+          }
+      }
+    }
+    return max_seam_assumptions;
+  }
+
+  // True if the fragment's seam assumptions leave no open set of directions: some mesh corner V is a
+  // corner of three or more of its assumed edges, and the half-spaces they assume (all bounded by
+  // planes through the eye and V) meet only in a plane or a line. Each plane is given exactly by V
+  // and the edge's other corner W (`normal_turn` is exact). The half-spaces meet in an open set
+  // exactly when their normals lie in an open half-plane around V: then one normal has all the
+  // others strictly counter-clockwise from it, within a half turn.
+  //
+  // Why such a copy may be dropped: every point of the query has a chain of copies whose
+  // assumptions hold for it (seam_step), so dropping copies that stand only for a closed set with no
+  // interior leaves every point outside a closed nowhere-dense set proven hidden; the hidden region
+  // of closed occluders is closed, so that proves every point of the query.
+  [[nodiscard]] static bool assumptions_vacuous(const SeamTable& seams, const Fragment& f) noexcept {
+    glm::vec3 other[max_seam_assumptions];
+    int turn[max_seam_assumptions];
+    std::uint32_t index[max_seam_assumptions];
+    for (std::uint32_t k = 0; k < f.assumed_count; ++k) {
+      const SeamKey& key = seams.key(f.assumed_edge[k]);
+      if (is_axis_key(key)) continue;
+      glm::vec3 lo, hi;
+      key_corners(key, lo, hi);
+      for (const glm::vec3& v : {lo, hi}) {
+        const std::uint32_t count = assumptions_at(seams, f, v, other, turn, index);
+        if (count < 3) continue;
+        bool open = false;
+        for (std::uint32_t i = 0; i < count && !open; ++i) {
+          bool all_ahead = true;
+          for (std::uint32_t j = 0; j < count && all_ahead; ++j)
+            all_ahead = j == i || normal_turn(seams, v, other, turn, i, j) > 0;
+          open = all_ahead;
+        }
+        if (!open) return true;
+      }
+    }
+    return false;
+  }
+
+  [[nodiscard]] static bool same_point(const glm::vec3& a, const glm::vec3& b) noexcept {
+    return float_bits(a.x) == float_bits(b.x) && float_bits(a.y) == float_bits(b.y) && float_bits(a.z) == float_bits(b.z);
   }
 
   // The exact walk: the fragments stack[0..count) are pushed down the tree from their `ref`, split
@@ -294,7 +415,10 @@ struct OcclusionWalk {
           break;
         }
         if (ref == visible_leaf) {
-          any_visible = true;
+          // A copy whose assumptions no open set of directions satisfies stands for no point that
+          // another copy does not also stand for (see `assumptions_vacuous`): it proves nothing
+          // either way.
+          if (cur->assumed_count < 3 || !assumptions_vacuous(t.seams_, *cur)) any_visible = true;
           break;
         }
         const Node& node = t.nodes_[ref];
@@ -308,7 +432,7 @@ struct OcclusionWalk {
           continue;
         }
         if (is_shared_seam(t, node)) {
-          const SeamStep step = seam_step(node, m, *cur, stack, top, *alt);
+          const SeamStep step = seam_step(t.seams_, node, m, *cur, stack, top, *alt);
           if (step == SeamStep::visible) {
             any_visible = true;
             break;
