@@ -348,6 +348,43 @@ struct OcclusionWalk {
     return max_seam_assumptions;
   }
 
+  // True if no point of the fragment satisfies its seam assumptions: the fragment clipped by every
+  // assumed half-space, each widened by a slack far above the error of its double-precision plane
+  // (normal from the edge's world corners), keeps no area. Then the points the copy stands for form
+  // a set with no interior (or none at all), and the copy may be dropped (see below). This finds the
+  // copies whose planes meet away from any shared corner, in a band where other planes cross too.
+  [[nodiscard]] static bool assumptions_miss(const SeamTable& seams, const Fragment& f) noexcept {
+    if (f.assumed_count == 0) return false;
+    constexpr std::size_t capacity = 2 * ConvexPolygon::capacity;
+    glm::dvec3 poly[capacity], next[capacity];
+    std::size_t n = f.size;
+    if (n > ConvexPolygon::capacity) return false;
+    for (std::size_t i = 0; i < n; ++i) poly[i] = glm::dvec3(f.v[i]);
+    for (std::uint32_t k = 0; k < f.assumed_count && n >= 3; ++k) {
+      const std::uint32_t root = f.assumed[k] >> 1;
+      glm::dvec3 normal = seams.canonical_normal(root);
+      const double length = glm::length(normal);
+      if (!(length > 0.0) || !std::isfinite(length)) return false;
+      normal /= (f.assumed[k] & 1u) ? length : -length;
+      std::size_t m = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (m + 2 > capacity) return false;  // cannot happen (each clip adds one corner at most)
+        const glm::dvec3& a = poly[i];
+        const glm::dvec3& b = poly[(i + 1) % n];
+        const double da = glm::dot(normal, a) + 1e-8 * glm::length(a);
+        const double db = glm::dot(normal, b) + 1e-8 * glm::length(b);
+        if (da >= 0.0) next[m++] = a;
+        if ((da >= 0.0) != (db >= 0.0)) next[m++] = a + (b - a) * (da / (da - db));
+      }
+      n = m;
+      for (std::size_t i = 0; i < n; ++i) poly[i] = next[i];
+    }
+    if (n < 3) return true;
+    glm::dvec3 area(0.0);
+    for (std::size_t i = 0; i < n; ++i) area += glm::cross(poly[i], poly[(i + 1) % n]);
+    return !(glm::length(area) > 0.0);
+  }
+
   // True if the fragment's seam assumptions leave no open set of directions: some mesh corner V is a
   // corner of three or more of its assumed edges, and the half-spaces they assume (all bounded by
   // planes through the eye and V) meet only in a plane or a line. Each plane is given exactly by V
@@ -360,6 +397,7 @@ struct OcclusionWalk {
   // interior leaves every point outside a closed nowhere-dense set proven hidden; the hidden region
   // of closed occluders is closed, so that proves every point of the query.
   [[nodiscard]] static bool assumptions_vacuous(const SeamTable& seams, const Fragment& f) noexcept {
+    if (f.assumed_count < 3) return false;
     glm::vec3 other[max_seam_assumptions];
     int turn[max_seam_assumptions];
     std::uint32_t index[max_seam_assumptions];
@@ -418,7 +456,7 @@ struct OcclusionWalk {
           // A copy whose assumptions no open set of directions satisfies stands for no point that
           // another copy does not also stand for (see `assumptions_vacuous`): it proves nothing
           // either way.
-          if (cur->assumed_count < 3 || !assumptions_vacuous(t.seams_, *cur)) any_visible = true;
+          if (!assumptions_vacuous(t.seams_, *cur) && !assumptions_miss(t.seams_, *cur)) any_visible = true;
           break;
         }
         const Node& node = t.nodes_[ref];
