@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cmath>
 #include <cstring>
 #include <vector>
 
@@ -104,13 +105,13 @@ class SeamTable {
   void clear(const glm::vec3& eye) {
     eye_ = eye;
     std::fill(slots_.begin(), slots_.end(), none);
-    std::fill(corner_slots_.begin(), corner_slots_.end(), none);
+    std::fill(plane_slots_.begin(), plane_slots_.end(), none);
     keys_.clear();
     root_.clear();
     flip_.clear();
     owner_.clear();
     shared_.clear();
-    corner_ids_.clear();
+    plane_ids_.clear();
   }
 
   /// The id of the edge (a, b) (world corners), added if new; marks its plane shared when
@@ -136,8 +137,7 @@ class SeamTable {
     shared_.push_back(0);
     if (!is_axis_key(key)) {
       link_coplanar(id, a, b);
-      add_corner(a, id);
-      add_corner(b, id);
+      add_plane(id);
     }
     mark_user(root_[id], occluder);
     return id;
@@ -175,27 +175,27 @@ class SeamTable {
     for (int i = 0; i < count; ++i) h = (h ^ words[i]) * 0xFF51AFD7ED558CCDull;
     return static_cast<std::uint32_t>(h ^ (h >> 29));
   }
-  [[nodiscard]] static SeamKey corner_key(const glm::vec3& p) noexcept {
-    SeamKey k{};
-    for (int i = 0; i < 3; ++i) k.bits[i] = float_bits(p[i]);
-    return k;
-  }
-
   void mark_user(std::uint32_t root, std::uint32_t occluder) {
     if (owner_[root] != occluder) shared_[root] = 1;
   }
 
-  // Links the new edge `id` (a, b) to the plane of every earlier edge that shares a corner with it and
-  // spans the same plane through the eye, exactly; planes found that way are merged into one.
+  // Links the new edge `id` (a, b) to the plane of every earlier edge that spans the same plane
+  // through the eye, exactly (the orientation test on world corners); planes found that way are
+  // merged into one. Candidates come from a table of planes by their unit normal, rounded to cells
+  // of 2^-23: one plane computed from two of its edges differs by far less, and where a normal lies
+  // near a cell's side the neighbouring cell is searched too.
   void link_coplanar(std::uint32_t id, const glm::vec3& a, const glm::vec3& b) {
+    if (plane_slots_.empty()) return;
     const glm::dvec3 normal = canonical_normal(id);
-    for (const glm::vec3& p : {a, b}) {
-      const SeamKey ck = corner_key(p);
-      if (corner_slots_.empty()) return;
-      const std::uint32_t mask = static_cast<std::uint32_t>(corner_slots_.size() - 1);
-      for (std::uint32_t s = hash(ck.bits, 3) & mask; corner_slots_[s] != none; s = (s + 1) & mask) {
-        const CornerEntry& e = corner_ids_[corner_slots_[s]];
-        if (e.bits[0] != ck.bits[0] || e.bits[1] != ck.bits[1] || e.bits[2] != ck.bits[2]) continue;
+    PlaneCell cells[16];
+    const int count = nearby_cells(normal, cells);
+    const std::uint32_t mask = static_cast<std::uint32_t>(plane_slots_.size() - 1);
+    for (int c = 0; c < count; ++c) {
+      for (std::uint32_t s = hash(cells[c].bits, 3) & mask; plane_slots_[s] != none; s = (s + 1) & mask) {
+        const PlaneEntry& e = plane_ids_[plane_slots_[s]];
+        if (e.cell.bits[0] != cells[c].bits[0] || e.cell.bits[1] != cells[c].bits[1] ||
+            e.cell.bits[2] != cells[c].bits[2])
+          continue;
         const std::uint32_t other = root_[e.id];
         if (other == root_[id]) continue;
         glm::vec3 lo, hi;
@@ -206,6 +206,70 @@ class SeamTable {
         merge(other, root_[id], relative ^ flip_[id]);
       }
     }
+  }
+
+  struct PlaneCell {
+    std::uint32_t bits[3];
+  };
+  struct PlaneEntry {
+    PlaneCell cell;
+    std::uint32_t id;
+  };
+  static constexpr double cell_size = 1.0 / 8388608.0;  // 2^-23
+
+  // The unit normal with its largest component made positive (`flip`: the other sign instead).
+  [[nodiscard]] static glm::dvec3 signed_unit(const glm::dvec3& normal, bool flip) noexcept {
+    glm::dvec3 n = normal / glm::length(normal);
+    int big = 0;
+    for (int i = 1; i < 3; ++i)
+      if (std::fabs(n[i]) > std::fabs(n[big])) big = i;
+    if ((n[big] < 0.0) != flip) n = -n;
+    return n;
+  }
+  [[nodiscard]] static std::uint32_t cell_of(double x) noexcept {
+    return static_cast<std::uint32_t>(static_cast<std::int32_t>(std::floor(x / cell_size)));
+  }
+  [[nodiscard]] static PlaneCell cell_of(const glm::dvec3& n) noexcept {
+    return PlaneCell{{cell_of(n.x), cell_of(n.y), cell_of(n.z)}};
+  }
+
+  // The cells where a plane with this normal may have been filed (up to 16).
+  [[nodiscard]] static int nearby_cells(const glm::dvec3& normal, PlaneCell* out) noexcept {
+    const glm::dvec3 n = signed_unit(normal, false);
+    double top = 0.0, second = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const double m = std::fabs(n[i]);
+      if (m > top) {
+        second = top;
+        top = m;
+      } else if (m > second) {
+        second = m;
+      }
+    }
+    const int signs = top - second < 1e-6 ? 2 : 1;  // two components nearly tie: either may be "largest"
+    int count = 0;
+    for (int sign = 0; sign < signs; ++sign) {
+      const glm::dvec3 u = sign == 0 ? n : -n;
+      std::int32_t lo[3], span[3];
+      for (int i = 0; i < 3; ++i) {
+        const double scaled = u[i] / cell_size;
+        const double base = std::floor(scaled);
+        lo[i] = static_cast<std::int32_t>(base);
+        span[i] = 1;
+        if (scaled - base < 0.01) {
+          --lo[i];
+          span[i] = 2;
+        } else if (scaled - base > 0.99) {
+          span[i] = 2;
+        }
+      }
+      for (std::int32_t x = 0; x < span[0]; ++x)
+        for (std::int32_t y = 0; y < span[1]; ++y)
+          for (std::int32_t z = 0; z < span[2]; ++z)
+            out[count++] = PlaneCell{{static_cast<std::uint32_t>(lo[0] + x), static_cast<std::uint32_t>(lo[1] + y),
+                                      static_cast<std::uint32_t>(lo[2] + z)}};
+    }
+    return count;
   }
 
   // Every edge of plane `gone` joins plane `kept`; `relative` is 1 if their canonical normals are opposite.
@@ -219,14 +283,14 @@ class SeamTable {
     shared_[kept] = static_cast<std::uint8_t>(shared_[kept] | was_shared);
   }
 
-  void add_corner(const glm::vec3& p, std::uint32_t id) {
-    if (2 * (corner_ids_.size() + 1) > corner_slots_.size()) grow_corners();
-    const SeamKey ck = corner_key(p);
-    const std::uint32_t mask = static_cast<std::uint32_t>(corner_slots_.size() - 1);
-    std::uint32_t s = hash(ck.bits, 3) & mask;
-    while (corner_slots_[s] != none) s = (s + 1) & mask;
-    corner_slots_[s] = static_cast<std::uint32_t>(corner_ids_.size());
-    corner_ids_.push_back(CornerEntry{{ck.bits[0], ck.bits[1], ck.bits[2]}, id});
+  void add_plane(std::uint32_t id) {
+    if (2 * (plane_ids_.size() + 1) > plane_slots_.size()) grow_planes();
+    const PlaneCell cell = cell_of(signed_unit(canonical_normal(id), false));
+    const std::uint32_t mask = static_cast<std::uint32_t>(plane_slots_.size() - 1);
+    std::uint32_t s = hash(cell.bits, 3) & mask;
+    while (plane_slots_[s] != none) s = (s + 1) & mask;
+    plane_slots_[s] = static_cast<std::uint32_t>(plane_ids_.size());
+    plane_ids_.push_back(PlaneEntry{cell, id});
   }
 
   void grow() {
@@ -239,21 +303,17 @@ class SeamTable {
       slots_[s] = id;
     }
   }
-  void grow_corners() {
-    const std::size_t size = corner_slots_.empty() ? 128 : 2 * corner_slots_.size();
-    corner_slots_.assign(size, none);
+  void grow_planes() {
+    const std::size_t size = plane_slots_.empty() ? 128 : 2 * plane_slots_.size();
+    plane_slots_.assign(size, none);
     const std::uint32_t mask = static_cast<std::uint32_t>(size - 1);
-    for (std::uint32_t i = 0; i < corner_ids_.size(); ++i) {
-      std::uint32_t s = hash(corner_ids_[i].bits, 3) & mask;
-      while (corner_slots_[s] != none) s = (s + 1) & mask;
-      corner_slots_[s] = i;
+    for (std::uint32_t i = 0; i < plane_ids_.size(); ++i) {
+      std::uint32_t s = hash(plane_ids_[i].cell.bits, 3) & mask;
+      while (plane_slots_[s] != none) s = (s + 1) & mask;
+      plane_slots_[s] = i;
     }
   }
 
-  struct CornerEntry {
-    std::uint32_t bits[3];  // the corner, bit for bit
-    std::uint32_t id;       // an edge that has it
-  };
   glm::vec3 eye_ = glm::vec3(0.0f);
   std::vector<std::uint32_t> slots_;         // edge id per slot, or none
   std::vector<SeamKey> keys_;                // per edge id
@@ -261,8 +321,8 @@ class SeamTable {
   std::vector<std::uint8_t> flip_;           // per edge id: canonical normal opposite to its root's
   std::vector<std::uint32_t> owner_;         // per plane: first occluder (insertion serial)
   std::vector<std::uint8_t> shared_;         // per plane: used by a second occluder
-  std::vector<std::uint32_t> corner_slots_;  // index into corner_ids_ per slot, or none
-  std::vector<CornerEntry> corner_ids_;
+  std::vector<std::uint32_t> plane_slots_;  // index into plane_ids_ per slot, or none
+  std::vector<PlaneEntry> plane_ids_;       // each edge's plane cell
 };
 
 }  // namespace cullkit::detail

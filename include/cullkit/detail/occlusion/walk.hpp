@@ -287,24 +287,51 @@ struct OcclusionWalk {
     ++f.assumed_count;
   }
 
-  // The assumptions of `f` whose edges have corner `v`, as the other corner W of each edge and the
-  // sign that makes cross(V, W) the normal of the assumed half-space. Returns how many.
+  // The assumptions of `f` whose planes pass through the world point `v` (a corner of their edge, or
+  // exactly on their plane: collinear edges share one plane), as a second point W of each plane and
+  // the sign that makes cross(V, W) (V = v - eye, W = w - eye) the normal of the assumed half-space.
+  // Returns how many. A plane whose second point lies on the ray through V is left out (a subset of
+  // the assumptions: safe).
   static std::uint32_t assumptions_at(const SeamTable& seams, const Fragment& f, const glm::vec3& v,
                                       glm::vec3* other, int* turn, std::uint32_t* index) noexcept {
+    const glm::vec3& eye = seams.eye();
     std::uint32_t count = 0;
     for (std::uint32_t j = 0; j < f.assumed_count; ++j) {
       const std::uint32_t edge = f.assumed_edge[j];
       const SeamKey& key = seams.key(edge);
-      if (is_axis_key(key)) continue;
-      glm::vec3 lo, hi;
-      key_corners(key, lo, hi);
-      const bool v_is_lo = same_point(lo, v);
-      if (!v_is_lo && !same_point(hi, v)) continue;
-      // The side relative to the edge's canonical normal cross(lo, hi); cross(V, W) is that normal
-      // when V is lo and its opposite when V is hi.
+      const glm::dvec3 normal = seams.canonical_normal(edge);
+      // x: a point far off the plane, eye + the axis along which the plane's normal is largest.
+      int axis = 0;
+      for (int a = 1; a < 3; ++a)
+        if (std::fabs(normal[a]) > std::fabs(normal[axis])) axis = a;
+      glm::vec3 x = eye;
+      x[axis] += std::fabs(eye[axis]) + 1.0f;
+      glm::vec3 w;
+      int x_side;  // the side of x along the edge's canonical normal
+      if (is_axis_key(key)) {
+        // The axis plane through the eye: v lies in it when its coordinate is the eye's. The second
+        // point moves v along the other axis where v - eye is smaller, so that it is off v's ray.
+        if (v[axis] != eye[axis]) continue;
+        const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+        const int along = std::fabs(v[a1] - eye[a1]) < std::fabs(v[a2] - eye[a2]) ? a1 : a2;
+        w = v;
+        w[along] += std::fabs(v[along]) + 1.0f;
+        x_side = 1;
+      } else {
+        glm::vec3 lo, hi;
+        key_corners(key, lo, hi);
+        const bool v_is_lo = same_point(lo, v), v_is_hi = same_point(hi, v);
+        if (!v_is_lo && !v_is_hi && orientation_sign(eye, lo, hi, v) != 0) continue;
+        w = v_is_lo ? hi : lo;
+        x_side = orientation_sign(eye, lo, hi, x);
+      }
+      // cross(V, W) = lambda * (the canonical normal), one plane: lambda has the sign of the product
+      // of the sides x lies on for both (x is far off the plane, so both signs are certain).
+      const int lambda = orientation_sign(eye, v, w, x) * x_side;
+      if (lambda == 0) continue;
       const bool positive = (((f.assumed[j] & 1u) ^ seams.flip(edge)) != 0);
-      other[count] = v_is_lo ? hi : lo;
-      turn[count] = (positive == v_is_lo) ? 1 : -1;
+      other[count] = w;
+      turn[count] = positive ? lambda : -lambda;
       index[count] = j;
       ++count;
     }
