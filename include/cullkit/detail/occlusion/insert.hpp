@@ -41,6 +41,9 @@ struct OcclusionChain {
   Plane closing[3] = {};
   int closing_count = 0;
   glm::vec3 box_points[8] = {};  // eye-relative front corners of a box occluder
+  glm::vec3 corners[ConvexPolygon::capacity] = {};  // the outline's corners, eye-relative as inserted
+  glm::vec3 world[ConvexPolygon::capacity] = {};    // the same corners in world coordinates
+  int corner_count = 0;
   int box_point_count = 0;
   float split_epsilon = 0.0f;
 };
@@ -121,6 +124,7 @@ struct OcclusionInsert {
     }
     OcclusionChain& chain = t.current_;
     chain = OcclusionChain{};
+    remember_corners(chain, frag, polygon);
     chain.edge_count = beam_edges(t, frag, polygon);
     if (chain.edge_count == 0) return false;
     chain.is_box = false;
@@ -151,6 +155,7 @@ struct OcclusionInsert {
     }
     OcclusionChain& chain = t.current_;
     chain = OcclusionChain{};
+    remember_corners(chain, frag, proxy.corners);
     chain.edge_count = beam_edges(t, frag, proxy.corners);
     if (chain.edge_count == 0) return false;
     chain.is_box = true;
@@ -273,9 +278,26 @@ struct OcclusionInsert {
           inside = behind;
           continue;
         }
-        if (top == work.size()) work.resize(2 * top);  // `node` stays valid: the node array does not move
+        if (top + 1 >= work.size()) work.resize(2 * work.size());  // `node` stays valid: the node array does not move
         Fragment& in_piece = work[top].fragment;
         FragmentSide side = classify_fragment(*cur, node.plane, chain.split_epsilon);
+        if (node.kind == NodeKind::edge && (side == FragmentSide::inside || side == FragmentSide::outside) &&
+            reaches_across(t, node, *cur, chain.split_epsilon, side == FragmentSide::inside)) {
+          // A sliver truly across the edge's plane: each side gets the part within the band there.
+          if (!overlapping_pieces(*cur, node.plane, chain.split_epsilon, in_piece, *alt)) {
+            ++t.stats_.fragments_degenerate;
+            break;
+          }
+          in_piece.ref = ref;
+          in_piece.assumed_count = 0;
+          alt->assumed_count = 0;
+          work[top].inside = true;
+          ++top;
+          alt->ref = ref;
+          inside = false;
+          std::swap(cur, alt);
+          continue;
+        }
         if (side == FragmentSide::split) side = split_fragment(*cur, node.plane, chain.split_epsilon, in_piece, *alt);
         if (side == FragmentSide::inside) {
           cur->ref = ref;
@@ -304,6 +326,63 @@ struct OcclusionInsert {
           break;
         }
       }
+    }
+  }
+
+  // True if a fragment that lies on one side of an edge plane (`inward`: the inside), within the band
+  // of it, may reach across its true plane: a corner in the band is truly on the other side, or
+  // cannot be placed exactly. Queries split at the true plane of a shared edge (seams.hpp) and trust
+  // each side's subtree for the points truly there, so a sliver of an occluder across it (nearly
+  // collinear edges of a mesh) must be found on both sides. A corner of the occluder itself is placed
+  // exactly (its world corner against the plane through the eye and the edge's world corners); a
+  // mesh's shared corners, and the corners of collinear edges, lie on it and reach no further.
+  [[nodiscard]] static bool reaches_across(const Tree& t, const Node& node, const Fragment& f, float epsilon,
+                                           bool inward) {
+    const OcclusionChain& chain = t.current_;
+    for (std::uint32_t i = 0; i < f.size; ++i) {
+      const float d = signed_distance(node.plane, f.v[i]);
+      if (inward ? !(d <= epsilon) : !(d >= -epsilon)) continue;  // clearly on the fragment's side
+      if (node.seam == Tree::no_seam) return true;
+      int k = 0;
+      while (k < chain.corner_count && !same_corner(f.v[i], chain.corners[k])) ++k;
+      if (k == chain.corner_count) return true;  // a corner made by a split: not placed exactly
+      const int truly = t.seams_.true_side(node.seam, chain.world[k]);
+      if (inward ? truly < 0 : truly > 0) return true;
+    }
+    return false;
+  }
+
+  [[nodiscard]] static bool same_corner(const glm::vec3& a, const glm::vec3& b) noexcept {
+    return float_bits(a.x) == float_bits(b.x) && float_bits(a.y) == float_bits(b.y) && float_bits(a.z) == float_bits(b.z);
+  }
+
+  // The two pieces of `f` that reach the band of `plane` from either side: `in` gets the part at
+  // distance >= -epsilon, `out` the part at distance <= epsilon. False when a piece has no area or
+  // too many corners (the fragment is then dropped: losing occluder area is safe).
+  [[nodiscard]] static bool overlapping_pieces(const Fragment& f, const Plane& plane, float epsilon, Fragment& in,
+                                               Fragment& out) {
+    Fragment scratch;
+    const Plane inner{plane.normal, plane.d + epsilon};    // distance >= -epsilon: positive here
+    const Plane outer{-plane.normal, -plane.d + epsilon};  // distance <= epsilon: positive here
+    if (!keep_positive(f, inner, in, scratch) || !keep_positive(f, outer, out, scratch)) return false;
+    return in.size >= 3 && out.size >= 3;
+  }
+
+  // The part of `f` at distance >= 0 from `plane`, into `out`.
+  [[nodiscard]] static bool keep_positive(const Fragment& f, const Plane& plane, Fragment& out, Fragment& scratch) {
+    const FragmentSide side = split_fragment(f, plane, 0.0f, out, scratch);
+    if (side == FragmentSide::split) return true;
+    if (side != FragmentSide::inside && side != FragmentSide::on) return false;
+    out.size = f.size;
+    for (std::uint32_t i = 0; i < f.size; ++i) out.v[i] = f.v[i];
+    return true;
+  }
+
+  static void remember_corners(OcclusionChain& chain, const ConvexPolygon& outline, const glm::vec3* world) {
+    chain.corner_count = static_cast<int>(outline.size());
+    for (std::size_t i = 0; i < outline.size(); ++i) {
+      chain.corners[i] = outline[i];
+      chain.world[i] = world[i];
     }
   }
 

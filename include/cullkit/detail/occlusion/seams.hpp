@@ -112,6 +112,9 @@ class SeamTable {
     owner_.clear();
     shared_.clear();
     plane_ids_.clear();
+    first_corner_.clear();
+    corner_point_.clear();
+    corner_next_.clear();
   }
 
   /// The id of the edge (a, b) (world corners), added if new; marks its plane shared when
@@ -125,6 +128,10 @@ class SeamTable {
       const std::uint32_t id = slots_[s];
       if (keys_[id] == key) {
         mark_user(root_[id], occluder);
+        if (is_axis_key(key)) {  // one key for every edge in the axis plane: keep each one's corners
+          add_corner(id, a);
+          add_corner(id, b);
+        }
         return id;
       }
     }
@@ -135,6 +142,9 @@ class SeamTable {
     flip_.push_back(0);
     owner_.push_back(occluder);
     shared_.push_back(0);
+    first_corner_.push_back(none);
+    add_corner(id, a);
+    add_corner(id, b);
     if (!is_axis_key(key)) {
       link_coplanar(id, a, b);
       add_plane(id);
@@ -142,6 +152,12 @@ class SeamTable {
     mark_user(root_[id], occluder);
     return id;
   }
+
+  /// The corners of the edges in the plane of edge `id`: `first_corner(root(id))`, then
+  /// `next_corner(k)` until `none`; `corner(k)` is a world point.
+  [[nodiscard]] std::uint32_t first_corner(std::uint32_t root) const noexcept { return first_corner_[root]; }
+  [[nodiscard]] std::uint32_t next_corner(std::uint32_t k) const noexcept { return corner_next_[k]; }
+  [[nodiscard]] const glm::vec3& corner(std::uint32_t k) const noexcept { return corner_point_[k]; }
 
   /// The plane of edge `id` (the id of its first edge).
   [[nodiscard]] std::uint32_t root(std::uint32_t id) const noexcept { return root_[id]; }
@@ -152,6 +168,22 @@ class SeamTable {
   [[nodiscard]] std::size_t size() const noexcept { return keys_.size(); }
   [[nodiscard]] const SeamKey& key(std::uint32_t id) const noexcept { return keys_[id]; }
   [[nodiscard]] const glm::vec3& eye() const noexcept { return eye_; }
+
+  /// The exact side of world point `p` of the true plane of the edge plane with seam code `code`
+  /// (OcclusionNode::seam): 1 on its inside, -1 on its outside, 0 on the plane.
+  [[nodiscard]] int true_side(std::uint32_t code, const glm::vec3& p) const noexcept {
+    const SeamKey& key = keys_[code >> 1];
+    int along;  // the side of the edge's canonical normal
+    if (is_axis_key(key)) {
+      const int axis = static_cast<int>(key.bits[1]);
+      along = p[axis] > eye_[axis] ? 1 : (p[axis] < eye_[axis] ? -1 : 0);
+    } else {
+      glm::vec3 lo, hi;
+      key_corners(key, lo, hi);
+      along = orientation_sign(eye_, lo, hi, p);  // the sign of dot(cross(lo - eye, hi - eye), p - eye)
+    }
+    return (code & 1u) ? along : -along;
+  }
 
   /// The canonical normal of edge `id`: cross(lo - eye, hi - eye) of its corners in canonical order,
   /// or +axis for an axis-plane key. An edge plane's `inside` is the canonical side when its normal
@@ -281,6 +313,27 @@ class SeamTable {
       flip_[i] = static_cast<std::uint8_t>(flip_[i] ^ relative);
     }
     shared_[kept] = static_cast<std::uint8_t>(shared_[kept] | was_shared);
+    // The plane's corners: kept's list, then gone's (repeats across the two do no harm).
+    if (first_corner_[kept] == none) {
+      first_corner_[kept] = first_corner_[gone];
+    } else {
+      std::uint32_t k = first_corner_[kept];
+      while (corner_next_[k] != none) k = corner_next_[k];
+      corner_next_[k] = first_corner_[gone];
+    }
+    first_corner_[gone] = none;
+  }
+
+  // Adds corner p to the list of the plane of edge `id`, unless it is there already.
+  void add_corner(std::uint32_t id, const glm::vec3& p) {
+    const std::uint32_t root = root_[id];
+    for (std::uint32_t k = first_corner_[root]; k != none; k = corner_next_[k])
+      if (float_bits(corner_point_[k].x) == float_bits(p.x) && float_bits(corner_point_[k].y) == float_bits(p.y) &&
+          float_bits(corner_point_[k].z) == float_bits(p.z))
+        return;
+    corner_point_.push_back(p);
+    corner_next_.push_back(first_corner_[root]);
+    first_corner_[root] = static_cast<std::uint32_t>(corner_point_.size() - 1);
   }
 
   void add_plane(std::uint32_t id) {
@@ -323,6 +376,9 @@ class SeamTable {
   std::vector<std::uint8_t> shared_;         // per plane: used by a second occluder
   std::vector<std::uint32_t> plane_slots_;  // index into plane_ids_ per slot, or none
   std::vector<PlaneEntry> plane_ids_;       // each edge's plane cell
+  std::vector<std::uint32_t> first_corner_;  // per plane (root edge id): its corner list, or none
+  std::vector<glm::vec3> corner_point_;      // corner lists: world points ...
+  std::vector<std::uint32_t> corner_next_;   // ... and the next entry, or none
 };
 
 }  // namespace cullkit::detail

@@ -245,8 +245,12 @@ struct OcclusionWalk {
       return SeamStep::moved;
     }
     if (top >= stack_size) return SeamStep::ordinary;
+    // The walk goes on with the inside copy (into this occluder's chain, which it mostly ends in) and
+    // keeps the outside one for later: around a mesh corner shared by many triangles, a copy then
+    // sweeps round the corner with one pending copy at a time instead of one per triangle.
     Fragment scratch;
-    Fragment& in_copy = stack[top];
+    Fragment& in_copy = alt;
+    Fragment& out_copy = stack[top];
     // The inside copy: the part at distance >= -m (all of it unless the fragment crosses `outer`).
     if (out_side == FragmentSide::split) {
       if (split_fragment(cur, outer, 0.0f, in_copy, scratch) != FragmentSide::split) return SeamStep::visible;
@@ -255,16 +259,16 @@ struct OcclusionWalk {
     }
     // The outside copy: the part at distance <= m.
     if (in_side == FragmentSide::split) {
-      if (split_fragment(cur, inner, 0.0f, scratch, alt) != FragmentSide::split) return SeamStep::visible;
+      if (split_fragment(cur, inner, 0.0f, scratch, out_copy) != FragmentSide::split) return SeamStep::visible;
     } else {
-      copy_fragment(cur, alt);
+      copy_fragment(cur, out_copy);
     }
     copy_assumptions(cur, in_copy);
-    copy_assumptions(cur, alt);
+    copy_assumptions(cur, out_copy);
     add_assumption(seams, in_copy, 2 * id + node_side, edge);
-    add_assumption(seams, alt, 2 * id + (1u - node_side), edge);
+    add_assumption(seams, out_copy, 2 * id + (1u - node_side), edge);
     in_copy.ref = node.inside;
-    alt.ref = node.outside;
+    out_copy.ref = node.outside;
     ++top;
     return SeamStep::copies;
   }
@@ -425,15 +429,29 @@ struct OcclusionWalk {
   // of closed occluders is closed, so that proves every point of the query.
   [[nodiscard]] static bool assumptions_vacuous(const SeamTable& seams, const Fragment& f) noexcept {
     if (f.assumed_count < 3) return false;
+    // Candidate corners: those of the assumed planes' edges whose direction lies within the
+    // fragment's cone (its centre direction and widest corner, with room to spare).
+    glm::dvec3 centre(0.0);
+    for (std::uint32_t i = 0; i < f.size; ++i) centre += glm::normalize(glm::dvec3(f.v[i]));
+    const double centre_length = glm::length(centre);
+    if (!(centre_length > 0.0)) return false;
+    centre /= centre_length;
+    double widest = 1.0;  // the least cosine between the centre and a corner
+    for (std::uint32_t i = 0; i < f.size; ++i) widest = std::min(widest, glm::dot(centre, glm::normalize(glm::dvec3(f.v[i]))));
+    const double reach = widest - 1e-6 - 0.01 * (1.0 - widest);
+    const glm::dvec3 eye(seams.eye());
     glm::vec3 other[max_seam_assumptions];
     int turn[max_seam_assumptions];
     std::uint32_t index[max_seam_assumptions];
+    int budget = 64;  // corners examined at most; beyond, the copy is kept (safe)
     for (std::uint32_t k = 0; k < f.assumed_count; ++k) {
-      const SeamKey& key = seams.key(f.assumed_edge[k]);
-      if (is_axis_key(key)) continue;
-      glm::vec3 lo, hi;
-      key_corners(key, lo, hi);
-      for (const glm::vec3& v : {lo, hi}) {
+      const std::uint32_t root = f.assumed[k] >> 1;
+      for (std::uint32_t c = seams.first_corner(root); c != SeamTable::none; c = seams.next_corner(c)) {
+        const glm::vec3& v = seams.corner(c);
+        const glm::dvec3 dir = glm::dvec3(v) - eye;
+        const double length = glm::length(dir);
+        if (!(length > 0.0) || glm::dot(centre, dir) < reach * length) continue;
+        if (--budget < 0) return false;
         const std::uint32_t count = assumptions_at(seams, f, v, other, turn, index);
         if (count < 3) continue;
         bool open = false;
