@@ -280,8 +280,9 @@ struct OcclusionInsert {
         }
         if (top + 1 >= work.size()) work.resize(2 * work.size());  // `node` stays valid: the node array does not move
         Fragment& in_piece = work[top].fragment;
-        FragmentSide side = classify_fragment(*cur, node.plane, chain.split_epsilon);
-        if (node.kind == NodeKind::edge && (side == FragmentSide::inside || side == FragmentSide::outside) &&
+        bool in_band = false;  // some corner within split_epsilon of the plane
+        FragmentSide side = classify_with_band(*cur, node.plane, chain.split_epsilon, in_band);
+        if (in_band && node.kind == NodeKind::edge && (side == FragmentSide::inside || side == FragmentSide::outside) &&
             reaches_across(t, node, *cur, chain.split_epsilon, side == FragmentSide::inside)) {
           // A sliver truly across the edge's plane: each side gets the part within the band there.
           if (!overlapping_pieces(*cur, node.plane, chain.split_epsilon, in_piece, *alt)) {
@@ -327,6 +328,23 @@ struct OcclusionInsert {
         }
       }
     }
+  }
+
+  // classify_fragment, also telling whether some corner lies within `epsilon` of the plane.
+  [[nodiscard]] static FragmentSide classify_with_band(const Fragment& f, const Plane& plane, float epsilon,
+                                                       bool& in_band) noexcept {
+    bool front = false, back = false, band = false, nan = false;
+    for (std::uint32_t i = 0; i < f.size; ++i) {
+      const float d = signed_distance(plane, f.v[i]);
+      front |= d > epsilon;
+      back |= d < -epsilon;
+      band |= std::fabs(d) <= epsilon;
+      nan |= !finite_distance(d);
+    }
+    in_band = band;
+    if (nan) return FragmentSide::undecided;
+    if (front && back) return FragmentSide::split;
+    return front ? FragmentSide::inside : (back ? FragmentSide::outside : FragmentSide::on);
   }
 
   // True if a fragment that lies on one side of an edge plane (`inward`: the inside), within the band

@@ -21,7 +21,6 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
-#include <cmath>
 #include <cstring>
 #include <vector>
 
@@ -92,11 +91,11 @@ inline void key_corners(const SeamKey& key, glm::vec3& lo, glm::vec3& hi) noexce
 
 [[nodiscard]] inline bool is_axis_key(const SeamKey& key) noexcept { return key.bits[0] == 0x7FC0FFEEu; }
 
-/// Edges by key, and the planes they lie in. Every distinct edge key gets an id of its own; edges that
-/// span one plane through the eye (collinear edges of a regular grid, found through a shared corner
-/// and an exact orientation test) are linked to one plane, its `root`, so that a query assumption
-/// about one holds at all of them. Flat open-addressing tables (no allocation once warm; `clear`
-/// keeps the memory). Each plane remembers the first occluder that used it and whether another did.
+/// Edges by key (no allocation once warm; `clear` keeps the memory). Each edge id remembers the first
+/// occluder that used it and whether another did. Edges of one axis plane through the eye share one
+/// key; the table keeps the corners of all of them (the corners a query may meet in that plane).
+/// Distinct keys may still span one plane (collinear edges): queries find that out when it matters,
+/// with `coplanar`.
 class SeamTable {
  public:
   static constexpr std::uint32_t none = 0xFFFFFFFFu;
@@ -105,69 +104,64 @@ class SeamTable {
   void clear(const glm::vec3& eye) {
     eye_ = eye;
     std::fill(slots_.begin(), slots_.end(), none);
-    std::fill(plane_slots_.begin(), plane_slots_.end(), none);
     keys_.clear();
-    root_.clear();
-    flip_.clear();
     owner_.clear();
     shared_.clear();
-    plane_ids_.clear();
-    first_corner_.clear();
+    for (std::uint32_t& first : axis_corners_) first = none;
     corner_point_.clear();
     corner_next_.clear();
   }
 
-  /// The id of the edge (a, b) (world corners), added if new; marks its plane shared when
-  /// `occluder` differs from the plane's first user.
+  /// The id of the edge (a, b) (world corners), added if new; marks it shared when `occluder` differs
+  /// from its first user.
   std::uint32_t use(const glm::vec3& a, const glm::vec3& b, std::uint32_t occluder) {
     const SeamKey key = seam_key(a, b, eye_);
+    if (is_axis_key(key)) {
+      add_axis_corner(key.bits[1], a);
+      add_axis_corner(key.bits[1], b);
+    }
     if (2 * (keys_.size() + 1) > slots_.size()) grow();
     const std::uint32_t mask = static_cast<std::uint32_t>(slots_.size() - 1);
-    std::uint32_t s = hash(key.bits, 6) & mask;
+    std::uint32_t s = hash(key.bits) & mask;
     for (; slots_[s] != none; s = (s + 1) & mask) {
       const std::uint32_t id = slots_[s];
       if (keys_[id] == key) {
-        mark_user(root_[id], occluder);
-        if (is_axis_key(key)) {  // one key for every edge in the axis plane: keep each one's corners
-          add_corner(id, a);
-          add_corner(id, b);
-        }
+        if (owner_[id] != occluder) shared_[id] = 1;
         return id;
       }
     }
     const auto id = static_cast<std::uint32_t>(keys_.size());
     slots_[s] = id;
     keys_.push_back(key);
-    root_.push_back(id);
-    flip_.push_back(0);
     owner_.push_back(occluder);
     shared_.push_back(0);
-    first_corner_.push_back(none);
-    add_corner(id, a);
-    add_corner(id, b);
-    if (!is_axis_key(key)) {
-      link_coplanar(id, a, b);
-      add_plane(id);
-    }
-    mark_user(root_[id], occluder);
     return id;
   }
 
-  /// The corners of the edges in the plane of edge `id`: `first_corner(root(id))`, then
-  /// `next_corner(k)` until `none`; `corner(k)` is a world point.
-  [[nodiscard]] std::uint32_t first_corner(std::uint32_t root) const noexcept { return first_corner_[root]; }
+  /// True if two different occluders use edge `id`.
+  [[nodiscard]] bool shared(std::uint32_t id) const noexcept { return id < shared_.size() && shared_[id] != 0; }
+  [[nodiscard]] const SeamKey& key(std::uint32_t id) const noexcept { return keys_[id]; }
+  [[nodiscard]] const glm::vec3& eye() const noexcept { return eye_; }
+
+  /// The corners of the edges in the axis plane `axis` through the eye: `first_axis_corner(axis)`,
+  /// then `next_corner(k)` until `none`; `corner(k)` is a world point.
+  [[nodiscard]] std::uint32_t first_axis_corner(std::uint32_t axis) const noexcept { return axis_corners_[axis]; }
   [[nodiscard]] std::uint32_t next_corner(std::uint32_t k) const noexcept { return corner_next_[k]; }
   [[nodiscard]] const glm::vec3& corner(std::uint32_t k) const noexcept { return corner_point_[k]; }
 
-  /// The plane of edge `id` (the id of its first edge).
-  [[nodiscard]] std::uint32_t root(std::uint32_t id) const noexcept { return root_[id]; }
-  /// 1 if the canonical normal of edge `id` is opposite to that of its plane's root.
-  [[nodiscard]] std::uint32_t flip(std::uint32_t id) const noexcept { return flip_[id]; }
-  /// True if two different occluders use the plane of edge `id`.
-  [[nodiscard]] bool shared(std::uint32_t id) const noexcept { return id < root_.size() && shared_[root_[id]] != 0; }
-  [[nodiscard]] std::size_t size() const noexcept { return keys_.size(); }
-  [[nodiscard]] const SeamKey& key(std::uint32_t id) const noexcept { return keys_[id]; }
-  [[nodiscard]] const glm::vec3& eye() const noexcept { return eye_; }
+  /// True if edges `i` and `j` lie in one plane through the eye, exactly; `opposite` then says
+  /// whether their canonical normals point opposite ways.
+  [[nodiscard]] bool coplanar(std::uint32_t i, std::uint32_t j, bool& opposite) const noexcept {
+    const SeamKey& ki = keys_[i];
+    const SeamKey& kj = keys_[j];
+    if (is_axis_key(ki) || is_axis_key(kj)) return false;  // one axis plane has one key
+    glm::vec3 lo, hi, a, b;
+    key_corners(ki, lo, hi);
+    key_corners(kj, a, b);
+    if (orientation_sign(eye_, lo, hi, a) != 0 || orientation_sign(eye_, lo, hi, b) != 0) return false;
+    opposite = glm::dot(canonical_normal(i), canonical_normal(j)) < 0.0;  // parallel: the sign is certain
+    return true;
+  }
 
   /// The exact side of world point `p` of the true plane of the edge plane with seam code `code`
   /// (OcclusionNode::seam): 1 on its inside, -1 on its outside, 0 on the plane.
@@ -202,148 +196,21 @@ class SeamTable {
   }
 
  private:
-  [[nodiscard]] static std::uint32_t hash(const std::uint32_t* words, int count) noexcept {
+  [[nodiscard]] static std::uint32_t hash(const std::uint32_t* words) noexcept {
     std::uint64_t h = 0x9E3779B97F4A7C15ull;
-    for (int i = 0; i < count; ++i) h = (h ^ words[i]) * 0xFF51AFD7ED558CCDull;
+    for (int i = 0; i < 6; ++i) h = (h ^ words[i]) * 0xFF51AFD7ED558CCDull;
     return static_cast<std::uint32_t>(h ^ (h >> 29));
   }
-  void mark_user(std::uint32_t root, std::uint32_t occluder) {
-    if (owner_[root] != occluder) shared_[root] = 1;
-  }
 
-  // Links the new edge `id` (a, b) to the plane of every earlier edge that spans the same plane
-  // through the eye, exactly (the orientation test on world corners); planes found that way are
-  // merged into one. Candidates come from a table of planes by their unit normal, rounded to cells
-  // of 2^-23: one plane computed from two of its edges differs by far less, and where a normal lies
-  // near a cell's side the neighbouring cell is searched too.
-  void link_coplanar(std::uint32_t id, const glm::vec3& a, const glm::vec3& b) {
-    if (plane_slots_.empty()) return;
-    const glm::dvec3 normal = canonical_normal(id);
-    PlaneCell cells[16];
-    const int count = nearby_cells(normal, cells);
-    const std::uint32_t mask = static_cast<std::uint32_t>(plane_slots_.size() - 1);
-    for (int c = 0; c < count; ++c) {
-      for (std::uint32_t s = hash(cells[c].bits, 3) & mask; plane_slots_[s] != none; s = (s + 1) & mask) {
-        const PlaneEntry& e = plane_ids_[plane_slots_[s]];
-        if (e.cell.bits[0] != cells[c].bits[0] || e.cell.bits[1] != cells[c].bits[1] ||
-            e.cell.bits[2] != cells[c].bits[2])
-          continue;
-        const std::uint32_t other = root_[e.id];
-        if (other == root_[id]) continue;
-        glm::vec3 lo, hi;
-        key_corners(keys_[e.id], lo, hi);
-        if (orientation_sign(eye_, lo, hi, a) != 0 || orientation_sign(eye_, lo, hi, b) != 0) continue;
-        // Parallel normals: the sign of their dot product is certain.
-        const std::uint32_t relative = glm::dot(normal, canonical_normal(other)) < 0.0 ? 1u : 0u;
-        merge(other, root_[id], relative ^ flip_[id]);
-      }
-    }
-  }
-
-  struct PlaneCell {
-    std::uint32_t bits[3];
-  };
-  struct PlaneEntry {
-    PlaneCell cell;
-    std::uint32_t id;
-  };
-  static constexpr double cell_size = 1.0 / 8388608.0;  // 2^-23
-
-  // The unit normal with its largest component made positive (`flip`: the other sign instead).
-  [[nodiscard]] static glm::dvec3 signed_unit(const glm::dvec3& normal, bool flip) noexcept {
-    glm::dvec3 n = normal / glm::length(normal);
-    int big = 0;
-    for (int i = 1; i < 3; ++i)
-      if (std::fabs(n[i]) > std::fabs(n[big])) big = i;
-    if ((n[big] < 0.0) != flip) n = -n;
-    return n;
-  }
-  [[nodiscard]] static std::uint32_t cell_of(double x) noexcept {
-    return static_cast<std::uint32_t>(static_cast<std::int32_t>(std::floor(x / cell_size)));
-  }
-  [[nodiscard]] static PlaneCell cell_of(const glm::dvec3& n) noexcept {
-    return PlaneCell{{cell_of(n.x), cell_of(n.y), cell_of(n.z)}};
-  }
-
-  // The cells where a plane with this normal may have been filed (up to 16).
-  [[nodiscard]] static int nearby_cells(const glm::dvec3& normal, PlaneCell* out) noexcept {
-    const glm::dvec3 n = signed_unit(normal, false);
-    double top = 0.0, second = 0.0;
-    for (int i = 0; i < 3; ++i) {
-      const double m = std::fabs(n[i]);
-      if (m > top) {
-        second = top;
-        top = m;
-      } else if (m > second) {
-        second = m;
-      }
-    }
-    const int signs = top - second < 1e-6 ? 2 : 1;  // two components nearly tie: either may be "largest"
-    int count = 0;
-    for (int sign = 0; sign < signs; ++sign) {
-      const glm::dvec3 u = sign == 0 ? n : -n;
-      std::int32_t lo[3], span[3];
-      for (int i = 0; i < 3; ++i) {
-        const double scaled = u[i] / cell_size;
-        const double base = std::floor(scaled);
-        lo[i] = static_cast<std::int32_t>(base);
-        span[i] = 1;
-        if (scaled - base < 0.01) {
-          --lo[i];
-          span[i] = 2;
-        } else if (scaled - base > 0.99) {
-          span[i] = 2;
-        }
-      }
-      for (std::int32_t x = 0; x < span[0]; ++x)
-        for (std::int32_t y = 0; y < span[1]; ++y)
-          for (std::int32_t z = 0; z < span[2]; ++z)
-            out[count++] = PlaneCell{{static_cast<std::uint32_t>(lo[0] + x), static_cast<std::uint32_t>(lo[1] + y),
-                                      static_cast<std::uint32_t>(lo[2] + z)}};
-    }
-    return count;
-  }
-
-  // Every edge of plane `gone` joins plane `kept`; `relative` is 1 if their canonical normals are opposite.
-  void merge(std::uint32_t kept, std::uint32_t gone, std::uint32_t relative) {
-    const std::uint8_t was_shared = shared_[gone] != 0 || owner_[gone] != owner_[kept] ? 1 : 0;
-    for (std::size_t i = 0; i < root_.size(); ++i) {
-      if (root_[i] != gone) continue;
-      root_[i] = kept;
-      flip_[i] = static_cast<std::uint8_t>(flip_[i] ^ relative);
-    }
-    shared_[kept] = static_cast<std::uint8_t>(shared_[kept] | was_shared);
-    // The plane's corners: kept's list, then gone's (repeats across the two do no harm).
-    if (first_corner_[kept] == none) {
-      first_corner_[kept] = first_corner_[gone];
-    } else {
-      std::uint32_t k = first_corner_[kept];
-      while (corner_next_[k] != none) k = corner_next_[k];
-      corner_next_[k] = first_corner_[gone];
-    }
-    first_corner_[gone] = none;
-  }
-
-  // Adds corner p to the list of the plane of edge `id`, unless it is there already.
-  void add_corner(std::uint32_t id, const glm::vec3& p) {
-    const std::uint32_t root = root_[id];
-    for (std::uint32_t k = first_corner_[root]; k != none; k = corner_next_[k])
+  // Adds corner p to the list of axis plane `axis`, unless it is there already.
+  void add_axis_corner(std::uint32_t axis, const glm::vec3& p) {
+    for (std::uint32_t k = axis_corners_[axis]; k != none; k = corner_next_[k])
       if (float_bits(corner_point_[k].x) == float_bits(p.x) && float_bits(corner_point_[k].y) == float_bits(p.y) &&
           float_bits(corner_point_[k].z) == float_bits(p.z))
         return;
     corner_point_.push_back(p);
-    corner_next_.push_back(first_corner_[root]);
-    first_corner_[root] = static_cast<std::uint32_t>(corner_point_.size() - 1);
-  }
-
-  void add_plane(std::uint32_t id) {
-    if (2 * (plane_ids_.size() + 1) > plane_slots_.size()) grow_planes();
-    const PlaneCell cell = cell_of(signed_unit(canonical_normal(id), false));
-    const std::uint32_t mask = static_cast<std::uint32_t>(plane_slots_.size() - 1);
-    std::uint32_t s = hash(cell.bits, 3) & mask;
-    while (plane_slots_[s] != none) s = (s + 1) & mask;
-    plane_slots_[s] = static_cast<std::uint32_t>(plane_ids_.size());
-    plane_ids_.push_back(PlaneEntry{cell, id});
+    corner_next_.push_back(axis_corners_[axis]);
+    axis_corners_[axis] = static_cast<std::uint32_t>(corner_point_.size() - 1);
   }
 
   void grow() {
@@ -351,34 +218,20 @@ class SeamTable {
     slots_.assign(size, none);
     const std::uint32_t mask = static_cast<std::uint32_t>(size - 1);
     for (std::uint32_t id = 0; id < keys_.size(); ++id) {
-      std::uint32_t s = hash(keys_[id].bits, 6) & mask;
+      std::uint32_t s = hash(keys_[id].bits) & mask;
       while (slots_[s] != none) s = (s + 1) & mask;
       slots_[s] = id;
     }
   }
-  void grow_planes() {
-    const std::size_t size = plane_slots_.empty() ? 128 : 2 * plane_slots_.size();
-    plane_slots_.assign(size, none);
-    const std::uint32_t mask = static_cast<std::uint32_t>(size - 1);
-    for (std::uint32_t i = 0; i < plane_ids_.size(); ++i) {
-      std::uint32_t s = hash(plane_ids_[i].cell.bits, 3) & mask;
-      while (plane_slots_[s] != none) s = (s + 1) & mask;
-      plane_slots_[s] = i;
-    }
-  }
 
   glm::vec3 eye_ = glm::vec3(0.0f);
-  std::vector<std::uint32_t> slots_;         // edge id per slot, or none
-  std::vector<SeamKey> keys_;                // per edge id
-  std::vector<std::uint32_t> root_;          // per edge id: its plane (an edge id)
-  std::vector<std::uint8_t> flip_;           // per edge id: canonical normal opposite to its root's
-  std::vector<std::uint32_t> owner_;         // per plane: first occluder (insertion serial)
-  std::vector<std::uint8_t> shared_;         // per plane: used by a second occluder
-  std::vector<std::uint32_t> plane_slots_;  // index into plane_ids_ per slot, or none
-  std::vector<PlaneEntry> plane_ids_;       // each edge's plane cell
-  std::vector<std::uint32_t> first_corner_;  // per plane (root edge id): its corner list, or none
-  std::vector<glm::vec3> corner_point_;      // corner lists: world points ...
-  std::vector<std::uint32_t> corner_next_;   // ... and the next entry, or none
+  std::vector<std::uint32_t> slots_;      // edge id per slot, or none
+  std::vector<SeamKey> keys_;             // per edge id
+  std::vector<std::uint32_t> owner_;      // per edge id: first occluder (insertion serial)
+  std::vector<std::uint8_t> shared_;      // per edge id: used by a second occluder
+  std::uint32_t axis_corners_[3] = {none, none, none};  // per axis plane: its corner list, or none
+  std::vector<glm::vec3> corner_point_;   // corner lists: world points ...
+  std::vector<std::uint32_t> corner_next_;  // ... and the next entry, or none
 };
 
 }  // namespace cullkit::detail

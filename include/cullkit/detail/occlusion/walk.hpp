@@ -222,10 +222,9 @@ struct OcclusionWalk {
   // to "visible".
   [[nodiscard]] static SeamStep seam_step(const SeamTable& seams, const Node& node, float m, Fragment& cur, Fragment* stack, int& top,
                                           Fragment& alt) {
-    // Assumptions name the plane (the root of the node's edge), on the root's canonical sides.
     const std::uint32_t edge = node.seam >> 1;
-    const std::uint32_t id = seams.root(edge);
-    const std::uint32_t node_side = (node.seam & 1u) ^ seams.flip(edge);  // the canonical side this node's inside is
+    const std::uint32_t id = edge;
+    const std::uint32_t node_side = node.seam & 1u;  // the canonical side this node's inside is
     for (std::uint32_t k = 0; k < cur.assumed_count; ++k) {
       if ((cur.assumed[k] >> 1) != id) continue;
       cur.ref = (cur.assumed[k] & 1u) == node_side ? node.inside : node.outside;
@@ -242,6 +241,13 @@ struct OcclusionWalk {
     }
     if (out_side == FragmentSide::outside || out_side == FragmentSide::on) {
       cur.ref = node.outside;
+      return SeamStep::moved;
+    }
+    // In the band: an assumption about another edge in the same plane (collinear edges) holds here.
+    for (std::uint32_t k = 0; k < cur.assumed_count; ++k) {
+      bool opposite = false;
+      if (!seams.coplanar(cur.assumed_edge[k], edge, opposite)) continue;
+      cur.ref = ((cur.assumed[k] & 1u) ^ (opposite ? 1u : 0u)) == node_side ? node.inside : node.outside;
       return SeamStep::moved;
     }
     if (top >= stack_size) return SeamStep::ordinary;
@@ -333,7 +339,7 @@ struct OcclusionWalk {
       // of the sides x lies on for both (x is far off the plane, so both signs are certain).
       const int lambda = orientation_sign(eye, v, w, x) * x_side;
       if (lambda == 0) continue;
-      const bool positive = (((f.assumed[j] & 1u) ^ seams.flip(edge)) != 0);
+      const bool positive = (f.assumed[j] & 1u) != 0;
       other[count] = w;
       turn[count] = positive ? lambda : -lambda;
       index[count] = j;
@@ -445,9 +451,14 @@ struct OcclusionWalk {
     std::uint32_t index[max_seam_assumptions];
     int budget = 64;  // corners examined at most; beyond, the copy is kept (safe)
     for (std::uint32_t k = 0; k < f.assumed_count; ++k) {
-      const std::uint32_t root = f.assumed[k] >> 1;
-      for (std::uint32_t c = seams.first_corner(root); c != SeamTable::none; c = seams.next_corner(c)) {
-        const glm::vec3& v = seams.corner(c);
+      // The corners of the assumed edge, or of every edge in an assumed axis plane.
+      const SeamKey& key = seams.key(f.assumed_edge[k]);
+      glm::vec3 ends[2];
+      const bool axis = is_axis_key(key);
+      if (!axis) key_corners(key, ends[0], ends[1]);
+      std::uint32_t c = axis ? seams.first_axis_corner(key.bits[1]) : 0;
+      for (; axis ? c != SeamTable::none : c < 2; c = axis ? seams.next_corner(c) : c + 1) {
+        const glm::vec3& v = axis ? seams.corner(c) : ends[c];
         const glm::dvec3 dir = glm::dvec3(v) - eye;
         const double length = glm::length(dir);
         if (!(length > 0.0) || glm::dot(centre, dir) < reach * length) continue;
