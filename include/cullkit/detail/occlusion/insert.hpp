@@ -282,7 +282,8 @@ struct OcclusionInsert {
         Fragment& in_piece = work[top].fragment;
         bool in_band = false;  // some corner within split_epsilon of the plane
         FragmentSide side = classify_with_band(*cur, node.plane, chain.split_epsilon, in_band);
-        if (in_band && node.kind == NodeKind::edge && (side == FragmentSide::inside || side == FragmentSide::outside) &&
+        if (in_band && !chain.is_box && node.kind == NodeKind::edge &&
+            (side == FragmentSide::inside || side == FragmentSide::outside) &&
             reaches_across(t, node, *cur, chain.split_epsilon, side == FragmentSide::inside)) {
           // A sliver truly across the edge's plane: each side gets the part within the band there.
           if (!overlapping_pieces(*cur, node.plane, chain.split_epsilon, in_piece, *alt)) {
@@ -348,8 +349,7 @@ struct OcclusionInsert {
   }
 
   // True if a fragment that lies on one side of an edge plane (`inward`: the inside), within the band
-  // of it, may reach across its true plane: a corner in the band is truly on the other side, or
-  // cannot be placed exactly. Queries split at the true plane of a shared edge (seams.hpp) and trust
+  // of it, may reach across its true plane: a corner in the band is truly on the other side. Queries split at the true plane of a shared edge (seams.hpp) and trust
   // each side's subtree for the points truly there, so a sliver of an occluder across it (nearly
   // collinear edges of a mesh) must be found on both sides. A corner of the occluder itself is placed
   // exactly (its world corner against the plane through the eye and the edge's world corners); a
@@ -363,8 +363,18 @@ struct OcclusionInsert {
       if (node.seam == Tree::no_seam) return true;
       int k = 0;
       while (k < chain.corner_count && !same_corner(f.v[i], chain.corners[k])) ++k;
-      if (k == chain.corner_count) return true;  // a corner made by a split: not placed exactly
-      const int truly = t.seams_.true_side(node.seam, chain.world[k]);
+      int truly;
+      if (k < chain.corner_count) {
+        truly = t.seams_.true_side(node.seam, chain.world[k]);
+      } else {
+        // Made by a split: placed in double precision against the true plane; a corner within
+        // rounding of it (cut on a plane of the same edge) counts as on it.
+        const glm::dvec3 normal = t.seams_.canonical_normal(node.seam >> 1);
+        const glm::dvec3 p(f.v[i]);
+        const double along = glm::dot(normal, p) / glm::length(normal);
+        if (!(std::fabs(along) > 1e-6 * glm::length(p))) continue;
+        truly = ((along > 0.0) == ((node.seam & 1u) != 0)) ? 1 : -1;
+      }
       if (inward ? truly < 0 : truly > 0) return true;
     }
     return false;
