@@ -12,10 +12,13 @@
 // instead of measuring. Every point has a copy on its true side, so the answer stays conservative.
 //
 // A seam id is valid only if it names one true plane exactly, so ids come from exact data:
-//  - the unordered pair of an edge's two corners, bit for bit (eye-relative floats; equal world
-//    corners give equal eye-relative ones): the plane through the eye and those two points;
+//  - the unordered pair of an edge's two world corners, bit for bit: the plane through the eye and
+//    those two points (world corners, not eye-relative ones: their rounding would break the
+//    collinearity of a regular grid's diagonals);
 //  - an edge whose corners both have coordinate `axis` exactly equal to the eye's: the axis plane
 //    through the eye (two boxes sharing a face the eye lies in the plane of).
+// Distinct keys can still name one plane (collinear edges); `SeamTable::coplanar` decides that
+// exactly when a query needs it.
 #pragma once
 
 #include <algorithm>
