@@ -286,21 +286,11 @@ struct OcclusionInsert {
             (side == FragmentSide::inside || side == FragmentSide::outside) &&
             reaches_across(t, node, *cur, chain.split_epsilon, side == FragmentSide::inside)) {
           // A sliver truly across the edge's plane: each side gets the part within the band there.
-          if (!overlapping_pieces(*cur, node.plane, chain.split_epsilon, in_piece, *alt)) {
-            ++t.stats_.fragments_degenerate;
-            break;
-          }
-          in_piece.ref = ref;
-          in_piece.assumed_count = 0;
-          alt->assumed_count = 0;
-          work[top].inside = true;
-          ++top;
-          alt->ref = ref;
-          inside = false;
-          std::swap(cur, alt);
-          continue;
+          side = overlapping_pieces(*cur, node.plane, chain.split_epsilon, in_piece, *alt) ? FragmentSide::split
+                                                                                            : FragmentSide::undecided;
+        } else if (side == FragmentSide::split) {
+          side = split_fragment(*cur, node.plane, chain.split_epsilon, in_piece, *alt);
         }
-        if (side == FragmentSide::split) side = split_fragment(*cur, node.plane, chain.split_epsilon, in_piece, *alt);
         if (side == FragmentSide::inside) {
           cur->ref = ref;
           inside = true;
