@@ -41,7 +41,7 @@ struct OcclusionChain {
   Plane closing[3] = {};
   int closing_count = 0;
   glm::vec3 box_points[8] = {};  // eye-relative front corners of a box occluder
-  glm::vec3 corners[ConvexPolygon::capacity] = {};  // the outline's corners, eye-relative as inserted
+  glm::vec3 corners[ConvexPolygon::capacity] = {};  // a polygon's corners, eye-relative as inserted
   glm::vec3 world[ConvexPolygon::capacity] = {};    // the same corners in world coordinates
   int corner_count = 0;
   int box_point_count = 0;
@@ -155,7 +155,6 @@ struct OcclusionInsert {
     }
     OcclusionChain& chain = t.current_;
     chain = OcclusionChain{};
-    remember_corners(chain, frag, proxy.corners);
     chain.edge_count = beam_edges(t, frag, proxy.corners);
     if (chain.edge_count == 0) return false;
     chain.is_box = true;
@@ -280,9 +279,10 @@ struct OcclusionInsert {
         }
         if (top + 1 >= work.size()) work.resize(2 * work.size());  // `node` stays valid: the node array does not move
         Fragment& in_piece = work[top].fragment;
-        bool in_band = false;  // some corner within split_epsilon of the plane
-        FragmentSide side = classify_with_band(*cur, node.plane, chain.split_epsilon, in_band);
-        if (in_band && !chain.is_box && node.kind == NodeKind::edge &&
+        bool in_band = false;  // some corner within split_epsilon of the plane (polygon occluders only)
+        FragmentSide side = chain.is_box ? classify_fragment(*cur, node.plane, chain.split_epsilon)
+                                         : classify_with_band(*cur, node.plane, chain.split_epsilon, in_band);
+        if (in_band && node.kind == NodeKind::edge &&
             (side == FragmentSide::inside || side == FragmentSide::outside) &&
             reaches_across(t, node, *cur, chain.split_epsilon, side == FragmentSide::inside)) {
           // A sliver truly across the edge's plane: each side gets the part within the band there.
