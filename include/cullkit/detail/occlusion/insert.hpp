@@ -46,6 +46,17 @@ struct OcclusionChain {
   int corner_count = 0;
   int box_point_count = 0;
   float split_epsilon = 0.0f;
+
+  /// Empties the description for the next occluder. The arrays are written before they are read (up
+  /// to their counts), so only the counts are reset: no kilobyte of zeros per occluder.
+  void clear() noexcept {
+    edge_count = 0;
+    is_box = false;
+    closing_count = 0;
+    box_point_count = 0;
+    corner_count = 0;
+    split_epsilon = 0.0f;
+  }
 };
 
 /// A pending occluder fragment: `fragment.ref` is the node whose child slot it enters next
@@ -123,7 +134,7 @@ struct OcclusionInsert {
       scale = std::max(scale, norm1(frag[i]));
     }
     OcclusionChain& chain = t.current_;
-    chain = OcclusionChain{};
+    chain.clear();
     remember_corners(chain, frag, polygon);
     chain.edge_count = beam_edges(t, frag, polygon);
     if (chain.edge_count == 0) return false;
@@ -154,7 +165,7 @@ struct OcclusionInsert {
       scale = std::max(scale, norm1(frag[static_cast<std::size_t>(i)]));
     }
     OcclusionChain& chain = t.current_;
-    chain = OcclusionChain{};
+    chain.clear();
     chain.edge_count = beam_edges(t, frag, proxy.corners);
     if (chain.edge_count == 0) return false;
     chain.is_box = true;
