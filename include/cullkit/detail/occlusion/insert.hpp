@@ -366,6 +366,7 @@ struct OcclusionInsert {
       while (k < chain.corner_count && !same_corner(f.v[i], chain.corners[k])) ++k;
       int truly;
       if (k < chain.corner_count) {
+        if (t.seams_.is_corner(node.seam >> 1, chain.world[k])) continue;  // a shared corner: on the plane
         truly = t.seams_.true_side(node.seam, chain.world[k]);
       } else {
         // Made by a split: placed in double precision against the true plane; a corner within

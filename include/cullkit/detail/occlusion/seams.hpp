@@ -166,6 +166,15 @@ class SeamTable {
     return true;
   }
 
+  /// True if world point `p` is, bit for bit, a corner of edge `id` (then it lies on its plane).
+  [[nodiscard]] bool is_corner(std::uint32_t id, const glm::vec3& p) const noexcept {
+    const SeamKey& key = keys_[id];
+    if (is_axis_key(key)) return false;
+    const std::uint32_t x = float_bits(p.x), y = float_bits(p.y), z = float_bits(p.z);
+    return (key.bits[0] == x && key.bits[1] == y && key.bits[2] == z) ||
+           (key.bits[3] == x && key.bits[4] == y && key.bits[5] == z);
+  }
+
   /// The exact side of world point `p` of the true plane of the edge plane with seam code `code`
   /// (OcclusionNode::seam): 1 on its inside, -1 on its outside, 0 on the plane.
   [[nodiscard]] int true_side(std::uint32_t code, const glm::vec3& p) const noexcept {
