@@ -7,6 +7,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -16,9 +17,15 @@
 
 namespace cullkit::detail::nci {
 
-struct alignas(16) TriangleBvhNode {
-  float lo[3][4];
-  float hi[3][4];
+// A node: its four children's boxes quantized to 8 bits a bound on a per-axis grid (origin, scale),
+// by axis over the lanes (the layout a 4-wide box test loads), and their codes; 64 bytes, one cache
+// line. The bounds read back (bound()) contain the children's boxes whatever the rounding of the
+// read (see quantize).
+struct alignas(64) TriangleBvhNode {
+  float origin[3];
+  float scale[3];
+  std::uint8_t qlo[3][4];
+  std::uint8_t qhi[3][4];
   std::uint32_t child[4];
 
   static constexpr std::uint32_t empty = 0xFFFFFFFFu;
@@ -30,6 +37,48 @@ struct alignas(16) TriangleBvhNode {
   [[nodiscard]] static std::uint32_t leaf_count(std::uint32_t code) noexcept { return (code & 7u) + 1u; }
   [[nodiscard]] static std::uint32_t leaf(std::uint32_t first, std::uint32_t count) noexcept {
     return leaf_bit | first << 3 | (count - 1u);
+  }
+
+  // Bound q of axis a as the cast reads it.
+  [[nodiscard]] float bound(int a, std::uint8_t q) const noexcept { return origin[a] + static_cast<float>(q) * scale[a]; }
+
+  // Sets the boxes of children 0..count-1 (finite, lo <= hi); the others are empty. Each bound is
+  // moved outward to a grid step at least `margin` beyond the box, margin = 2^-20 of the largest
+  // coordinate magnitude of the node: origin + q * scale, rounded once or twice (fused or not),
+  // lies within about 2^-22 of that magnitude of its exact value, so the bound read back still
+  // contains the box.
+  void quantize(const float lo[3][4], const float hi[3][4], int count) noexcept {
+    for (int a = 0; a < 3; ++a) {
+      double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo;
+      for (int j = 0; j < count; ++j) {
+        ulo = std::min(ulo, double(lo[a][j]));
+        uhi = std::max(uhi, double(hi[a][j]));
+      }
+      if (count == 0) ulo = uhi = 0.0;
+      const double margin = std::max(std::fabs(ulo), std::fabs(uhi)) * 0x1p-20;
+      float o = static_cast<float>(ulo - margin);
+      if (double(o) > ulo - margin) o = std::nextafter(o, -std::numeric_limits<float>::infinity());
+      float sc = static_cast<float>((uhi + margin - double(o)) / 255.0);
+      for (int guard = 0; guard < 64 && double(o) + 255.0 * double(sc) < uhi + margin; ++guard)
+        sc = std::nextafter(sc, std::numeric_limits<float>::infinity());
+      origin[a] = o;
+      scale[a] = sc;
+      const auto at = [&](int q) { return double(o) + double(q) * double(sc); };
+      for (int j = 0; j < 4; ++j) {
+        if (j >= count) {
+          qlo[a][j] = qhi[a][j] = 0;
+          continue;
+        }
+        const double want_lo = double(lo[a][j]) - margin, want_hi = double(hi[a][j]) + margin;
+        int ql = sc > 0.0f ? static_cast<int>(std::clamp(std::floor((want_lo - double(o)) / double(sc)), 0.0, 255.0)) : 0;
+        while (ql > 0 && at(ql) > want_lo) --ql;
+        int qh = sc > 0.0f ? static_cast<int>(std::clamp(std::ceil((want_hi - double(o)) / double(sc)), 0.0, 255.0)) : 255;
+        while (qh < 255 && at(qh) < want_hi) ++qh;
+        qlo[a][j] = static_cast<std::uint8_t>(ql);
+        qhi[a][j] = static_cast<std::uint8_t>(qh);
+      }
+    }
+    for (int j = count; j < 4; ++j) child[j] = empty;
   }
 };
 
@@ -46,7 +95,7 @@ struct TriangleBvh {
 // The build's cost of a traversal step against one triangle test (TriangleBvhBuilder::traversal_cost)
 // for the index's hierarchy. On the 10.1M city seen whole (nearest hits only, one thread) 1, 2 and 3
 // cast within 3 % of each other; 2 and 3 take half the nodes of 1 (18.0 and 17.2 bytes per
-// triangle against 29.6, with 128-byte nodes).
+// triangle against 29.6, with the former 128-byte nodes).
 inline constexpr float frame_traversal_cost = 3.0f;
 
 // A triangle's box, handed to the builder by triangle id.
@@ -343,26 +392,19 @@ class TriangleBvhBuilder {
     }
     const std::size_t index = nodes.size();
     nodes.emplace_back();
-    for (int j = 0; j < 4; ++j) {
-      std::uint32_t code = TriangleBvhNode::empty;
-      float lo[3] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
-                     std::numeric_limits<float>::infinity()};
-      float hi[3] = {-lo[0], -lo[1], -lo[2]};
-      if (static_cast<std::size_t>(j) < kids.size()) {
-        const Range& k = kids[static_cast<std::size_t>(j)];
-        code = leaf_or_node(k, nodes, depth + 1);
-        for (int a = 0; a < 3; ++a) {
-          lo[a] = k.lo[a];
-          hi[a] = k.hi[a];
-        }
-      }
-      TriangleBvhNode& node = nodes[index];
+    float lo[3][4], hi[3][4];
+    std::uint32_t codes[4];
+    for (std::size_t j = 0; j < kids.size(); ++j) {
+      const Range& k = kids[j];
+      codes[j] = leaf_or_node(k, nodes, depth + 1);
       for (int a = 0; a < 3; ++a) {
-        node.lo[a][j] = lo[a];
-        node.hi[a][j] = hi[a];
+        lo[a][j] = k.lo[a];
+        hi[a][j] = k.hi[a];
       }
-      node.child[j] = code;
     }
+    TriangleBvhNode& node = nodes[index];
+    node.quantize(lo, hi, static_cast<int>(kids.size()));
+    for (std::size_t j = 0; j < kids.size(); ++j) node.child[j] = codes[j];
     return static_cast<std::uint32_t>(index);
   }
 
@@ -393,14 +435,14 @@ class TriangleBvhBuilder {
       std::vector<TriangleBvhNode>().swap(sub[t]);
     }
     auto fill = [&](TriangleBvhNode& nd, const std::uint32_t* c, const Range* rg, std::size_t count) {
-      for (int j = 0; j < 4; ++j) {
-        const bool has = static_cast<std::size_t>(j) < count;
+      float lo[3][4], hi[3][4];
+      for (std::size_t j = 0; j < count; ++j)
         for (int a = 0; a < 3; ++a) {
-          nd.lo[a][j] = has ? rg[j].lo[a] : std::numeric_limits<float>::infinity();
-          nd.hi[a][j] = has ? rg[j].hi[a] : -std::numeric_limits<float>::infinity();
+          lo[a][j] = rg[j].lo[a];
+          hi[a][j] = rg[j].hi[a];
         }
-        nd.child[j] = has ? c[j] : TriangleBvhNode::empty;
-      }
+      nd.quantize(lo, hi, static_cast<int>(count));
+      for (std::size_t j = 0; j < count; ++j) nd.child[j] = c[j];
     };
     if (tops.size() <= 4) {
       fill(nodes[0], codes.data(), tops.data(), tops.size());
