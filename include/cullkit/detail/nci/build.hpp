@@ -18,6 +18,7 @@
 #include "triangle_bvh.hpp"
 #include "kmeans.hpp"
 #include "overlap.hpp"
+#include "../bits.hpp"
 #include "../parallel.hpp"
 #include "core.hpp"
 #include "index_data.hpp"
@@ -240,31 +241,43 @@ inline void build_class_grids(const IndexData& data, const std::vector<std::uint
 
 // Per vertex, the first vertex with bitwise the same position (itself when none comes before it),
 // through an open-addressing table over the position bits; `distinct` counts the vertices that are
-// their own.
+// their own. A table entry holds a vertex id and the upper half of its hash, so that most probes
+// settle without reading a position; the slot of the vertex `ahead` places on is prefetched.
 inline std::vector<std::uint32_t> canonical_vertices(const std::vector<glm::vec3>& vertices, std::size_t& distinct) {
   const std::size_t count = vertices.size();
   std::vector<std::uint32_t> canon(count);
   std::size_t size = 16;
   while (size < 2 * count) size *= 2;
-  std::vector<std::uint32_t> table(size, no_triangle);
-  const auto bits_of = [&](std::size_t v, std::uint32_t out[3]) { std::memcpy(out, &vertices[v], 3 * sizeof(std::uint32_t)); };
+  constexpr std::uint64_t vacant = ~std::uint64_t{0};
+  std::vector<std::uint64_t> table(size, vacant);
+  const auto hash_of = [&](std::size_t v, std::uint32_t b[3]) {
+    std::memcpy(b, &vertices[v], 3 * sizeof(std::uint32_t));
+    std::uint64_t h = (std::uint64_t{b[0]} * 0x9E3779B97F4A7C15ull) ^ (std::uint64_t{b[1]} * 0xC2B2AE3D27D4EB4Full) ^
+                      (std::uint64_t{b[2]} * 0x165667B19E3779F9ull);
+    return h ^ (h >> 29);
+  };
+  constexpr std::size_t ahead = 16;
   distinct = 0;
   for (std::size_t v = 0; v < count; ++v) {
+    if (v + ahead < count) {
+      std::uint32_t b[3];
+      detail::prefetch(&table[static_cast<std::size_t>(hash_of(v + ahead, b)) & (size - 1)]);
+    }
     std::uint32_t b[3];
-    bits_of(v, b);
-    std::uint64_t hash = (std::uint64_t{b[0]} * 0x9E3779B97F4A7C15ull) ^ (std::uint64_t{b[1]} * 0xC2B2AE3D27D4EB4Full) ^
-                         (std::uint64_t{b[2]} * 0x165667B19E3779F9ull);
-    hash ^= hash >> 29;
+    const std::uint64_t hash = hash_of(v, b);
+    const std::uint64_t tag = hash >> 32 << 32;
     for (std::size_t at = static_cast<std::size_t>(hash) & (size - 1);; at = (at + 1) & (size - 1)) {
-      const std::uint32_t other = table[at];
-      if (other == no_triangle) {
-        table[at] = static_cast<std::uint32_t>(v);
+      const std::uint64_t entry = table[at];
+      if (entry == vacant) {
+        table[at] = tag | v;
         canon[v] = static_cast<std::uint32_t>(v);
         ++distinct;
         break;
       }
+      if ((entry >> 32 << 32) != tag) continue;
+      const std::uint32_t other = static_cast<std::uint32_t>(entry);
       std::uint32_t o[3];
-      bits_of(other, o);
+      std::memcpy(o, &vertices[other], sizeof o);
       if (o[0] == b[0] && o[1] == b[1] && o[2] == b[2]) {
         canon[v] = other;
         break;

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -118,9 +119,15 @@ class TriangleBvhBuilder {
   TriangleBvh build() {
     TriangleBvh out;
     const std::size_t n = items_.size();
-    out.tris.resize(n);
-    for (std::size_t i = 0; i < n; ++i) out.tris[i] = static_cast<std::uint32_t>(i);
-    ids_ = out.tris.data();
+    // The passes over a range read its boxes in order: they travel with their ids.
+    refs_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (int a = 0; a < 3; ++a) {
+        refs_[i].lo[a] = items_[i].lo[a];
+        refs_[i].hi[a] = items_[i].hi[a];
+      }
+      refs_[i].id = static_cast<std::uint32_t>(i);
+    }
     if (n == 0) return out;
     const Range all = bounds_of(0, n);
     for (int a = 0; a < 3; ++a) {
@@ -138,12 +145,16 @@ class TriangleBvhBuilder {
       std::vector<Range>* tops;
       std::vector<std::vector<TriangleBvhNode>>* sub;
       std::vector<std::uint32_t>* sub_root;
-      std::size_t workers;
-    } job{this, &tops, &sub, &sub_root, std::max<std::size_t>(1, std::min<std::size_t>(threads_, tops.size()))};
-    detail::run_tasks(runner_, job.workers, [](void* j, std::size_t k) {
+      std::atomic<std::size_t> next{0};  // ranges are taken in turn: their sizes differ
+    } job{this, &tops, &sub, &sub_root};
+    const std::size_t workers = std::max<std::size_t>(1, std::min<std::size_t>(threads_, tops.size()));
+    detail::run_tasks(runner_, workers, [](void* j, std::size_t) {
       Job& b = *static_cast<Job*>(j);
-      for (std::size_t t = k; t < b.tops->size(); t += b.workers) (*b.sub_root)[t] = b.self->make((*b.tops)[t], (*b.sub)[t]);
+      for (std::size_t t = b.next++; t < b.tops->size(); t = b.next++) (*b.sub_root)[t] = b.self->make((*b.tops)[t], (*b.sub)[t]);
     }, &job);
+    out.tris.resize(n);
+    for (std::size_t i = 0; i < n; ++i) out.tris[i] = refs_[i].id;
+    std::vector<Ref>().swap(refs_);
     // Top nodes: the whole set cut into `tops` by the same rule, rebuilt over the ranges' roots.
     std::vector<TriangleBvhNode>& nodes = out.nodes;
     std::size_t next = 0;
@@ -157,10 +168,14 @@ class TriangleBvhBuilder {
     float lo[3], hi[3];
   };
   static constexpr int bins = 16;
+  struct Ref {
+    float lo[3], hi[3];
+    std::uint32_t id;
+  };
   const std::vector<TriangleBvhItem>& items_;
+  std::vector<Ref> refs_;  // the items in the tree's order as it is built
   unsigned threads_;
   TaskRunner runner_;
-  std::uint32_t* ids_ = nullptr;
 
   static float area(const float lo[3], const float hi[3]) noexcept {
     const float x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2];
@@ -174,7 +189,7 @@ class TriangleBvhBuilder {
       r.hi[a] = -std::numeric_limits<float>::infinity();
     }
     for (std::size_t i = b; i < e; ++i) {
-      const TriangleBvhItem& it = items_[ids_[i]];
+      const Ref& it = refs_[i];
       for (int a = 0; a < 3; ++a) {
         r.lo[a] = std::min(r.lo[a], it.lo[a]);
         r.hi[a] = std::max(r.hi[a], it.hi[a]);
@@ -185,7 +200,7 @@ class TriangleBvhBuilder {
 
   // Splits r in two by the binned heuristic (the median of the widest centroid axis when the
   // centroids coincide or every plane leaves a side empty); false when r is a leaf.
-  bool split(const Range& r, Range& left, Range& right, bool median = false) const {
+  bool split(const Range& r, Range& left, Range& right, bool median = false) {
     const std::size_t n = r.e - r.b;
     if (n <= 1) return false;
     if (median && n > static_cast<std::size_t>(TriangleBvhNode::leaf_max)) return median_split(r, left, right);
@@ -195,7 +210,7 @@ class TriangleBvhBuilder {
       ch[a] = -cl[a];
     }
     for (std::size_t i = r.b; i < r.e; ++i) {
-      const TriangleBvhItem& it = items_[ids_[i]];
+      const Ref& it = refs_[i];
       for (int a = 0; a < 3; ++a) {
         const float c = it.lo[a] + it.hi[a];
         cl[a] = std::min(cl[a], c);
@@ -219,7 +234,7 @@ class TriangleBvhBuilder {
       }
     }
     for (std::size_t i = r.b; i < r.e; ++i) {
-      const TriangleBvhItem& it = items_[ids_[i]];
+      const Ref& it = refs_[i];
       for (int a = 0; a < 3; ++a) {
         const int k = std::min(bins - 1, static_cast<int>((it.lo[a] + it.hi[a] - cl[a]) * scale[a]));
         Bin& bb = bin[a][k];
@@ -280,11 +295,11 @@ class TriangleBvhBuilder {
     {
       const int a = best_axis;
       const float c0 = cl[a], s = scale[a];
-      std::uint32_t* m = std::partition(ids_ + r.b, ids_ + r.e, [&](std::uint32_t id) {
-        const TriangleBvhItem& it = items_[id];
+      Ref* const base = refs_.data();
+      Ref* m = std::partition(base + r.b, base + r.e, [&](const Ref& it) {
         return std::min(bins - 1, static_cast<int>((it.lo[a] + it.hi[a] - c0) * s)) < best_plane;
       });
-      mid = static_cast<std::size_t>(m - ids_);
+      mid = static_cast<std::size_t>(m - base);
     }
     // The sides' boxes are the unions of their bins' (each triangle lies in one bin of the axis),
     // unless the partition disagreed with the binning (then measured again).
@@ -313,7 +328,7 @@ class TriangleBvhBuilder {
   }
 
   // Cuts r in two halves at the median of its centroids along their widest axis (ties by id).
-  bool median_split(const Range& r, Range& left, Range& right) const {
+  bool median_split(const Range& r, Range& left, Range& right) {
     float cl[3], ch[3];
     for (int a = 0; a < 3; ++a) {
       cl[a] = std::numeric_limits<float>::infinity();
@@ -321,7 +336,7 @@ class TriangleBvhBuilder {
     }
     for (std::size_t i = r.b; i < r.e; ++i)
       for (int a = 0; a < 3; ++a) {
-        const float c = items_[ids_[i]].lo[a] + items_[ids_[i]].hi[a];
+        const float c = refs_[i].lo[a] + refs_[i].hi[a];
         cl[a] = std::min(cl[a], c);
         ch[a] = std::max(ch[a], c);
       }
@@ -329,9 +344,10 @@ class TriangleBvhBuilder {
     for (int j = 1; j < 3; ++j)
       if (ch[j] - cl[j] > ch[a] - cl[a]) a = j;
     const std::size_t mid = r.b + (r.e - r.b) / 2;
-    std::nth_element(ids_ + r.b, ids_ + mid, ids_ + r.e, [&](std::uint32_t x, std::uint32_t y) {
-      const float cx = items_[x].lo[a] + items_[x].hi[a], cy = items_[y].lo[a] + items_[y].hi[a];
-      return cx < cy || (cx == cy && x < y);
+    Ref* const base = refs_.data();
+    std::nth_element(base + r.b, base + mid, base + r.e, [&](const Ref& x, const Ref& y) {
+      const float cx = x.lo[a] + x.hi[a], cy = y.lo[a] + y.hi[a];
+      return cx < cy || (cx == cy && x.id < y.id);
     });
     left = bounds_of(r.b, mid);
     right = bounds_of(mid, r.e);
@@ -339,7 +355,7 @@ class TriangleBvhBuilder {
   }
 
   // Cuts r into at most `most` ranges, splitting the largest-area splittable range first.
-  void split_into(const Range& r, std::size_t most, std::vector<Range>& out, bool median = false) const {
+  void split_into(const Range& r, std::size_t most, std::vector<Range>& out, bool median = false) {
     out.assign(1, r);
     std::vector<bool> done(1, false);
     while (out.size() < most) {
