@@ -24,7 +24,7 @@
 // same run; with --hash, the first path of the list answers (every path must print the same hashes).
 // --threads LIST: thread counts of the races (default 1,2). CSV on stdout.
 // --frame-race SCENE [REPS] [--threads LIST] [--path LIST]: see frame_race below (env FRAME_VIEWS=1:
-// the outside view only).
+// the outside view only; SCENE as for --profile).
 // --profile SCENE VIEW [FRAMES]: for callgrind (instructions per frame: a run of 3 frames minus a run of 1,
 // halved; or `--collect-atstart=no --toggle-collect='*process_tile*'` for the tiles alone):
 // one thread, select_visible only, at 640x480, FRAMES frames (default 1) of view VIEW (0: outside,
@@ -614,6 +614,7 @@ int frame_race(const std::string& name, int reps) {
   std::optional<Scene> s;
   if (name == "city") s = support::make_city(7, 20);
   else if (name == "bigcity") s = support::make_city(8, 284);
+  else if (name.rfind("foliage", 0) == 0) s = support::make_foliage(1, name.size() > 7 ? std::atoi(name.c_str() + 7) : 70, 2280);
   else s = support::load_obj(support::scenes_dir() + "/" + name);
   if (!s) return 1;
   const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
@@ -631,7 +632,7 @@ int frame_race(const std::string& name, int reps) {
       std::printf("nci_build,%s,%s,build_s=%.3f,bytes_per_tri=%.2f\n", name.c_str(), g_paths[k].name,
                   index[k]->stats().build_seconds, double(index[k]->memory_bytes()) / double(s->triangle_count()));
     for (auto [w, h] : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}}) {
-      const auto cams = views(*s, w, h);
+      const auto cams = views(*s, w, h, name.rfind("foliage", 0) == 0);
       for (int ci = 0; ci < views_wanted; ++ci) {
         const Camera cam = cams[static_cast<std::size_t>(ci)];
         std::vector<NciContext> ctx(g_paths.size());
