@@ -57,6 +57,18 @@ struct alignas(64) TriangleBvhNode {
       }
       if (count == 0) ulo = uhi = 0.0;
       const double margin = std::max(std::fabs(ulo), std::fabs(uhi)) * 0x1p-20;
+      const double half_max = 0.5 * double(std::numeric_limits<float>::max());
+      if (!(ulo - margin >= -half_max && uhi + margin <= half_max)) {
+        // Too near float's limits for the grid's products: the whole axis (bound 0 reads -max,
+        // bound 255 +inf, fused or not), every child taking both ends.
+        origin[a] = -std::numeric_limits<float>::max();
+        scale[a] = std::numeric_limits<float>::max();
+        for (int j = 0; j < 4; ++j) {
+          qlo[a][j] = 0;
+          qhi[a][j] = 255;
+        }
+        continue;
+      }
       float o = static_cast<float>(ulo - margin);
       if (double(o) > ulo - margin) o = std::nextafter(o, -std::numeric_limits<float>::infinity());
       float sc = static_cast<float>((uhi + margin - double(o)) / 255.0);
