@@ -15,7 +15,8 @@
 //     the (tile, cell) pairs it walked and the tiles it cast through the triangle hierarchy, and its
 //     tested count; with two or more paths, one `nci_path_ratio` line per path: its median over the
 //     first path's; and one `nci_crowding` line: triangles per pixel of the scene box's rectangle.
-// Flags: --no-big, --only-big (both big scenes), --only-foliage, --no-precision, --quick (precision at the default parameters only,
+// Flags: --no-big, --only-big (both big scenes), --only-foliage, --foliage-trees N (trees per side of
+// the forest: default 70, 10.1M triangles; 23 gives 1.1M for quick runs), --no-precision, --quick (precision at the default parameters only,
 // timing at 640x480 only), --hash (only a hash of the per-pixel triangle and depth of both views at
 // 640x480 and 1024x768 per scene, to check that a change keeps every answer; env CULLKIT_NCI_TILE sets
 // NciParams::tile_size for it). --path LIST: the crowded-cell paths raced (comma-separated walk, rays,
@@ -23,11 +24,12 @@
 // same run; with --hash, the first path of the list answers (every path must print the same hashes).
 // --threads LIST: thread counts of the races (default 1,2). CSV on stdout.
 // --frame-race SCENE [REPS] [--threads LIST] [--path LIST]: see frame_race below (env FRAME_VIEWS=1:
-// the outside view only).
+// the outside view only; SCENE as for --profile).
 // --profile SCENE VIEW [FRAMES]: for callgrind (instructions per frame: a run of 3 frames minus a run of 1,
 // halved; or `--collect-atstart=no --toggle-collect='*process_tile*'` for the tiles alone):
 // one thread, select_visible only, at 640x480, FRAMES frames (default 1) of view VIEW (0: outside,
-// 1: inside) of SCENE ("city", "bigcity" (10.1M triangles) or a real scene's file name); prints the
+// 1: inside, or from above for the forest) of SCENE ("city", "bigcity" (10.1M triangles), "foliage"
+// (the 10.1M-triangle forest; "foliageN": N trees per side) or a real scene's file name); prints the
 // tested count, the call's NciSelectStats (triangles met and those with no pixel centre) and the mean
 // wall time per frame (the first frame included); env CULLKIT_NCI_GRID / CULLKIT_NCI_TILE set
 // NciParams::grid / tile_size.
@@ -244,6 +246,7 @@ double triangles_per_pixel(const Scene& s, const Camera& cam) {
   return double(s.triangle_count()) / (w * h);
 }
 
+int g_foliage_trees = 70;  // --foliage-trees: trees per side of the generated forest
 bool g_quick = false;  // --quick: precision at the default parameters only, timing at 640x480 only
 
 struct PathChoice {
@@ -423,6 +426,7 @@ int profile(const std::string& name, int view, int frames) {
   std::optional<Scene> s;
   if (name == "city") s = support::make_city(7, 20);
   else if (name == "bigcity") s = support::make_city(8, 284);
+  else if (name.rfind("foliage", 0) == 0) s = support::make_foliage(1, name.size() > 7 ? std::atoi(name.c_str() + 7) : 70, 2280);
   else s = support::load_obj(support::scenes_dir() + "/" + name);
   if (!s) {
     std::fprintf(stderr, "profile: no scene %s\n", name.c_str());
@@ -435,7 +439,7 @@ int profile(const std::string& name, int view, int frames) {
   if (const char* t = std::getenv("CULLKIT_NCI_TILE")) p.tile_size = std::atoi(t);
   path_from_env(p);
   const NormalClassIndex<glm::vec3> index(s->mesh(), p);
-  const auto cams = views(*s, 640, 480);
+  const auto cams = views(*s, 640, 480, name.rfind("foliage", 0) == 0);
   NciContext ctx;
   VisibleSet out;
   const auto t0 = std::chrono::steady_clock::now();
@@ -610,6 +614,7 @@ int frame_race(const std::string& name, int reps) {
   std::optional<Scene> s;
   if (name == "city") s = support::make_city(7, 20);
   else if (name == "bigcity") s = support::make_city(8, 284);
+  else if (name.rfind("foliage", 0) == 0) s = support::make_foliage(1, name.size() > 7 ? std::atoi(name.c_str() + 7) : 70, 2280);
   else s = support::load_obj(support::scenes_dir() + "/" + name);
   if (!s) return 1;
   const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
@@ -627,7 +632,7 @@ int frame_race(const std::string& name, int reps) {
       std::printf("nci_build,%s,%s,build_s=%.3f,bytes_per_tri=%.2f\n", name.c_str(), g_paths[k].name,
                   index[k]->stats().build_seconds, double(index[k]->memory_bytes()) / double(s->triangle_count()));
     for (auto [w, h] : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}}) {
-      const auto cams = views(*s, w, h);
+      const auto cams = views(*s, w, h, name.rfind("foliage", 0) == 0);
       for (int ci = 0; ci < views_wanted; ++ci) {
         const Camera cam = cams[static_cast<std::size_t>(ci)];
         std::vector<NciContext> ctx(g_paths.size());
@@ -697,6 +702,10 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--only-foliage")) small = precision = timing = big = false, foliage = true;
     if (!std::strcmp(argv[i], "--no-precision")) precision = false, no_precision = true;
     if (!std::strcmp(argv[i], "--quick")) g_quick = true;
+    if (!std::strcmp(argv[i], "--foliage-trees") && (i + 1 >= argc || (g_foliage_trees = std::atoi(argv[++i])) < 1)) {
+      std::fprintf(stderr, "--foliage-trees: a positive count of trees per side\n");
+      return 2;
+    }
     if (!std::strcmp(argv[i], "--hash")) hash = true;
     if (!std::strcmp(argv[i], "--path") && (i + 1 >= argc || !parse_paths(argv[++i], g_paths))) {
       std::fprintf(stderr, "--path: a comma-separated list of walk, rays, auto\n");
@@ -746,7 +755,7 @@ int main(int argc, char** argv) {
   }
   if (big || foliage) {
     // >= 10M triangles of crowded foliage: trees of small leaves, seen whole and from above.
-    Scene s = support::make_foliage(1, 70, 2280);
+    Scene s = support::make_foliage(1, g_foliage_trees, 2280);
     std::printf("# foliage scene: %zu triangles\n", s.triangle_count());
     if (hash) {
       pixel_hash("foliage", s, threads, true);

@@ -18,6 +18,7 @@
 #include "triangle_bvh.hpp"
 #include "kmeans.hpp"
 #include "overlap.hpp"
+#include "../bits.hpp"
 #include "../parallel.hpp"
 #include "core.hpp"
 #include "index_data.hpp"
@@ -238,6 +239,54 @@ inline void build_class_grids(const IndexData& data, const std::vector<std::uint
                     [](void* job, std::size_t task) { (*static_cast<Work*>(job))(task == 0); }, &work);
 }
 
+// Per vertex, the first vertex with bitwise the same position (itself when none comes before it),
+// through an open-addressing table over the position bits; `distinct` counts the vertices that are
+// their own. A table entry holds a vertex id and the upper half of its hash, so that most probes
+// settle without reading a position; the slot of the vertex `ahead` places on is prefetched.
+inline std::vector<std::uint32_t> canonical_vertices(const std::vector<glm::vec3>& vertices, std::size_t& distinct) {
+  const std::size_t count = vertices.size();
+  std::vector<std::uint32_t> canon(count);
+  std::size_t size = 16;
+  while (size < 2 * count) size *= 2;
+  constexpr std::uint64_t vacant = ~std::uint64_t{0};
+  std::vector<std::uint64_t> table(size, vacant);
+  const auto hash_of = [&](std::size_t v, std::uint32_t b[3]) {
+    std::memcpy(b, &vertices[v], 3 * sizeof(std::uint32_t));
+    std::uint64_t h = (std::uint64_t{b[0]} * 0x9E3779B97F4A7C15ull) ^ (std::uint64_t{b[1]} * 0xC2B2AE3D27D4EB4Full) ^
+                      (std::uint64_t{b[2]} * 0x165667B19E3779F9ull);
+    return h ^ (h >> 29);
+  };
+  constexpr std::size_t ahead = 16;
+  distinct = 0;
+  for (std::size_t v = 0; v < count; ++v) {
+    if (v + ahead < count) {
+      std::uint32_t b[3];
+      detail::prefetch(&table[static_cast<std::size_t>(hash_of(v + ahead, b)) & (size - 1)]);
+    }
+    std::uint32_t b[3];
+    const std::uint64_t hash = hash_of(v, b);
+    const std::uint64_t tag = hash >> 32 << 32;
+    for (std::size_t at = static_cast<std::size_t>(hash) & (size - 1);; at = (at + 1) & (size - 1)) {
+      const std::uint64_t entry = table[at];
+      if (entry == vacant) {
+        table[at] = tag | v;
+        canon[v] = static_cast<std::uint32_t>(v);
+        ++distinct;
+        break;
+      }
+      if ((entry >> 32 << 32) != tag) continue;
+      const std::uint32_t other = static_cast<std::uint32_t>(entry);
+      std::uint32_t o[3];
+      std::memcpy(o, &vertices[other], sizeof o);
+      if (o[0] == b[0] && o[1] == b[1] && o[2] == b[2]) {
+        canon[v] = other;
+        break;
+      }
+    }
+  }
+  return canon;
+}
+
 // Internal numbering (memory locality of the select walk): class by class, each class's
 // triangles in the order their first cell comes in its X grid, so a cell's triangles are
 // mostly one run of consecutive ids (and so are their vertices and per-thread records).
@@ -273,36 +322,25 @@ inline void renumber(IndexData& data, const std::vector<std::uint16_t>& class_of
     // Triangles, their mesh numbers and vertices in the new order; vertices renumbered by first
     // use and merged when their positions are bitwise equal (OBJ files often repeat a position
     // per normal or texture coordinate).
-    std::vector<std::uint32_t> canon(data.vertices.size());
-    {
-      struct Key {
-        std::uint32_t bits[3];
-        std::uint32_t id;
-      };
-      std::vector<Key> keys(data.vertices.size());
-      for (std::size_t v = 0; v < data.vertices.size(); ++v) {
-        std::memcpy(keys[v].bits, &data.vertices[v], sizeof keys[v].bits);
-        keys[v].id = static_cast<std::uint32_t>(v);
-      }
-      std::sort(keys.begin(), keys.end(), [](const Key& x, const Key& y) {
-        if (x.bits[0] != y.bits[0]) return x.bits[0] < y.bits[0];
-        if (x.bits[1] != y.bits[1]) return x.bits[1] < y.bits[1];
-        if (x.bits[2] != y.bits[2]) return x.bits[2] < y.bits[2];
-        return x.id < y.id;
-      });
-      for (std::size_t v = 0; v < keys.size(); ++v) {
-        const bool same = v > 0 && std::memcmp(keys[v].bits, keys[v - 1].bits, sizeof keys[v].bits) == 0;
-        canon[keys[v].id] = same ? canon[keys[v - 1].id] : keys[v].id;
-      }
-    }
-    std::vector<std::uint32_t> vmap(data.vertices.size(), no_triangle);
+    std::size_t distinct = 0;
+    const std::vector<std::uint32_t> canon = canonical_vertices(data.vertices, distinct);
+    // Per-slot storage (corner k of triangle t at 3 t + k, no ids) when it takes no more bytes than
+    // distinct vertices and their ids: meshes of unshared triangles, such as foliage.
+    const std::size_t id_bytes = distinct <= 65536 ? 2 : 4;
+    data.slot_vertices = 36 * n <= 12 * distinct + 3 * n * id_bytes;
+    std::vector<std::uint32_t> vmap(data.slot_vertices ? 0 : data.vertices.size(), no_triangle);
     std::vector<glm::vec3> vertices;
-    std::vector<std::uint32_t> tri_vertices(3 * n), tri_original(n);
+    vertices.reserve(data.slot_vertices ? 3 * n : distinct);
+    std::vector<std::uint32_t> tri_vertices(data.slot_vertices ? 0 : 3 * n), tri_original(n);
     for (std::size_t k = 0; k < n; ++k) {
       const std::uint32_t old = order[k];
       tri_original[k] = data.tri_original[old];
       for (std::size_t j = 0; j < 3; ++j) {
         const std::uint32_t v = canon[data.tri_vertices[3 * old + j]];
+        if (data.slot_vertices) {
+          vertices.push_back(data.vertices[v]);
+          continue;
+        }
         if (vmap[v] == no_triangle) {
           vmap[v] = static_cast<std::uint32_t>(vertices.size());
           vertices.push_back(data.vertices[v]);
@@ -410,7 +448,7 @@ inline void make_chunk_boxes(IndexData& data, const std::vector<std::uint32_t>& 
         const std::uint32_t tri = data.entry_triangle(static_cast<std::uint32_t>(e), static_cast<std::uint32_t>(c));
         float* box = &data.chunk_box[6 * (e / data.chunk)];
         for (int k = 0; k < 3; ++k) {
-          const glm::vec3& q = data.vertices[data.tri_vertices[3 * tri + static_cast<std::uint32_t>(k)]];
+          const glm::vec3& q = data.corner(tri, k);
           for (int a = 0; a < 3; ++a) {
             if (e % data.chunk == 0 && k == 0) {
               box[a] = q[a];
@@ -448,7 +486,7 @@ inline void make_frame_hierarchy(IndexData& data) {
 
 inline void narrow_forms(IndexData& data) {
   const std::size_t classes = data.class_axis.size(), total_cells = data.stats.cells;
-  if (data.vertices.size() <= 65536) {
+  if (!data.slot_vertices && data.vertices.size() <= 65536) {
     data.tri_vertices16.assign(data.tri_vertices.begin(), data.tri_vertices.end());
     std::vector<std::uint32_t>().swap(data.tri_vertices);
   }

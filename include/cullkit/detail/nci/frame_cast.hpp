@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "../bits.hpp"
@@ -99,10 +100,20 @@ CULLKIT_FORCEINLINE void frame_node_test(const TriangleBvhNode& node, const floa
   const __m128 los = _mm_set1_ps(lo_scale), his = _mm_set1_ps(hi_scale), zero = _mm_setzero_ps();
   const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
   const __m128 sign = _mm_set1_ps(-0.0f);
-  __m128 lx = _mm_sub_ps(_mm_load_ps(node.lo[0]), _mm_set1_ps(eye[0])), hx = _mm_sub_ps(_mm_load_ps(node.hi[0]), _mm_set1_ps(eye[0]));
-  __m128 ly = _mm_sub_ps(_mm_load_ps(node.lo[1]), _mm_set1_ps(eye[1])), hy = _mm_sub_ps(_mm_load_ps(node.hi[1]), _mm_set1_ps(eye[1]));
-  __m128 lz = _mm_sub_ps(_mm_load_ps(node.lo[2]), _mm_set1_ps(eye[2])), hz = _mm_sub_ps(_mm_load_ps(node.hi[2]), _mm_set1_ps(eye[2]));
-  // Grown by frame_box_growth of the largest offset (an empty child's box becomes NaN: no ray).
+  // The four bounds of row q on axis a (TriangleBvhNode::bound, four at a time), less the eye.
+  const auto row = [&](const std::uint8_t q[4], int a) {
+    std::int32_t bits;
+    std::memcpy(&bits, q, sizeof bits);
+    const __m128i z = _mm_setzero_si128();
+    const __m128i wide = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(bits), z), z);
+    const __m128 b = _mm_add_ps(_mm_set1_ps(node.origin[a]), _mm_mul_ps(_mm_cvtepi32_ps(wide), _mm_set1_ps(node.scale[a])));
+    return _mm_sub_ps(b, _mm_set1_ps(eye[a]));
+  };
+  __m128 lx = row(node.qlo[0], 0), hx = row(node.qhi[0], 0);
+  __m128 ly = row(node.qlo[1], 1), hy = row(node.qhi[1], 1);
+  __m128 lz = row(node.qlo[2], 2), hz = row(node.qhi[2], 2);
+  // Grown by frame_box_growth of the largest offset (an empty child may meet rays: its code says
+  // it is empty).
   const __m128 far = _mm_max_ps(_mm_max_ps(_mm_max_ps(_mm_andnot_ps(sign, lx), _mm_andnot_ps(sign, hx)),
                                            _mm_max_ps(_mm_andnot_ps(sign, ly), _mm_andnot_ps(sign, hy))),
                                 _mm_max_ps(_mm_andnot_ps(sign, lz), _mm_andnot_ps(sign, hz)));
@@ -134,8 +145,8 @@ CULLKIT_FORCEINLINE void frame_node_test(const TriangleBvhNode& node, const floa
   for (int j = 0; j < 4; ++j) {
     float far = 0.0f;
     for (int a = 0; a < 3; ++a) {
-      lo[a][j] = node.lo[a][j] - eye[a];
-      hi[a][j] = node.hi[a][j] - eye[a];
+      lo[a][j] = node.bound(a, node.qlo[a][j]) - eye[a];
+      hi[a][j] = node.bound(a, node.qhi[a][j]) - eye[a];
       far = std::max({far, std::fabs(lo[a][j]), std::fabs(hi[a][j])});
     }
     for (int a = 0; a < 3; ++a) {
@@ -276,8 +287,7 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const TriangleBvh& bvh, const float e
     if (TriangleBvhNode::is_leaf(code)) {
       leaf.prefetch(TriangleBvhNode::leaf_first(code), TriangleBvhNode::leaf_count(code));
     } else {
-      detail::prefetch(reinterpret_cast<const char*>(bvh.nodes.data() + code));
-      detail::prefetch(reinterpret_cast<const char*>(bvh.nodes.data() + code) + 64);
+      detail::prefetch(bvh.nodes.data() + code);  // one cache line
     }
     c.stack[c.top++] = FrameCursor::Entry{code, 0u, cm[order[q]], nv[order[q]] * (1.0f - frame_t_slack), 0u};
   }

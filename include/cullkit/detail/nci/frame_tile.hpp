@@ -65,7 +65,8 @@ struct FrameLeaf {
   void prefetch(std::uint32_t first, std::uint32_t) const { detail::prefetch(data.bvh.tris.data() + first); }
 
   // Phase 0 finds the triangles of active classes (bit q of the carry: triangle first + q) and
-  // prefetches their vertex ids; phase 1 prefetches their corners.
+  // prefetches their vertex ids (with slot_vertices: their corners); phase 1 prefetches the corners
+  // the ids name.
   std::uint32_t prepare(std::uint32_t first, std::uint32_t count, std::uint32_t phase, std::uint32_t carry) {
     if (phase == 0) carry = 0;
     for (std::uint32_t q = 0; q < count; ++q) {
@@ -74,9 +75,15 @@ struct FrameLeaf {
       if (phase == 0) {
         if (!active(tri)) continue;
         carry |= 1u << q;
-        if (data.tri_vertices.empty()) detail::prefetch(&data.tri_vertices16[v]);
-        else detail::prefetch(&data.tri_vertices[v]);
-      } else if (carry >> q & 1u) {
+        if (data.slot_vertices) {  // the corners themselves (36 bytes: at most two lines; phase 1 has none left)
+          detail::prefetch(&data.vertices[v]);
+          detail::prefetch(reinterpret_cast<const char*>(&data.vertices[v]) + 3 * sizeof(glm::vec3) - 1);
+        } else if (data.tri_vertices.empty()) {
+          detail::prefetch(&data.tri_vertices16[v]);
+        } else {
+          detail::prefetch(&data.tri_vertices[v]);
+        }
+      } else if ((carry >> q & 1u) && !data.slot_vertices) {
         for (int k = 0; k < 3; ++k) detail::prefetch(&data.corner(tri, k));
       }
     }

@@ -39,7 +39,11 @@ struct IndexData {
   // parameters (see build.hpp, grid_size).
   double delta = 0.0;
   int dims[3] = {1, 1, 1};
+  // Corners: with slot_vertices, corner k of internal triangle t is vertices[3 t + k] (no ids: chosen
+  // when it takes no more bytes, as on meshes of unshared triangles); else vertices are shared and
+  // named by 3 ids per triangle in tri_vertices or, at most 65536 vertices, tri_vertices16.
   std::vector<glm::vec3> vertices;
+  bool slot_vertices = false;
   std::vector<std::uint32_t> tri_vertices;    // 3 per kept triangle, into vertices, or empty:
   std::vector<std::uint16_t> tri_vertices16;  // the same in 16 bits (at most 65536 vertices)
   std::vector<std::uint32_t> tri_original;    // internal triangle -> mesh triangle
@@ -91,6 +95,7 @@ struct IndexData {
   // Corner k of internal triangle tri.
   [[nodiscard]] const glm::vec3& corner(std::uint32_t tri, int k) const noexcept {
     const std::size_t i = 3 * std::size_t{tri} + static_cast<std::size_t>(k);
+    if (slot_vertices) return vertices[i];
     return vertices[tri_vertices.empty() ? tri_vertices16[i] : tri_vertices[i]];
   }
   // The internal triangle of entry e, which belongs to a cell of class c.

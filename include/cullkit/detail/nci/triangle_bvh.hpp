@@ -7,6 +7,8 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -16,9 +18,15 @@
 
 namespace cullkit::detail::nci {
 
-struct alignas(16) TriangleBvhNode {
-  float lo[3][4];
-  float hi[3][4];
+// A node: its four children's boxes quantized to 8 bits a bound on a per-axis grid (origin, scale),
+// by axis over the lanes (the layout a 4-wide box test loads), and their codes; 64 bytes, one cache
+// line. The bounds read back (bound()) contain the children's boxes whatever the rounding of the
+// read (see quantize).
+struct alignas(64) TriangleBvhNode {
+  float origin[3];
+  float scale[3];
+  std::uint8_t qlo[3][4];
+  std::uint8_t qhi[3][4];
   std::uint32_t child[4];
 
   static constexpr std::uint32_t empty = 0xFFFFFFFFu;
@@ -30,6 +38,60 @@ struct alignas(16) TriangleBvhNode {
   [[nodiscard]] static std::uint32_t leaf_count(std::uint32_t code) noexcept { return (code & 7u) + 1u; }
   [[nodiscard]] static std::uint32_t leaf(std::uint32_t first, std::uint32_t count) noexcept {
     return leaf_bit | first << 3 | (count - 1u);
+  }
+
+  // Bound q of axis a as the cast reads it.
+  [[nodiscard]] float bound(int a, std::uint8_t q) const noexcept { return origin[a] + static_cast<float>(q) * scale[a]; }
+
+  // Sets the boxes of children 0..count-1 (finite, lo <= hi); the others are empty. Each bound is
+  // moved outward to a grid step at least `margin` beyond the box, margin = 2^-20 of the largest
+  // coordinate magnitude of the node: origin + q * scale, rounded once or twice (fused or not),
+  // lies within about 2^-22 of that magnitude of its exact value, so the bound read back still
+  // contains the box.
+  void quantize(const float lo[3][4], const float hi[3][4], int count) noexcept {
+    for (int a = 0; a < 3; ++a) {
+      double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo;
+      for (int j = 0; j < count; ++j) {
+        ulo = std::min(ulo, double(lo[a][j]));
+        uhi = std::max(uhi, double(hi[a][j]));
+      }
+      if (count == 0) ulo = uhi = 0.0;
+      const double margin = std::max(std::fabs(ulo), std::fabs(uhi)) * 0x1p-20;
+      const double half_max = 0.5 * double(std::numeric_limits<float>::max());
+      if (!(ulo - margin >= -half_max && uhi + margin <= half_max)) {
+        // Too near float's limits for the grid's products: the whole axis (bound 0 reads -max,
+        // bound 255 +inf, fused or not), every child taking both ends.
+        origin[a] = -std::numeric_limits<float>::max();
+        scale[a] = std::numeric_limits<float>::max();
+        for (int j = 0; j < 4; ++j) {
+          qlo[a][j] = 0;
+          qhi[a][j] = 255;
+        }
+        continue;
+      }
+      float o = static_cast<float>(ulo - margin);
+      if (double(o) > ulo - margin) o = std::nextafter(o, -std::numeric_limits<float>::infinity());
+      float sc = static_cast<float>((uhi + margin - double(o)) / 255.0);
+      for (int guard = 0; guard < 64 && double(o) + 255.0 * double(sc) < uhi + margin; ++guard)
+        sc = std::nextafter(sc, std::numeric_limits<float>::infinity());
+      origin[a] = o;
+      scale[a] = sc;
+      const auto at = [&](int q) { return double(o) + double(q) * double(sc); };
+      for (int j = 0; j < 4; ++j) {
+        if (j >= count) {
+          qlo[a][j] = qhi[a][j] = 0;
+          continue;
+        }
+        const double want_lo = double(lo[a][j]) - margin, want_hi = double(hi[a][j]) + margin;
+        int ql = sc > 0.0f ? static_cast<int>(std::clamp(std::floor((want_lo - double(o)) / double(sc)), 0.0, 255.0)) : 0;
+        while (ql > 0 && at(ql) > want_lo) --ql;
+        int qh = sc > 0.0f ? static_cast<int>(std::clamp(std::ceil((want_hi - double(o)) / double(sc)), 0.0, 255.0)) : 255;
+        while (qh < 255 && at(qh) < want_hi) ++qh;
+        qlo[a][j] = static_cast<std::uint8_t>(ql);
+        qhi[a][j] = static_cast<std::uint8_t>(qh);
+      }
+    }
+    for (int j = count; j < 4; ++j) child[j] = empty;
   }
 };
 
@@ -46,7 +108,7 @@ struct TriangleBvh {
 // The build's cost of a traversal step against one triangle test (TriangleBvhBuilder::traversal_cost)
 // for the index's hierarchy. On the 10.1M city seen whole (nearest hits only, one thread) 1, 2 and 3
 // cast within 3 % of each other; 2 and 3 take half the nodes of 1 (18.0 and 17.2 bytes per
-// triangle against 29.6, with 128-byte nodes).
+// triangle against 29.6, with the former 128-byte nodes).
 inline constexpr float frame_traversal_cost = 3.0f;
 
 // A triangle's box, handed to the builder by triangle id.
@@ -69,9 +131,15 @@ class TriangleBvhBuilder {
   TriangleBvh build() {
     TriangleBvh out;
     const std::size_t n = items_.size();
-    out.tris.resize(n);
-    for (std::size_t i = 0; i < n; ++i) out.tris[i] = static_cast<std::uint32_t>(i);
-    ids_ = out.tris.data();
+    // The passes over a range read its boxes in order: they travel with their ids.
+    refs_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (int a = 0; a < 3; ++a) {
+        refs_[i].lo[a] = items_[i].lo[a];
+        refs_[i].hi[a] = items_[i].hi[a];
+      }
+      refs_[i].id = static_cast<std::uint32_t>(i);
+    }
     if (n == 0) return out;
     const Range all = bounds_of(0, n);
     for (int a = 0; a < 3; ++a) {
@@ -89,12 +157,16 @@ class TriangleBvhBuilder {
       std::vector<Range>* tops;
       std::vector<std::vector<TriangleBvhNode>>* sub;
       std::vector<std::uint32_t>* sub_root;
-      std::size_t workers;
-    } job{this, &tops, &sub, &sub_root, std::max<std::size_t>(1, std::min<std::size_t>(threads_, tops.size()))};
-    detail::run_tasks(runner_, job.workers, [](void* j, std::size_t k) {
+      std::atomic<std::size_t> next{0};  // ranges are taken in turn: their sizes differ
+    } job{this, &tops, &sub, &sub_root};
+    const std::size_t workers = std::max<std::size_t>(1, std::min<std::size_t>(threads_, tops.size()));
+    detail::run_tasks(runner_, workers, [](void* j, std::size_t) {
       Job& b = *static_cast<Job*>(j);
-      for (std::size_t t = k; t < b.tops->size(); t += b.workers) (*b.sub_root)[t] = b.self->make((*b.tops)[t], (*b.sub)[t]);
+      for (std::size_t t = b.next++; t < b.tops->size(); t = b.next++) (*b.sub_root)[t] = b.self->make((*b.tops)[t], (*b.sub)[t]);
     }, &job);
+    out.tris.resize(n);
+    for (std::size_t i = 0; i < n; ++i) out.tris[i] = refs_[i].id;
+    std::vector<Ref>().swap(refs_);
     // Top nodes: the whole set cut into `tops` by the same rule, rebuilt over the ranges' roots.
     std::vector<TriangleBvhNode>& nodes = out.nodes;
     std::size_t next = 0;
@@ -108,10 +180,14 @@ class TriangleBvhBuilder {
     float lo[3], hi[3];
   };
   static constexpr int bins = 16;
+  struct Ref {
+    float lo[3], hi[3];
+    std::uint32_t id;
+  };
   const std::vector<TriangleBvhItem>& items_;
+  std::vector<Ref> refs_;  // the items in the tree's order as it is built
   unsigned threads_;
   TaskRunner runner_;
-  std::uint32_t* ids_ = nullptr;
 
   static float area(const float lo[3], const float hi[3]) noexcept {
     const float x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2];
@@ -125,7 +201,7 @@ class TriangleBvhBuilder {
       r.hi[a] = -std::numeric_limits<float>::infinity();
     }
     for (std::size_t i = b; i < e; ++i) {
-      const TriangleBvhItem& it = items_[ids_[i]];
+      const Ref& it = refs_[i];
       for (int a = 0; a < 3; ++a) {
         r.lo[a] = std::min(r.lo[a], it.lo[a]);
         r.hi[a] = std::max(r.hi[a], it.hi[a]);
@@ -136,7 +212,7 @@ class TriangleBvhBuilder {
 
   // Splits r in two by the binned heuristic (the median of the widest centroid axis when the
   // centroids coincide or every plane leaves a side empty); false when r is a leaf.
-  bool split(const Range& r, Range& left, Range& right, bool median = false) const {
+  bool split(const Range& r, Range& left, Range& right, bool median = false) {
     const std::size_t n = r.e - r.b;
     if (n <= 1) return false;
     if (median && n > static_cast<std::size_t>(TriangleBvhNode::leaf_max)) return median_split(r, left, right);
@@ -146,7 +222,7 @@ class TriangleBvhBuilder {
       ch[a] = -cl[a];
     }
     for (std::size_t i = r.b; i < r.e; ++i) {
-      const TriangleBvhItem& it = items_[ids_[i]];
+      const Ref& it = refs_[i];
       for (int a = 0; a < 3; ++a) {
         const float c = it.lo[a] + it.hi[a];
         cl[a] = std::min(cl[a], c);
@@ -170,7 +246,7 @@ class TriangleBvhBuilder {
       }
     }
     for (std::size_t i = r.b; i < r.e; ++i) {
-      const TriangleBvhItem& it = items_[ids_[i]];
+      const Ref& it = refs_[i];
       for (int a = 0; a < 3; ++a) {
         const int k = std::min(bins - 1, static_cast<int>((it.lo[a] + it.hi[a] - cl[a]) * scale[a]));
         Bin& bb = bin[a][k];
@@ -231,11 +307,11 @@ class TriangleBvhBuilder {
     {
       const int a = best_axis;
       const float c0 = cl[a], s = scale[a];
-      std::uint32_t* m = std::partition(ids_ + r.b, ids_ + r.e, [&](std::uint32_t id) {
-        const TriangleBvhItem& it = items_[id];
+      Ref* const base = refs_.data();
+      Ref* m = std::partition(base + r.b, base + r.e, [&](const Ref& it) {
         return std::min(bins - 1, static_cast<int>((it.lo[a] + it.hi[a] - c0) * s)) < best_plane;
       });
-      mid = static_cast<std::size_t>(m - ids_);
+      mid = static_cast<std::size_t>(m - base);
     }
     // The sides' boxes are the unions of their bins' (each triangle lies in one bin of the axis),
     // unless the partition disagreed with the binning (then measured again).
@@ -264,7 +340,7 @@ class TriangleBvhBuilder {
   }
 
   // Cuts r in two halves at the median of its centroids along their widest axis (ties by id).
-  bool median_split(const Range& r, Range& left, Range& right) const {
+  bool median_split(const Range& r, Range& left, Range& right) {
     float cl[3], ch[3];
     for (int a = 0; a < 3; ++a) {
       cl[a] = std::numeric_limits<float>::infinity();
@@ -272,7 +348,7 @@ class TriangleBvhBuilder {
     }
     for (std::size_t i = r.b; i < r.e; ++i)
       for (int a = 0; a < 3; ++a) {
-        const float c = items_[ids_[i]].lo[a] + items_[ids_[i]].hi[a];
+        const float c = refs_[i].lo[a] + refs_[i].hi[a];
         cl[a] = std::min(cl[a], c);
         ch[a] = std::max(ch[a], c);
       }
@@ -280,9 +356,10 @@ class TriangleBvhBuilder {
     for (int j = 1; j < 3; ++j)
       if (ch[j] - cl[j] > ch[a] - cl[a]) a = j;
     const std::size_t mid = r.b + (r.e - r.b) / 2;
-    std::nth_element(ids_ + r.b, ids_ + mid, ids_ + r.e, [&](std::uint32_t x, std::uint32_t y) {
-      const float cx = items_[x].lo[a] + items_[x].hi[a], cy = items_[y].lo[a] + items_[y].hi[a];
-      return cx < cy || (cx == cy && x < y);
+    Ref* const base = refs_.data();
+    std::nth_element(base + r.b, base + mid, base + r.e, [&](const Ref& x, const Ref& y) {
+      const float cx = x.lo[a] + x.hi[a], cy = y.lo[a] + y.hi[a];
+      return cx < cy || (cx == cy && x.id < y.id);
     });
     left = bounds_of(r.b, mid);
     right = bounds_of(mid, r.e);
@@ -290,7 +367,7 @@ class TriangleBvhBuilder {
   }
 
   // Cuts r into at most `most` ranges, splitting the largest-area splittable range first.
-  void split_into(const Range& r, std::size_t most, std::vector<Range>& out, bool median = false) const {
+  void split_into(const Range& r, std::size_t most, std::vector<Range>& out, bool median = false) {
     out.assign(1, r);
     std::vector<bool> done(1, false);
     while (out.size() < most) {
@@ -343,26 +420,19 @@ class TriangleBvhBuilder {
     }
     const std::size_t index = nodes.size();
     nodes.emplace_back();
-    for (int j = 0; j < 4; ++j) {
-      std::uint32_t code = TriangleBvhNode::empty;
-      float lo[3] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
-                     std::numeric_limits<float>::infinity()};
-      float hi[3] = {-lo[0], -lo[1], -lo[2]};
-      if (static_cast<std::size_t>(j) < kids.size()) {
-        const Range& k = kids[static_cast<std::size_t>(j)];
-        code = leaf_or_node(k, nodes, depth + 1);
-        for (int a = 0; a < 3; ++a) {
-          lo[a] = k.lo[a];
-          hi[a] = k.hi[a];
-        }
-      }
-      TriangleBvhNode& node = nodes[index];
+    float lo[3][4], hi[3][4];
+    std::uint32_t codes[4];
+    for (std::size_t j = 0; j < kids.size(); ++j) {
+      const Range& k = kids[j];
+      codes[j] = leaf_or_node(k, nodes, depth + 1);
       for (int a = 0; a < 3; ++a) {
-        node.lo[a][j] = lo[a];
-        node.hi[a][j] = hi[a];
+        lo[a][j] = k.lo[a];
+        hi[a][j] = k.hi[a];
       }
-      node.child[j] = code;
     }
+    TriangleBvhNode& node = nodes[index];
+    node.quantize(lo, hi, static_cast<int>(kids.size()));
+    for (std::size_t j = 0; j < kids.size(); ++j) node.child[j] = codes[j];
     return static_cast<std::uint32_t>(index);
   }
 
@@ -393,14 +463,14 @@ class TriangleBvhBuilder {
       std::vector<TriangleBvhNode>().swap(sub[t]);
     }
     auto fill = [&](TriangleBvhNode& nd, const std::uint32_t* c, const Range* rg, std::size_t count) {
-      for (int j = 0; j < 4; ++j) {
-        const bool has = static_cast<std::size_t>(j) < count;
+      float lo[3][4], hi[3][4];
+      for (std::size_t j = 0; j < count; ++j)
         for (int a = 0; a < 3; ++a) {
-          nd.lo[a][j] = has ? rg[j].lo[a] : std::numeric_limits<float>::infinity();
-          nd.hi[a][j] = has ? rg[j].hi[a] : -std::numeric_limits<float>::infinity();
+          lo[a][j] = rg[j].lo[a];
+          hi[a][j] = rg[j].hi[a];
         }
-        nd.child[j] = has ? c[j] : TriangleBvhNode::empty;
-      }
+      nd.quantize(lo, hi, static_cast<int>(count));
+      for (std::size_t j = 0; j < count; ++j) nd.child[j] = c[j];
     };
     if (tops.size() <= 4) {
       fill(nodes[0], codes.data(), tops.data(), tops.size());
