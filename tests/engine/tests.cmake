@@ -4,7 +4,7 @@ cullkit_add_test(test_engine_camera SOURCES ${_engine}/test_engine_camera.cpp LA
 cullkit_add_test(test_engine_views SOURCES ${_engine}/test_engine_views.cpp LABELS engine)
 cullkit_add_test(test_engine_refit SOURCES ${_engine}/test_engine_refit.cpp LABELS engine)
 find_package(Threads REQUIRED)
-cullkit_add_test(test_engine_mesh_buffers SOURCES ${_engine}/test_engine_mesh_buffers.cpp LIBS Threads::Threads
+cullkit_add_test(test_engine_mesh_buffers NO_PCH SOURCES ${_engine}/test_engine_mesh_buffers.cpp LIBS Threads::Threads
                  LABELS engine)
 cullkit_add_test(test_engine_degenerate_camera SOURCES ${_engine}/test_engine_degenerate_camera.cpp
                  LIBS Threads::Threads LABELS engine)
