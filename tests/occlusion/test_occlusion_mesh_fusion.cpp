@@ -5,7 +5,8 @@
 // wall with one triangle missing, cubes beside the wall and cubes peeking around its edge; none may
 // be hidden while a ray from the eye sees it. The oracle is the double-precision segment test of
 // brute.hpp (corners, face grids and random points of each cube; for the negatives, the segment to
-// a point the ray through the gap, the hole or past the edge is aimed at).
+// a point the ray through the gap, the hole or past the edge is aimed at). Last, a point query in
+// front of a strip with extreme coordinates must not be hidden.
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -203,6 +204,26 @@ void negatives(Mesh mesh, const glm::vec3& eye, const Triangles& wall, Rng& rng,
   }
 }
 
+// A query with no interior seen from the eye (here a zero-size box) may lie wholly in the set of
+// directions a seam copy stands for when its assumptions leave no open set; such copies may then not
+// be dropped. The scene: a strip of four triangles (the first with a repeated corner), coordinates
+// near 1.7e9 mixed with denormals, a far eye; the point lies between the eye and every occluder
+// along z, so nothing hides it.
+void point_query_in_front_of_strip() {
+  const glm::vec3 eye(-2.72217754e+09f, -1.73482982e+09f, 10.1754894f);
+  const glm::vec3 strip[6] = {
+      {-1.73482982e+09f, -1.73482982e+09f, -1.73482982e+09f}, {1.85634128e-27f, 1.85634128e-27f, -1.73482982e+09f},
+      {-1.73482982e+09f, -1.73482982e+09f, -1.73482982e+09f}, {-1.73482355e+09f, 9.95053632e-40f, 0.0f},
+      {-536870912.0f, -1.73480986e+09f, 1.8563773e-27f},      {1.85634128e-27f, -1.73480589e+09f, -1.73482982e+09f}};
+  OcclusionParams params;
+  params.azimuth_planes = 2;
+  params.elevation_planes = 0;
+  OcclusionTree tree(eye, params);
+  for (int i = 0; i + 2 < 6; ++i) tree.insert_occluder(strip + i, 3);
+  const glm::vec3 p(0.00285692397f);
+  CHECK(tree.query(Aabb{p, p}).answer != OcclusionAnswer::hidden);
+}
+
 }  // namespace
 
 int main() {
@@ -226,5 +247,6 @@ int main() {
     all.false_culls += t.false_culls;
   }
   CHECK(all.false_culls == 0);
+  point_query_in_front_of_strip();
   return cullkit_test::report("test_occlusion_mesh_fusion");
 }

@@ -137,12 +137,16 @@ struct OcclusionWalk {
     Fragment stack[static_cast<std::size_t>(stack_size)];
     glm::vec3 outline[6];
     const auto corners = static_cast<std::uint32_t>(box_silhouette(box, eye, outline));
+    // The box's front is the graph of its depth over the outline's directions, so the outline says
+    // whether the query has an interior for the seam copies' vacuity rule (see `has_interior`).
+    bool thick = false;
     if (corners >= 3) {
       for (std::uint32_t i = 0; i < corners; ++i) stack[0].v[i] = outline[i] - eye;
       stack[0].size = corners;
       stack[0].ref = first_split;
       stack[0].assumed_count = 0;
-      result.answer = walk_fragments(t, stack, 1, scale, want_clear, &front);
+      thick = has_interior(stack[0], t.params_.margin);
+      result.answer = walk_fragments(t, stack, 1, scale, want_clear, &front, thick);
       if (result.answer != undecided_answer) return result;
     }
     // Phase 3: the front faces, split at every plane they straddle.
@@ -150,7 +154,7 @@ struct OcclusionWalk {
     const int nfaces = box_front_fragments(box, eye, stack);
     if (nfaces == 0) return result;
     for (int f = 0; f < nfaces; ++f) stack[f].ref = first_split;
-    result.answer = walk_fragments(t, stack, nfaces, scale, want_clear, nullptr);
+    result.answer = walk_fragments(t, stack, nfaces, scale, want_clear, nullptr, thick);
     return result;
   }
 
@@ -192,7 +196,7 @@ struct OcclusionWalk {
     if (ref >= hidden_leaf) return leaf_answer(result, ref, want_clear);
     result.together = ref;
     local.ref = ref;
-    result.answer = walk_fragments(t, stack, 1, scale, want_clear, nullptr);
+    result.answer = walk_fragments(t, stack, 1, scale, want_clear, nullptr, has_interior(local, t.params_.margin));
     return result;
   }
 
@@ -478,6 +482,38 @@ struct OcclusionWalk {
     return false;
   }
 
+  // True if the convex fragment `f` (eye-relative, as a query starts) covers an open set of
+  // directions at least `min_width` wide (radians, about): its width seen from the eye, the least
+  // over its edges of the farthest corner from the edge's plane through the eye (unit directions),
+  // exceeds it. Dropping seam copies whose assumptions leave no open set (`assumptions_vacuous`,
+  // `assumptions_miss`) is sound only for a query that is the closure of its interior: then the
+  // points those copies stand for are nowhere dense in it, and the closed hidden region that holds
+  // the rest holds them too. A zero-size box, a segment or a polygon seen edge-on has no interior;
+  // one narrower than the margin is treated alike (its corners' rounding could decide it).
+  // NaN or no edge: false (copies kept, the answer errs toward visible).
+  [[nodiscard]] static bool has_interior(const Fragment& f, float min_width) noexcept {
+    if (f.size < 3 || f.size > ConvexPolygon::capacity) return false;
+    glm::dvec3 u[ConvexPolygon::capacity];
+    for (std::uint32_t i = 0; i < f.size; ++i) {
+      const glm::dvec3 v(f.v[i]);
+      const double length = glm::length(v);
+      if (!(length > 0.0) || !std::isfinite(length)) return false;
+      u[i] = v / length;
+    }
+    double width = std::numeric_limits<double>::infinity();
+    bool any_edge = false;
+    for (std::uint32_t i = 0; i < f.size; ++i) {
+      const glm::dvec3 n = glm::cross(u[i], u[(i + 1) % f.size]);
+      const double length = glm::length(n);
+      if (!(length > 0.0)) continue;  // repeated corner: no edge
+      double reach = 0.0;
+      for (std::uint32_t j = 0; j < f.size; ++j) reach = std::max(reach, std::fabs(glm::dot(n, u[j])) / length);
+      width = std::min(width, reach);
+      any_edge = true;
+    }
+    return any_edge && width > double(min_width);
+  }
+
   [[nodiscard]] static bool same_point(const glm::vec3& a, const glm::vec3& b) noexcept {
     return float_bits(a.x) == float_bits(b.x) && float_bits(a.y) == float_bits(b.y) && float_bits(a.z) == float_bits(b.z);
   }
@@ -493,7 +529,7 @@ struct OcclusionWalk {
   // plane the whole front of the box decides, and if it straddles the walk returns
   // `undecided_answer` so the caller can walk the faces themselves.
   [[nodiscard]] static Answer walk_fragments(const Tree& t, Fragment* stack, int count, float scale, bool want_clear,
-                                             BoxFront* front) {
+                                             BoxFront* front, bool query_has_interior) {
     const float eps = t.params_.margin;
     bool any_hidden = false, any_visible = false;
     int top = count;
@@ -511,8 +547,10 @@ struct OcclusionWalk {
         if (ref == visible_leaf) {
           // A copy whose assumptions no open set of directions satisfies stands for no point that
           // another copy does not also stand for (see `assumptions_vacuous`): it proves nothing
-          // either way.
-          if (!assumptions_vacuous(t.seams_, *cur) && !assumptions_miss(t.seams_, *cur)) any_visible = true;
+          // either way. That needs a query with an interior: a point, a segment or a polygon seen
+          // edge-on may lie wholly in such a set, and its copies are never dropped.
+          if (!query_has_interior || (!assumptions_vacuous(t.seams_, *cur) && !assumptions_miss(t.seams_, *cur)))
+            any_visible = true;
           break;
         }
         const Node& node = t.nodes_[ref];
