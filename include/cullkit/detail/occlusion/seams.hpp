@@ -22,6 +22,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -108,6 +109,7 @@ class SeamTable {
     eye_ = eye;
     std::fill(slots_.begin(), slots_.end(), none);
     keys_.clear();
+    unit_normal_.clear();
     owner_.clear();
     shared_.clear();
     for (std::uint32_t& first : axis_corners_) first = none;
@@ -138,6 +140,9 @@ class SeamTable {
     keys_.push_back(key);
     owner_.push_back(occluder);
     shared_.push_back(0);
+    const glm::dvec3 normal = canonical_normal(id);
+    const double length = glm::length(normal);
+    unit_normal_.push_back(length > 0.0 && std::isfinite(length) ? glm::vec3(normal / length) : glm::vec3(0.0f));
     return id;
   }
 
@@ -191,6 +196,14 @@ class SeamTable {
     return (code & 1u) ? along : -along;
   }
 
+  /// The true plane of edge `id` through the eye as a unit normal rounded once to float (the canonical
+  /// side positive), or zero when the eye and the edge's corners are collinear. Its distances are
+  /// within float rounding of the true ones everywhere, unlike those of an edge node's plane, which is
+  /// built from eye-relative corners rounded to float: for a short edge far away, rounding that differs
+  /// between its two corners turns that plane about the edge's midpoint, by the rounding over the
+  /// edge's length, so far along the edge's line the two planes part by more than a query's margin.
+  [[nodiscard]] const glm::vec3& unit_normal(std::uint32_t id) const noexcept { return unit_normal_[id]; }
+
   /// The canonical normal of edge `id`: cross(lo - eye, hi - eye) of its corners in canonical order,
   /// or +axis for an axis-plane key. An edge plane's `inside` is the canonical side when its normal
   /// agrees.
@@ -239,6 +252,7 @@ class SeamTable {
   glm::vec3 eye_ = glm::vec3(0.0f);
   std::vector<std::uint32_t> slots_;      // edge id per slot, or none
   std::vector<SeamKey> keys_;             // per edge id
+  std::vector<glm::vec3> unit_normal_;    // per edge id: its true plane (unit_normal)
   std::vector<std::uint32_t> owner_;      // per edge id: first occluder (insertion serial)
   std::vector<std::uint8_t> shared_;      // per edge id: used by a second occluder
   std::uint32_t axis_corners_[3] = {none, none, none};  // per axis plane: its corner list, or none

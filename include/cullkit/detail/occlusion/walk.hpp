@@ -213,7 +213,7 @@ struct OcclusionWalk {
   enum class SeamStep : std::uint8_t {
     moved,      // `cur` went on to one child (its ref is updated)
     copies,     // `cur` became two copies: one pushed on the stack, the other written to `alt`
-    ordinary,   // no room for another assumption: treat the node as an ordinary plane
+    ordinary,   // no room for another assumption, or no true plane: treat the node as an ordinary plane
     visible,    // cannot be decided (NaN, too many corners): the query answers visible
   };
 
@@ -234,8 +234,14 @@ struct OcclusionWalk {
       cur.ref = (cur.assumed[k] & 1u) == node_side ? node.inside : node.outside;
       return SeamStep::moved;
     }
-    const Plane inner{node.plane.normal, node.plane.d - m};  // inside it: distance >= m
-    const Plane outer{node.plane.normal, node.plane.d + m};  // outside it: distance <= -m
+    // Measured against the seam's true plane, not the node's: the copies must reach m across the plane
+    // their assumptions name at every point, and the node's plane, built from rounded eye-relative
+    // corners, can part from it by more than m far along a short edge's line (SeamTable::unit_normal).
+    const glm::vec3& canonical = seams.unit_normal(edge);
+    if (canonical == glm::vec3(0.0f)) return SeamStep::ordinary;
+    const glm::vec3 normal = node_side != 0 ? canonical : -canonical;
+    const Plane inner{normal, -m};  // inside it: distance >= m
+    const Plane outer{normal, m};   // outside it: distance <= -m
     const FragmentSide in_side = classify_fragment(cur, inner, 0.0f);
     const FragmentSide out_side = classify_fragment(cur, outer, 0.0f);
     if (in_side == FragmentSide::undecided || out_side == FragmentSide::undecided) return SeamStep::visible;
