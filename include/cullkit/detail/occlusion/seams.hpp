@@ -131,7 +131,10 @@ class SeamTable {
     for (; slots_[s] != none; s = (s + 1) & mask) {
       const std::uint32_t id = slots_[s];
       if (keys_[id] == key) {
-        if (owner_[id] != occluder) shared_[id] = 1;
+        if (owner_[id] != occluder && shared_[id] == 0) {
+          shared_[id] = 1;
+          unit_normal_[id] = true_unit_normal(id);  // only shared edges make copies
+        }
         return id;
       }
     }
@@ -140,9 +143,7 @@ class SeamTable {
     keys_.push_back(key);
     owner_.push_back(occluder);
     shared_.push_back(0);
-    const glm::dvec3 normal = canonical_normal(id);
-    const double length = glm::length(normal);
-    unit_normal_.push_back(length > 0.0 && std::isfinite(length) ? glm::vec3(normal / length) : glm::vec3(0.0f));
+    unit_normal_.push_back(glm::vec3(0.0f));
     return id;
   }
 
@@ -196,12 +197,13 @@ class SeamTable {
     return (code & 1u) ? along : -along;
   }
 
-  /// The true plane of edge `id` through the eye as a unit normal rounded once to float (the canonical
-  /// side positive), or zero when the eye and the edge's corners are collinear. Its distances are
-  /// within float rounding of the true ones everywhere, unlike those of an edge node's plane, which is
-  /// built from eye-relative corners rounded to float: for a short edge far away, rounding that differs
-  /// between its two corners turns that plane about the edge's midpoint, by the rounding over the
-  /// edge's length, so far along the edge's line the two planes part by more than a query's margin.
+  /// The true plane of shared edge `id` through the eye as a unit normal rounded once to float (the
+  /// canonical side positive); zero when the eye and the edge's corners are collinear, or the edge is
+  /// not shared. Its distances are within float rounding of the true ones everywhere, unlike those of
+  /// an edge node's plane, which is built from eye-relative corners rounded to float: for a short edge
+  /// far away, rounding that differs between its two corners turns that plane about the edge's
+  /// midpoint, by the rounding over the edge's length, so far along the edge's line the two planes
+  /// part by more than a query's margin.
   [[nodiscard]] const glm::vec3& unit_normal(std::uint32_t id) const noexcept { return unit_normal_[id]; }
 
   /// The canonical normal of edge `id`: cross(lo - eye, hi - eye) of its corners in canonical order,
@@ -225,6 +227,12 @@ class SeamTable {
     std::uint64_t h = 0x9E3779B97F4A7C15ull;
     for (int i = 0; i < 6; ++i) h = (h ^ words[i]) * 0xFF51AFD7ED558CCDull;
     return static_cast<std::uint32_t>(h ^ (h >> 29));
+  }
+
+  [[nodiscard]] glm::vec3 true_unit_normal(std::uint32_t id) const noexcept {
+    const glm::dvec3 normal = canonical_normal(id);
+    const double length = glm::length(normal);
+    return length > 0.0 && std::isfinite(length) ? glm::vec3(normal / length) : glm::vec3(0.0f);
   }
 
   // Adds corner p to the list of axis plane `axis`, unless it is there already.
@@ -252,7 +260,7 @@ class SeamTable {
   glm::vec3 eye_ = glm::vec3(0.0f);
   std::vector<std::uint32_t> slots_;      // edge id per slot, or none
   std::vector<SeamKey> keys_;             // per edge id
-  std::vector<glm::vec3> unit_normal_;    // per edge id: its true plane (unit_normal)
+  std::vector<glm::vec3> unit_normal_;    // per edge id: its true plane once shared (unit_normal)
   std::vector<std::uint32_t> owner_;      // per edge id: first occluder (insertion serial)
   std::vector<std::uint8_t> shared_;      // per edge id: used by a second occluder
   std::uint32_t axis_corners_[3] = {none, none, none};  // per axis plane: its corner list, or none
