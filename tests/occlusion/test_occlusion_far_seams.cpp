@@ -127,6 +127,13 @@ Scene frame(Rng& rng) {
     if (glm::length(along) > 0.3) s.u = glm::normalize(along);
   }
   s.v = glm::cross(s.n, s.u);
+  // Often the surface's centre is where an eye-relative coordinate crosses a power of two: corners on
+  // either side of it round differently.
+  if (rng.uniform() < 0.6f) {
+    const int axis = rng.range(0, 2);
+    const double reach = std::fabs(s.n[axis]) * double(s.distance);
+    if (reach > 1.0) s.distance = float(double(s.distance) * std::exp2(std::floor(std::log2(reach))) / reach);
+  }
   return s;
 }
 
