@@ -1,8 +1,9 @@
 // Seams far from the eye: triangle strips, fans and runs of exactly collinear edges whose edges span
 // tiny angles (down to a few times `min_angle`), 1e3 to 1e7 units from the eye, some with large
-// coordinate offsets. The tree cuts a seam's copies at the rounded plane built from eye-relative
-// corners, while the assumptions they carry, the collinear-edge rule and the dropping of copies trust
-// the exact plane through the world corners; for a short edge far away the two planes differ most.
+// coordinate offsets. The assumptions a seam's copies carry, the collinear-edge rule and the dropping
+// of copies trust the true plane through the eye and the edge's world corners, so the copies must
+// reach the margin across that plane; an edge node's own plane, built from eye-relative corners
+// rounded to float, parts from it most for a short edge far away.
 // Point queries, small boxes, long thin boxes and thin polygons are placed just in front of, just
 // behind and just beside the surface and its edges. Every query the tree calls hidden is checked with
 // certified ray casts: a sample point of the query counts as seen only when the double-precision
@@ -118,8 +119,7 @@ Scene frame(Rng& rng) {
   const dvec3 w = random_direction(rng);
   s.n = glm::normalize(-w + random_direction(rng) * double(rng.uniform(0.0f, 0.8f)));
   s.u = glm::normalize(glm::cross(s.n, random_direction(rng)));
-  // Sometimes nearly along an axis: then the corners' other coordinates differ by few units in the
-  // last place, the case where eye-relative rounding tilts a short edge's plane most.
+  // Sometimes the strips run along an axis projected into the surface.
   if (rng.uniform() < 0.3f) {
     dvec3 axis(0.0);
     axis[rng.range(0, 2)] = 1.0;
