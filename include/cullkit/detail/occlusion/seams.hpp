@@ -164,6 +164,14 @@ class SeamTable {
     const SeamKey& ki = keys_[i];
     const SeamKey& kj = keys_[j];
     if (is_axis_key(ki) || is_axis_key(kj)) return false;  // one axis plane has one key
+    // Shared edges have their planes' unit normals, within float rounding (about 1e-7) of the true
+    // ones: normals more than 1e-4 radians apart (sines) need no exact test.
+    const glm::vec3& ni = unit_normal_[i];
+    const glm::vec3& nj = unit_normal_[j];
+    if (ni != glm::vec3(0.0f) && nj != glm::vec3(0.0f)) {
+      const glm::vec3 turn = glm::cross(ni, nj);
+      if (glm::dot(turn, turn) > 1e-8f) return false;
+    }
     glm::vec3 lo, hi, a, b;
     key_corners(ki, lo, hi);
     key_corners(kj, a, b);

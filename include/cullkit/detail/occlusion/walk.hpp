@@ -38,6 +38,16 @@ struct BoxFront {
   int point_count = 0;
 };
 
+/// The outline of a query seen from the eye (its world corners) and whether the directions it covers
+/// have an interior (see OcclusionWalk::has_interior), decided on first need: only a seam copy that
+/// may be dropped asks, so most queries never pay for it.
+struct QueryOutline {
+  QueryOutline(const glm::vec3* w, std::uint32_t n) : world(w), count(n) {}
+  const glm::vec3* world;
+  std::uint32_t count;
+  int interior = -1;  // -1: not decided yet; else 0 or 1
+};
+
 /// Where the whole front of a query box lies against one plane; `unknown` for NaN or overflow.
 enum class FrontSide : std::uint8_t { inside, outside, straddles, unknown };
 
@@ -139,14 +149,13 @@ struct OcclusionWalk {
     const auto corners = static_cast<std::uint32_t>(box_silhouette(box, eye, outline));
     // The box's front is the graph of its depth over the outline's directions, so the outline says
     // whether the query has an interior for the seam copies' vacuity rule (see `has_interior`).
-    bool thick = false;
+    QueryOutline shape(outline, corners);
     if (corners >= 3) {
       for (std::uint32_t i = 0; i < corners; ++i) stack[0].v[i] = outline[i] - eye;
       stack[0].size = corners;
       stack[0].ref = first_split;
       stack[0].assumed_count = 0;
-      thick = has_interior(stack[0], t.params_.margin);
-      result.answer = walk_fragments(t, stack, 1, scale, want_clear, &front, thick);
+      result.answer = walk_fragments(t, stack, 1, scale, want_clear, &front, shape);
       if (result.answer != undecided_answer) return result;
     }
     // Phase 3: the front faces, split at every plane they straddle.
@@ -154,7 +163,7 @@ struct OcclusionWalk {
     const int nfaces = box_front_fragments(box, eye, stack);
     if (nfaces == 0) return result;
     for (int f = 0; f < nfaces; ++f) stack[f].ref = first_split;
-    result.answer = walk_fragments(t, stack, nfaces, scale, want_clear, nullptr, thick);
+    result.answer = walk_fragments(t, stack, nfaces, scale, want_clear, nullptr, shape);
     return result;
   }
 
@@ -196,7 +205,8 @@ struct OcclusionWalk {
     if (ref >= hidden_leaf) return leaf_answer(result, ref, want_clear);
     result.together = ref;
     local.ref = ref;
-    result.answer = walk_fragments(t, stack, 1, scale, want_clear, nullptr, has_interior(local, t.params_.margin));
+    QueryOutline shape(&polygon[0], static_cast<std::uint32_t>(polygon.size()));
+    result.answer = walk_fragments(t, stack, 1, scale, want_clear, nullptr, shape);
     return result;
   }
 
@@ -488,8 +498,9 @@ struct OcclusionWalk {
     return false;
   }
 
-  // True if the convex fragment `f` (eye-relative, as a query starts) covers an open set of
-  // directions at least `min_width` wide (radians, about): its width seen from the eye, the least
+  // True if the convex outline `shape` (world corners, taken relative to the eye as a query starts)
+  // covers an open set of directions at least `min_width` wide (radians, about): its width seen from
+  // the eye, the least
   // over its edges of the farthest corner from the edge's plane through the eye (unit directions),
   // exceeds it. Dropping seam copies whose assumptions leave no open set (`assumptions_vacuous`,
   // `assumptions_miss`) is sound only for a query that is the closure of its interior: then the
@@ -497,23 +508,31 @@ struct OcclusionWalk {
   // the rest holds them too. A zero-size box, a segment or a polygon seen edge-on has no interior;
   // one narrower than the margin is treated alike (its corners' rounding could decide it).
   // NaN or no edge: false (copies kept, the answer errs toward visible).
-  [[nodiscard]] static bool has_interior(const Fragment& f, float min_width) noexcept {
-    if (f.size < 3 || f.size > ConvexPolygon::capacity) return false;
+  // The answer is kept in `shape` (decided once per query).
+  [[nodiscard]] static bool has_interior(const glm::vec3& eye, QueryOutline& shape, float min_width) noexcept {
+    if (shape.interior < 0) shape.interior = outline_has_interior(eye, shape, min_width) ? 1 : 0;
+    return shape.interior != 0;
+  }
+
+  [[nodiscard]] static bool outline_has_interior(const glm::vec3& eye, const QueryOutline& shape,
+                                                 float min_width) noexcept {
+    const std::uint32_t size = shape.count;
+    if (size < 3 || size > ConvexPolygon::capacity) return false;
     glm::dvec3 u[ConvexPolygon::capacity];
-    for (std::uint32_t i = 0; i < f.size; ++i) {
-      const glm::dvec3 v(f.v[i]);
+    for (std::uint32_t i = 0; i < size; ++i) {
+      const glm::dvec3 v(shape.world[i] - eye);  // as the query's first fragment has it
       const double length = glm::length(v);
       if (!(length > 0.0) || !std::isfinite(length)) return false;
       u[i] = v / length;
     }
     double width = std::numeric_limits<double>::infinity();
     bool any_edge = false;
-    for (std::uint32_t i = 0; i < f.size; ++i) {
-      const glm::dvec3 n = glm::cross(u[i], u[(i + 1) % f.size]);
+    for (std::uint32_t i = 0; i < size; ++i) {
+      const glm::dvec3 n = glm::cross(u[i], u[(i + 1) % size]);
       const double length = glm::length(n);
       if (!(length > 0.0)) continue;  // repeated corner: no edge
       double reach = 0.0;
-      for (std::uint32_t j = 0; j < f.size; ++j) reach = std::max(reach, std::fabs(glm::dot(n, u[j])) / length);
+      for (std::uint32_t j = 0; j < size; ++j) reach = std::max(reach, std::fabs(glm::dot(n, u[j])) / length);
       width = std::min(width, reach);
       any_edge = true;
     }
@@ -535,7 +554,7 @@ struct OcclusionWalk {
   // plane the whole front of the box decides, and if it straddles the walk returns
   // `undecided_answer` so the caller can walk the faces themselves.
   [[nodiscard]] static Answer walk_fragments(const Tree& t, Fragment* stack, int count, float scale, bool want_clear,
-                                             BoxFront* front, bool query_has_interior) {
+                                             BoxFront* front, QueryOutline& shape) {
     const float eps = t.params_.margin;
     bool any_hidden = false, any_visible = false;
     int top = count;
@@ -555,7 +574,8 @@ struct OcclusionWalk {
           // another copy does not also stand for (see `assumptions_vacuous`): it proves nothing
           // either way. That needs a query with an interior: a point, a segment or a polygon seen
           // edge-on may lie wholly in such a set, and its copies are never dropped.
-          if (!query_has_interior || (!assumptions_vacuous(t.seams_, *cur) && !assumptions_miss(t.seams_, *cur)))
+          if (cur->assumed_count == 0 || (!assumptions_vacuous(t.seams_, *cur) && !assumptions_miss(t.seams_, *cur)) ||
+              !has_interior(t.eye_, shape, eps))
             any_visible = true;
           break;
         }
