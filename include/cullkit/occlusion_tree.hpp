@@ -40,10 +40,11 @@
 // seam. Every edge plane therefore carries a seam id that names its true plane exactly (the edge's
 // corners bit for bit, or an axis plane through the eye), and edge normals are computed from the
 // corners in canonical order, so partners are exact negations. At a seam used by two occluders, a
-// piece within the band becomes two overlapping copies (distance >= -m inside, <= m outside), each
-// assuming its side; at every later node of that seam a copy follows its assumption. Each point has
-// a copy on its true side, and every plane of the chain that copy ends in holds for the point (by
-// the margin or by the assumption), so a hidden answer stays proof. For a triangulated surface
+// piece within the band becomes two overlapping copies (distance >= -m inside, <= m outside, from the
+// seam's true plane, whose normal comes from the world corners), each assuming its side; at every
+// later node of that seam a copy follows its assumption. Each point has a copy on its true side, and
+// every plane of the chain that copy ends in holds for the point (by the margin or by the
+// assumption), so a hidden answer stays proof. For a triangulated surface
 // (docs/occlusion_fusion.md, "Triangulated meshes"): an assumption also holds at an edge exactly
 // collinear with the assumed one; a copy reaching an empty leaf is dropped when its assumptions leave
 // it no open set of points (exact tests around a mesh corner, or a clip with no area left), which is
