@@ -40,10 +40,16 @@
 // seam. Every edge plane therefore carries a seam id that names its true plane exactly (the edge's
 // corners bit for bit, or an axis plane through the eye), and edge normals are computed from the
 // corners in canonical order, so partners are exact negations. At a seam used by two occluders, a
-// piece within the band becomes two overlapping copies (distance >= -m inside, <= m outside), each
-// assuming its side; at every later node of that seam a copy follows its assumption. Each point has
-// a copy on its true side, and every plane of the chain that copy ends in holds for the point (by
-// the margin or by the assumption), so a hidden answer stays proof.
+// piece within the band becomes two overlapping copies (distance >= -m inside, <= m outside, from the
+// seam's true plane, whose normal comes from the world corners), each assuming its side; at every
+// later node of that seam a copy follows its assumption. Each point has a copy on its true side, and
+// every plane of the chain that copy ends in holds for the point (by the margin or by the
+// assumption), so a hidden answer stays proof. For a triangulated surface
+// (docs/occlusion_fusion.md, "Triangulated meshes"): an assumption also holds at an edge exactly
+// collinear with the assumed one; a copy reaching an empty leaf is dropped when its assumptions leave
+// it no open set of points (exact tests around a mesh corner, or a clip with no area left), which is
+// safe because the hidden region is closed; and a polygon occluder with a corner in the band of an
+// edge plane but truly across it is inserted on both sides.
 //
 // Layout: this header holds the public types; the machinery lives in detail headers, as helpers
 // over the tree's arrays: detail/occlusion/insert.hpp (chains, insertion), detail/occlusion/walk.hpp
@@ -196,7 +202,7 @@ class OcclusionTree {
     eye_ok_ = detail::finite3(eye);
     eye_scale_ = eye_ok_ ? detail::norm1(eye) : 0.0f;
     nodes_.clear();
-    seams_.clear();
+    seams_.clear(eye);
     occluder_serial_ = 0;
     stats_ = OcclusionStats{};
     root_ = visible_leaf;

@@ -4,3 +4,5 @@ cullkit_add_test(test_occlusion_embree SOURCES ${_occ}/test_occlusion_embree.cpp
 cullkit_add_test(test_occlusion_order SOURCES ${_occ}/test_occlusion_order.cpp)
 cullkit_add_test(test_occlusion_fusion SOURCES ${_occ}/test_occlusion_fusion.cpp)
 cullkit_add_test(test_occlusion_oriented_box SOURCES ${_occ}/test_occlusion_oriented_box.cpp)
+cullkit_add_test(test_occlusion_mesh_fusion SOURCES ${_occ}/test_occlusion_mesh_fusion.cpp)
+cullkit_add_test(test_occlusion_far_seams SOURCES ${_occ}/test_occlusion_far_seams.cpp)

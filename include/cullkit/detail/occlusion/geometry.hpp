@@ -47,16 +47,17 @@ namespace cullkit::detail {
 /// polygon) and returns how many, or 0 when fewer than 3 corners survive or the polygon has no area
 /// as seen from the eye (then the fragment must be dropped, which is also safe).
 /// With `angles`, also writes for each edge 1 - cos of the angle it subtends at the eye (which grows
-/// with the angle, so it orders edges by angular length without an atan2). With `corners`, writes
-/// the kept corners: edge i runs from corners[i] to corners[(i + 1) % n].
+/// with the angle, so it orders edges by angular length without an atan2). With `sources`, writes
+/// the index in `poly` of each kept corner: edge i runs from corner sources[i] to sources[(i + 1) % n].
 /// Each normal is computed from the edge's corners in their canonical order (`corner_before`), so two
 /// occluders sharing an edge get planes that are exact negations of each other.
-/// pre: `out` (and `angles`, `corners`, if given) has room for `poly.size()` entries.
+/// pre: `out` (and `angles`, `sources`, if given) has room for `poly.size()` entries.
 template <std::size_t Capacity>
 [[nodiscard]] inline std::size_t beam_planes(const BasicConvexPolygon<Capacity>& poly, float min_angle,
                                              Plane* out, float* angles = nullptr,
-                                             glm::vec3* corners = nullptr) noexcept {
+                                             std::uint32_t* sources = nullptr) noexcept {
   glm::dvec3 kept[Capacity];
+  std::uint32_t kept_source[Capacity];
   std::size_t n = 0;
   const double min_sin = static_cast<double>(min_angle);
   for (std::size_t i = 0; i < poly.size(); ++i) {
@@ -68,6 +69,7 @@ template <std::size_t Capacity>
       const double s = glm::length(glm::cross(q, p)) / (glm::length(q) * len);
       if (s <= min_sin && glm::dot(q, p) > 0.0) continue;
     }
+    kept_source[n] = static_cast<std::uint32_t>(i);
     kept[n++] = p;
   }
   // The cycle closes: the last kept corner may duplicate the first.
@@ -96,7 +98,7 @@ template <std::size_t Capacity>
     // kept[] holds floats exactly, so the float round trip is exact.
     const glm::dvec3 cross = corner_before(glm::vec3(b), glm::vec3(a)) ? -glm::cross(b, a) : glm::cross(a, b);
     out[i] = eye_plane_from_normal(sign * cross);
-    if (corners) corners[i] = glm::vec3(a);
+    if (sources) sources[i] = kept_source[i];
     if (!is_valid(out[i])) return 0;
     if (angles) {
       angles[i] = static_cast<float>(1.0 - glm::dot(a, b) / (glm::length(a) * glm::length(b)));

@@ -41,8 +41,22 @@ struct OcclusionChain {
   Plane closing[3] = {};
   int closing_count = 0;
   glm::vec3 box_points[8] = {};  // eye-relative front corners of a box occluder
+  glm::vec3 corners[ConvexPolygon::capacity] = {};  // a polygon's corners, eye-relative as inserted
+  glm::vec3 world[ConvexPolygon::capacity] = {};    // the same corners in world coordinates
+  int corner_count = 0;
   int box_point_count = 0;
   float split_epsilon = 0.0f;
+
+  /// Empties the description for the next occluder. The arrays are written before they are read (up
+  /// to their counts), so only the counts are reset: no kilobyte of zeros per occluder.
+  void clear() noexcept {
+    edge_count = 0;
+    is_box = false;
+    closing_count = 0;
+    box_point_count = 0;
+    corner_count = 0;
+    split_epsilon = 0.0f;
+  }
 };
 
 /// A pending occluder fragment: `fragment.ref` is the node whose child slot it enters next
@@ -120,8 +134,9 @@ struct OcclusionInsert {
       scale = std::max(scale, norm1(frag[i]));
     }
     OcclusionChain& chain = t.current_;
-    chain = OcclusionChain{};
-    chain.edge_count = beam_edges(t, frag);
+    chain.clear();
+    remember_corners(chain, frag, polygon);
+    chain.edge_count = beam_edges(t, frag, polygon);
     if (chain.edge_count == 0) return false;
     chain.is_box = false;
     chain.closing[0] = own;
@@ -150,8 +165,8 @@ struct OcclusionInsert {
       scale = std::max(scale, norm1(frag[static_cast<std::size_t>(i)]));
     }
     OcclusionChain& chain = t.current_;
-    chain = OcclusionChain{};
-    chain.edge_count = beam_edges(t, frag);
+    chain.clear();
+    chain.edge_count = beam_edges(t, frag, proxy.corners);
     if (chain.edge_count == 0) return false;
     chain.is_box = true;
     for (int f = 0; f < proxy.face_count; ++f) {
@@ -177,14 +192,15 @@ struct OcclusionInsert {
   // The occluder's beam planes into the chain's edges, longest edge (in angle) first: a query passing
   // beside the occluder is most likely outside a long edge, so it leaves the chain after fewer steps.
   // (The chain's region does not depend on the order.)
-  static std::size_t beam_edges(Tree& t, const ConvexPolygon& outline) {
+  // `world` holds the outline's corners in world coordinates (the seams name edges by them).
+  static std::size_t beam_edges(Tree& t, const ConvexPolygon& outline, const glm::vec3* world) {
     OcclusionChain& chain = t.current_;
     float angles[ConvexPolygon::capacity];  // 1 - cos of each edge's angle: same order as the angle
-    glm::vec3 corners[ConvexPolygon::capacity];
-    const std::size_t n = beam_planes(outline, t.params_.min_angle, chain.edges, angles, corners);
+    std::uint32_t sources[ConvexPolygon::capacity];
+    const std::size_t n = beam_planes(outline, t.params_.min_angle, chain.edges, angles, sources);
     ++t.occluder_serial_;
     for (std::size_t i = 0; i < n; ++i)
-      chain.edge_seams[i] = edge_seam(t, chain.edges[i], corners[i], corners[(i + 1) % n]);
+      chain.edge_seams[i] = edge_seam(t, chain.edges[i], world[sources[i]], world[sources[(i + 1) % n]]);
     for (std::size_t i = 1; i < n; ++i) {
       const Plane plane = chain.edges[i];
       const std::uint32_t seam = chain.edge_seams[i];
@@ -202,15 +218,14 @@ struct OcclusionInsert {
     return n;
   }
 
-  // The seam code (OcclusionNode::seam) of the edge plane through the eye and a-b.
+  // The seam code (OcclusionNode::seam) of the edge plane through the eye and the edge with world
+  // corners a-b: its edge id, and whether the plane's normal agrees with the edge's canonical normal
+  // (parallel vectors: the sign of their dot product is certain).
   static std::uint32_t edge_seam(Tree& t, const Plane& plane, const glm::vec3& a, const glm::vec3& b) {
-    bool forward = false;  // cross(a, b) is the seam's canonical normal
-    const SeamKey key = seam_key(a, b, forward);
-    const std::uint32_t id = t.seams_.use(key, t.occluder_serial_);
+    const std::uint32_t id = t.seams_.use(a, b, t.occluder_serial_);
     if (id >= Tree::no_seam / 2) return Tree::no_seam;
-    const glm::dvec3 ab = glm::cross(glm::dvec3(a), glm::dvec3(b));
-    const bool along_ab = glm::dot(glm::dvec3(plane.normal), ab) > 0.0;
-    return 2 * id + (along_ab == forward ? 1u : 0u);
+    const bool agrees = glm::dot(glm::dvec3(plane.normal), t.seams_.canonical_normal(id)) > 0.0;
+    return 2 * id + (agrees ? 1u : 0u);
   }
 
   [[nodiscard]] static std::uint32_t slot_value(const Tree& t, std::uint32_t parent, bool inside) {
@@ -273,10 +288,20 @@ struct OcclusionInsert {
           inside = behind;
           continue;
         }
-        if (top == work.size()) work.resize(2 * top);  // `node` stays valid: the node array does not move
+        if (top + 1 >= work.size()) work.resize(2 * work.size());  // `node` stays valid: the node array does not move
         Fragment& in_piece = work[top].fragment;
-        FragmentSide side = classify_fragment(*cur, node.plane, chain.split_epsilon);
-        if (side == FragmentSide::split) side = split_fragment(*cur, node.plane, chain.split_epsilon, in_piece, *alt);
+        bool in_band = false;  // some corner within split_epsilon of the plane (polygon occluders only)
+        FragmentSide side = chain.is_box ? classify_fragment(*cur, node.plane, chain.split_epsilon)
+                                         : classify_with_band(*cur, node.plane, chain.split_epsilon, in_band);
+        if (in_band && node.kind == NodeKind::edge &&
+            (side == FragmentSide::inside || side == FragmentSide::outside) &&
+            reaches_across(t, node, *cur, chain.split_epsilon, side == FragmentSide::inside)) {
+          // A sliver truly across the edge's plane: each side gets the part within the band there.
+          side = overlapping_pieces(*cur, node.plane, chain.split_epsilon, in_piece, *alt) ? FragmentSide::split
+                                                                                            : FragmentSide::undecided;
+        } else if (side == FragmentSide::split) {
+          side = split_fragment(*cur, node.plane, chain.split_epsilon, in_piece, *alt);
+        }
         if (side == FragmentSide::inside) {
           cur->ref = ref;
           inside = true;
@@ -304,6 +329,90 @@ struct OcclusionInsert {
           break;
         }
       }
+    }
+  }
+
+  // classify_fragment, also telling whether some corner lies within `epsilon` of the plane.
+  [[nodiscard]] static FragmentSide classify_with_band(const Fragment& f, const Plane& plane, float epsilon,
+                                                       bool& in_band) noexcept {
+    bool front = false, back = false, band = false, nan = false;
+    for (std::uint32_t i = 0; i < f.size; ++i) {
+      const float d = signed_distance(plane, f.v[i]);
+      front |= d > epsilon;
+      back |= d < -epsilon;
+      band |= std::fabs(d) <= epsilon;
+      nan |= !finite_distance(d);
+    }
+    in_band = band;
+    if (nan) return FragmentSide::undecided;
+    if (front && back) return FragmentSide::split;
+    return front ? FragmentSide::inside : (back ? FragmentSide::outside : FragmentSide::on);
+  }
+
+  // True if a fragment that lies on one side of an edge plane (`inward`: the inside), within the band
+  // of it, may reach across its true plane: a corner in the band is truly on the other side. Queries split at the true plane of a shared edge (seams.hpp) and trust
+  // each side's subtree for the points truly there, so a sliver of an occluder across it (nearly
+  // collinear edges of a mesh) must be found on both sides. A corner of the occluder itself is placed
+  // exactly (its world corner against the plane through the eye and the edge's world corners); a
+  // mesh's shared corners, and the corners of collinear edges, lie on it and reach no further.
+  [[nodiscard]] static bool reaches_across(const Tree& t, const Node& node, const Fragment& f, float epsilon,
+                                           bool inward) {
+    const OcclusionChain& chain = t.current_;
+    for (std::uint32_t i = 0; i < f.size; ++i) {
+      const float d = signed_distance(node.plane, f.v[i]);
+      if (inward ? !(d <= epsilon) : !(d >= -epsilon)) continue;  // clearly on the fragment's side
+      if (node.seam == Tree::no_seam) return true;
+      int k = 0;
+      while (k < chain.corner_count && !same_corner(f.v[i], chain.corners[k])) ++k;
+      int truly;
+      if (k < chain.corner_count) {
+        if (t.seams_.is_corner(node.seam >> 1, chain.world[k])) continue;  // a shared corner: on the plane
+        truly = t.seams_.true_side(node.seam, chain.world[k]);
+      } else {
+        // Made by a split: placed in double precision against the true plane; a corner within
+        // rounding of it (cut on a plane of the same edge) counts as on it.
+        const glm::dvec3 normal = t.seams_.canonical_normal(node.seam >> 1);
+        const glm::dvec3 p(f.v[i]);
+        const double along = glm::dot(normal, p) / glm::length(normal);
+        if (!(std::fabs(along) > 1e-6 * glm::length(p))) continue;
+        truly = ((along > 0.0) == ((node.seam & 1u) != 0)) ? 1 : -1;
+      }
+      if (inward ? truly < 0 : truly > 0) return true;
+    }
+    return false;
+  }
+
+  [[nodiscard]] static bool same_corner(const glm::vec3& a, const glm::vec3& b) noexcept {
+    return float_bits(a.x) == float_bits(b.x) && float_bits(a.y) == float_bits(b.y) && float_bits(a.z) == float_bits(b.z);
+  }
+
+  // The two pieces of `f` that reach the band of `plane` from either side: `in` gets the part at
+  // distance >= -epsilon, `out` the part at distance <= epsilon. False when a piece has no area or
+  // too many corners (the fragment is then dropped: losing occluder area is safe).
+  [[nodiscard]] static bool overlapping_pieces(const Fragment& f, const Plane& plane, float epsilon, Fragment& in,
+                                               Fragment& out) {
+    Fragment scratch;
+    const Plane inner{plane.normal, plane.d + epsilon};    // distance >= -epsilon: positive here
+    const Plane outer{-plane.normal, -plane.d + epsilon};  // distance <= epsilon: positive here
+    if (!keep_positive(f, inner, in, scratch) || !keep_positive(f, outer, out, scratch)) return false;
+    return in.size >= 3 && out.size >= 3;
+  }
+
+  // The part of `f` at distance >= 0 from `plane`, into `out`.
+  [[nodiscard]] static bool keep_positive(const Fragment& f, const Plane& plane, Fragment& out, Fragment& scratch) {
+    const FragmentSide side = split_fragment(f, plane, 0.0f, out, scratch);
+    if (side == FragmentSide::split) return true;
+    if (side != FragmentSide::inside && side != FragmentSide::on) return false;
+    out.size = f.size;
+    for (std::uint32_t i = 0; i < f.size; ++i) out.v[i] = f.v[i];
+    return true;
+  }
+
+  static void remember_corners(OcclusionChain& chain, const ConvexPolygon& outline, const glm::vec3* world) {
+    chain.corner_count = static_cast<int>(outline.size());
+    for (std::size_t i = 0; i < outline.size(); ++i) {
+      chain.corners[i] = outline[i];
+      chain.world[i] = world[i];
     }
   }
 

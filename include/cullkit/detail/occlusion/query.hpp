@@ -32,6 +32,8 @@ struct QueryFragment {
   /// The seams this fragment only stands for one side of: `2 * id + 1` for the positive side of
   /// seam `id`'s canonical plane, `2 * id` for the negative side.
   std::uint32_t assumed[max_seam_assumptions];
+  /// The edge (seam table id) at whose node each assumption was made.
+  std::uint32_t assumed_edge[max_seam_assumptions];
   std::uint32_t assumed_count;
 };
 
@@ -115,7 +117,10 @@ template <std::size_t Capacity>
 template <std::size_t Capacity>
 inline void copy_assumptions(const QueryFragment<Capacity>& from, QueryFragment<Capacity>& to) noexcept {
   to.assumed_count = from.assumed_count;
-  for (std::uint32_t i = 0; i < from.assumed_count; ++i) to.assumed[i] = from.assumed[i];
+  for (std::uint32_t i = 0; i < from.assumed_count; ++i) {
+    to.assumed[i] = from.assumed[i];
+    to.assumed_edge[i] = from.assumed_edge[i];
+  }
 }
 
 /// Copies the used vertices, the size, the slot and the seam assumptions of a fragment.
