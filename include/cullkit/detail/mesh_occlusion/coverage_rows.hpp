@@ -1,6 +1,6 @@
 // cullkit/detail/mesh_occlusion/coverage_rows.hpp: the row kernels of CoverageGrid (coverage.hpp),
 // the loops that run over the cells of one grid row: freezing covered cells, adding a patch's grid
-// into the union (and taking its nearer bounds), lowering depth bounds along a row, accumulating crossings and
+// into the union (freezing and taking its nearer bounds in the same pass), lowering depth bounds along a row, accumulating crossings and
 // the per-tile minimum. Each has its scalar form and, where the compiler targets them, SSE2 and AVX2
 // forms with the same comparisons and float operations, so the answers never depend on the build.
 // Included by coverage.hpp after the class; not on its own.
@@ -22,26 +22,29 @@ inline std::size_t CoverageGrid::freeze(int j, int a, int b) {
   float* depth = depth_.data() + base;
   std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
   std::size_t covered = 0;
+  // A cell is covered once its bit is set: by freezing, by a nearer patch bound, or by seed_frozen
+  // (whose cells keep depth 0 in a patch's grid), so the bit, not the depth, says it is taken.
   const auto one = [&](int i) {
-    if (net[i] >= 1 && depth[i] == 0.0f) {
+    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+    if (net[i] >= 1 && (frozen[i >> 6] & bit) == 0) {
       depth[i] = bound[i];
-      frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
+      frozen[i >> 6] |= bit;
       ++covered;
     }
   };
   int i = a;
 #if CULLKIT_COVERAGE_AVX2
   for (; i <= b && (i & 7) != 0; ++i) one(i);
-  const __m256i zero8_i = _mm256_setzero_si256();
-  const __m256 zero8_f = _mm256_setzero_ps();
+  const __m256i zero8 = _mm256_setzero_si256();
+  const __m256i lane_bit8 = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
   for (; i + 7 <= b; i += 8) {
     const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(net + i));
-    const __m256 d = _mm256_loadu_ps(depth + i);
-    const __m256 fresh = _mm256_and_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(c, zero8_i)),
-                                       _mm256_cmp_ps(d, zero8_f, _CMP_EQ_OQ));
-    const int mask = _mm256_movemask_ps(fresh);
+    const int positive = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(c, zero8)));
+    const int mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xffu);
     if (mask == 0) continue;
-    _mm256_storeu_ps(depth + i, _mm256_blendv_ps(d, _mm256_loadu_ps(bound + i), fresh));
+    const __m256 fresh = _mm256_castsi256_ps(
+        _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), lane_bit8), lane_bit8));
+    _mm256_storeu_ps(depth + i, _mm256_blendv_ps(_mm256_loadu_ps(depth + i), _mm256_loadu_ps(bound + i), fresh));
     frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
     covered += bits_in_nibble(mask & 15) + bits_in_nibble(mask >> 4);
   }
@@ -50,14 +53,15 @@ inline std::size_t CoverageGrid::freeze(int j, int a, int b) {
   // Groups of four aligned on the row (a word of frozen bits holds 16 of them): the same
   // comparisons, four at once.
   for (; i <= b && (i & 3) != 0; ++i) one(i);
-  const __m128i zero_i = _mm_setzero_si128();
-  const __m128 zero_f = _mm_setzero_ps();
+  const __m128i zero = _mm_setzero_si128();
+  const __m128i lane_bit = _mm_setr_epi32(1, 2, 4, 8);
   for (; i + 3 <= b; i += 4) {
     const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(net + i));
-    const __m128 d = _mm_loadu_ps(depth + i);
-    const __m128 fresh = _mm_and_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(c, zero_i)), _mm_cmpeq_ps(d, zero_f));
-    const int mask = _mm_movemask_ps(fresh);
+    const int positive = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(c, zero)));
+    const int mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xfu);
     if (mask == 0) continue;
+    const __m128 fresh = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(mask), lane_bit), lane_bit));
+    const __m128 d = _mm_loadu_ps(depth + i);
     _mm_storeu_ps(depth + i, _mm_or_ps(_mm_and_ps(fresh, _mm_loadu_ps(bound + i)), _mm_andnot_ps(fresh, d)));
     frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
     covered += bits_in_nibble(mask);
@@ -67,77 +71,150 @@ inline std::size_t CoverageGrid::freeze(int j, int a, int b) {
   return covered;
 }
 
-inline std::size_t CoverageGrid::absorb(const CoverageGrid& patch, bool layers) {
+inline std::uint64_t CoverageGrid::nearer_bits(const float* row, int lo, int hi, float limit) {
+  std::uint64_t bits = 0;
+  int i = lo;
+  const auto one = [&](int k) {
+    if (row[k] >= limit) bits |= std::uint64_t{1} << (k & 63);
+  };
+#if CULLKIT_COVERAGE_AVX2
+  const __m256 limit8 = _mm256_set1_ps(limit);
+  for (; i + 7 <= hi; i += 8)
+    bits |= static_cast<std::uint64_t>(_mm256_movemask_ps(_mm256_cmp_ps(_mm256_loadu_ps(row + i), limit8, _CMP_GE_OQ)))
+            << (i & 63);
+#endif
+#if CULLKIT_HAS_SSE2
+  const __m128 limit4 = _mm_set1_ps(limit);
+  for (; i + 3 <= hi; i += 4)
+    bits |= static_cast<std::uint64_t>(_mm_movemask_ps(_mm_cmpge_ps(_mm_loadu_ps(row + i), limit4))) << (i & 63);
+#endif
+  for (; i <= hi; ++i) one(i);
+  return bits;
+}
+
+inline std::size_t CoverageGrid::absorb(CoverageGrid& patch, bool layers) {
   if (patch.dirty_.empty()) return 0;
   grow(dirty_, patch.dirty_);
   std::size_t covered = 0;
   for (int n = 0; n < patch.used_row_count_; ++n) {
     const int j = patch.used_rows_[static_cast<std::size_t>(n)];
     const int i0 = patch.used_lo_[static_cast<std::size_t>(j)], i1 = patch.used_hi_[static_cast<std::size_t>(j)];
-    const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-    std::int32_t* net = net_.data() + base;
-    float* bound = bound_.data() + base;
-    const std::int32_t* from_net = patch.net_.data() + base;
-    const float* from_bound = patch.bound_.data() + base;
-    int i = i0;
-#if CULLKIT_COVERAGE_AVX2
-    for (; i + 7 <= i1; i += 8) {
-      const auto at = [i](const std::int32_t* p) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + i)); };
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(net + i), _mm256_add_epi32(at(net), at(from_net)));
-      _mm256_storeu_ps(bound + i, _mm256_min_ps(_mm256_loadu_ps(from_bound + i), _mm256_loadu_ps(bound + i)));
-    }
-#endif
-#if CULLKIT_HAS_SSE2
-    for (; i + 3 <= i1; i += 4) {
-      const auto at = [i](const std::int32_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + i)); };
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(net + i), _mm_add_epi32(at(net), at(from_net)));
-      // min(bound, from) as std::min takes it: `from` where it is smaller, else `bound`.
-      _mm_storeu_ps(bound + i, _mm_min_ps(_mm_loadu_ps(from_bound + i), _mm_loadu_ps(bound + i)));
-    }
-#endif
-    for (; i <= i1; ++i) {
-      net[i] += from_net[i];
-      bound[i] = std::min(bound[i], from_bound[i]);
-    }
+    patch.used_lo_[static_cast<std::size_t>(j)] = width_;
+    patch.used_hi_[static_cast<std::size_t>(j)] = -1;
     use(j, i0, i1);
-    covered += freeze(j, i0, i1);
-    if (layers) take_nearer(j, i0, i1, patch.depth_.data() + base);
+    covered += absorb_row(patch, j, i0, i1, layers);
   }
+  patch.used_row_count_ = 0;
   return covered;
 }
 
-inline void CoverageGrid::take_nearer(int j, int i0, int i1, const float* from) {
-  float* to = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+inline std::size_t CoverageGrid::absorb_row(CoverageGrid& patch, int j, int i0, int i1, bool layers) {
+  const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+  std::int32_t* net = net_.data() + base;
+  float* bound = bound_.data() + base;
+  float* depth = depth_.data() + base;
   std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+  std::int32_t* from_net = patch.net_.data() + base;
+  float* from_bound = patch.bound_.data() + base;
+  float* from_depth = patch.depth_.data() + base;
+  constexpr float empty_bound = std::numeric_limits<float>::infinity();
+  std::size_t covered = 0;
+  // Per cell, in this order: the sums, then freezing at the running bound, then the patch's nearer
+  // bound; the patch's cell is left empty behind.
   const auto one = [&](int i) {
-    if (!(from[i] > to[i])) return;
-    to[i] = from[i];
-    frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
+    net[i] += from_net[i];
+    bound[i] = std::min(bound[i], from_bound[i]);
+    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+    if (net[i] >= 1 && (frozen[i >> 6] & bit) == 0) {
+      depth[i] = bound[i];
+      frozen[i >> 6] |= bit;
+      ++covered;
+    }
+    if (layers && from_depth[i] > depth[i]) {
+      depth[i] = from_depth[i];
+      frozen[i >> 6] |= bit;
+    }
+    from_net[i] = 0;
+    from_bound[i] = empty_bound;
+    from_depth[i] = 0.0f;
   };
   int i = i0;
 #if CULLKIT_COVERAGE_AVX2
   for (; i <= i1 && (i & 7) != 0; ++i) one(i);
+  const __m256i zero8 = _mm256_setzero_si256();
+  const __m256i lane_bit8 = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m256 empty8 = _mm256_set1_ps(empty_bound), zero8_f = _mm256_setzero_ps();
   for (; i + 7 <= i1; i += 8) {
-    const __m256 a = _mm256_loadu_ps(from + i), b = _mm256_loadu_ps(to + i);
-    const __m256 nearer = _mm256_cmp_ps(a, b, _CMP_GT_OQ);
-    const int mask = _mm256_movemask_ps(nearer);
-    if (mask == 0) continue;
-    _mm256_storeu_ps(to + i, _mm256_blendv_ps(b, a, nearer));
-    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+    const auto load_i = [i](const std::int32_t* p) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + i)); };
+    const __m256i c = _mm256_add_epi32(load_i(net), load_i(from_net));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(net + i), c);
+    const __m256 b = _mm256_min_ps(_mm256_loadu_ps(from_bound + i), _mm256_loadu_ps(bound + i));
+    _mm256_storeu_ps(bound + i, b);
+    const int positive = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(c, zero8)));
+    const int fresh_mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xffu);
+    __m256 d = _mm256_loadu_ps(depth + i);
+    if (fresh_mask != 0) {
+      const __m256 fresh = _mm256_castsi256_ps(
+          _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(fresh_mask), lane_bit8), lane_bit8));
+      d = _mm256_blendv_ps(d, b, fresh);
+      covered += bits_in_nibble(fresh_mask & 15) + bits_in_nibble(fresh_mask >> 4);
+    }
+    int taken = fresh_mask;
+    if (layers) {
+      const __m256 own = _mm256_loadu_ps(from_depth + i);
+      const __m256 nearer = _mm256_cmp_ps(own, d, _CMP_GT_OQ);
+      const int nearer_mask = _mm256_movemask_ps(nearer);
+      if (nearer_mask != 0) d = _mm256_blendv_ps(d, own, nearer);
+      taken |= nearer_mask;
+    }
+    if (taken != 0) {
+      _mm256_storeu_ps(depth + i, d);
+      frozen[i >> 6] |= static_cast<std::uint64_t>(taken) << (i & 63);
+    }
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(from_net + i), zero8);
+    _mm256_storeu_ps(from_bound + i, empty8);
+    _mm256_storeu_ps(from_depth + i, zero8_f);
   }
 #endif
 #if CULLKIT_HAS_SSE2
   for (; i <= i1 && (i & 3) != 0; ++i) one(i);
+  const __m128i zero = _mm_setzero_si128();
+  const __m128i lane_bit = _mm_setr_epi32(1, 2, 4, 8);
+  const __m128 empty4 = _mm_set1_ps(empty_bound), zero_f = _mm_setzero_ps();
   for (; i + 3 <= i1; i += 4) {
-    const __m128 a = _mm_loadu_ps(from + i), b = _mm_loadu_ps(to + i);
-    const __m128 nearer = _mm_cmpgt_ps(a, b);
-    const int mask = _mm_movemask_ps(nearer);
-    if (mask == 0) continue;
-    _mm_storeu_ps(to + i, _mm_or_ps(_mm_and_ps(nearer, a), _mm_andnot_ps(nearer, b)));
-    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+    const auto load_i = [i](const std::int32_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + i)); };
+    const __m128i c = _mm_add_epi32(load_i(net), load_i(from_net));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(net + i), c);
+    // min(bound, from) as std::min takes it: `from` where it is smaller, else `bound`.
+    const __m128 b = _mm_min_ps(_mm_loadu_ps(from_bound + i), _mm_loadu_ps(bound + i));
+    _mm_storeu_ps(bound + i, b);
+    const int positive = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(c, zero)));
+    const int fresh_mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xfu);
+    __m128 d = _mm_loadu_ps(depth + i);
+    if (fresh_mask != 0) {
+      const __m128 fresh = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(fresh_mask), lane_bit), lane_bit));
+      d = _mm_or_ps(_mm_and_ps(fresh, b), _mm_andnot_ps(fresh, d));
+      covered += bits_in_nibble(fresh_mask);
+    }
+    int taken = fresh_mask;
+    if (layers) {
+      const __m128 own = _mm_loadu_ps(from_depth + i);
+      const __m128 nearer = _mm_cmpgt_ps(own, d);
+      const int nearer_mask = _mm_movemask_ps(nearer);
+      if (nearer_mask != 0) d = _mm_or_ps(_mm_and_ps(nearer, own), _mm_andnot_ps(nearer, d));
+      taken |= nearer_mask;
+    }
+    if (taken != 0) {
+      _mm_storeu_ps(depth + i, d);
+      frozen[i >> 6] |= static_cast<std::uint64_t>(taken) << (i & 63);
+    }
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(from_net + i), zero);
+    _mm_storeu_ps(from_bound + i, empty4);
+    _mm_storeu_ps(from_depth + i, zero_f);
   }
 #endif
   for (; i <= i1; ++i) one(i);
+  return covered;
 }
 
 inline float CoverageGrid::tile_minimum(int j0, int j1, int i0, int i1) const {
