@@ -221,16 +221,19 @@ class CoverageGrid {
     std::size_t covered = 0;
     for (int n = 0; n < band_row_count_; ++n) {
       const int j = band_rows_[static_cast<std::size_t>(n)];
-      const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
       const int i0 = band_lo_[static_cast<std::size_t>(j)], i1 = band_hi_[static_cast<std::size_t>(j)];
       band_lo_[static_cast<std::size_t>(j)] = width_;
       band_hi_[static_cast<std::size_t>(j)] = -1;
       // A band that added no crossings (the union's, which takes whole patches' counts) leaves the
       // row's counts as they are: nothing to accumulate.
-      const int last = band_crossings_ ? accumulate_row(base, i0, i1) - 1 : i1;
+      int last = i1;
+      if (band_crossings_) {
+        covered += accumulate_freeze_row(j, i0, i1, last);
+      } else {
+        covered += freeze(j, i0, last);
+      }
       grow(dirty_, CellRect{i0, j, last, j});
       use(j, i0, last);
-      covered += freeze(j, i0, last);
     }
     band_row_count_ = 0;
     band_crossings_ = false;
@@ -510,8 +513,20 @@ class CoverageGrid {
   // Adds the running sum of the row's crossings (diff_, cleared on the way) to its counts, from i0
   // through i1, and on to the row's end while the sum is not zero: a crossing beyond the last column
   // is dropped, so a row's sum need not return to zero. Every crossing of the band lies in
-  // [i0, i1] (`mark`), so past i1 the sum is constant. Returns one past the last cell changed.
-  int accumulate_row(std::size_t base, int i0, int i1);
+  // [i0, i1] (`mark`), so past i1 the sum is constant. In the same pass, freezes the cells whose
+  // count makes them covered (as `freeze` would after it). `last` gets the last cell changed;
+  // returns how many cells it covered.
+  std::size_t accumulate_freeze_row(int j, int i0, int i1, int& last);
+
+#if CULLKIT_COVERAGE_AVX2
+  // Freezes those of the eight cells from i (a multiple of 8) whose count `c` is at least one and
+  // that are not covered yet; returns how many.
+  static std::size_t freeze8(__m256i c, int i, const float* bound, float* depth, std::uint64_t* frozen);
+#endif
+#if CULLKIT_HAS_SSE2
+  // The same for the four cells from i (a multiple of 4).
+  static std::size_t freeze4(__m128i c, int i, const float* bound, float* depth, std::uint64_t* frozen);
+#endif
 
   // Cell range [i0, i1] of row j changed in this band: end_band scans it.
   void mark(int j, int i0, int i1) {

@@ -35,41 +35,46 @@ inline std::size_t CoverageGrid::freeze(int j, int a, int b) {
   int i = a;
 #if CULLKIT_COVERAGE_AVX2
   for (; i <= b && (i & 7) != 0; ++i) one(i);
-  const __m256i zero8 = _mm256_setzero_si256();
-  const __m256i lane_bit8 = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-  for (; i + 7 <= b; i += 8) {
-    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(net + i));
-    const int positive = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(c, zero8)));
-    const int mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xffu);
-    if (mask == 0) continue;
-    const __m256 fresh = _mm256_castsi256_ps(
-        _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), lane_bit8), lane_bit8));
-    _mm256_storeu_ps(depth + i, _mm256_blendv_ps(_mm256_loadu_ps(depth + i), _mm256_loadu_ps(bound + i), fresh));
-    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
-    covered += bits_in_nibble(mask & 15) + bits_in_nibble(mask >> 4);
-  }
+  for (; i + 7 <= b; i += 8)
+    covered += freeze8(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(net + i)), i, bound, depth, frozen);
 #endif
 #if CULLKIT_HAS_SSE2
   // Groups of four aligned on the row (a word of frozen bits holds 16 of them): the same
   // comparisons, four at once.
   for (; i <= b && (i & 3) != 0; ++i) one(i);
-  const __m128i zero = _mm_setzero_si128();
-  const __m128i lane_bit = _mm_setr_epi32(1, 2, 4, 8);
-  for (; i + 3 <= b; i += 4) {
-    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(net + i));
-    const int positive = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(c, zero)));
-    const int mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xfu);
-    if (mask == 0) continue;
-    const __m128 fresh = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(mask), lane_bit), lane_bit));
-    const __m128 d = _mm_loadu_ps(depth + i);
-    _mm_storeu_ps(depth + i, _mm_or_ps(_mm_and_ps(fresh, _mm_loadu_ps(bound + i)), _mm_andnot_ps(fresh, d)));
-    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
-    covered += bits_in_nibble(mask);
-  }
+  for (; i + 3 <= b; i += 4)
+    covered += freeze4(_mm_loadu_si128(reinterpret_cast<const __m128i*>(net + i)), i, bound, depth, frozen);
 #endif
   for (; i <= b; ++i) one(i);
   return covered;
 }
+
+#if CULLKIT_COVERAGE_AVX2
+inline std::size_t CoverageGrid::freeze8(__m256i c, int i, const float* bound, float* depth, std::uint64_t* frozen) {
+  const int positive = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(c, _mm256_setzero_si256())));
+  const int mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xffu);
+  if (mask == 0) return 0;
+  const __m256i lane_bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m256 fresh = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), lane_bit), lane_bit));
+  _mm256_storeu_ps(depth + i, _mm256_blendv_ps(_mm256_loadu_ps(depth + i), _mm256_loadu_ps(bound + i), fresh));
+  frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+  return bits_in_nibble(mask & 15) + bits_in_nibble(mask >> 4);
+}
+#endif
+
+#if CULLKIT_HAS_SSE2
+inline std::size_t CoverageGrid::freeze4(__m128i c, int i, const float* bound, float* depth, std::uint64_t* frozen) {
+  const int positive = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(c, _mm_setzero_si128())));
+  const int mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xfu);
+  if (mask == 0) return 0;
+  const __m128i lane_bit = _mm_setr_epi32(1, 2, 4, 8);
+  const __m128 fresh = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(mask), lane_bit), lane_bit));
+  const __m128 d = _mm_loadu_ps(depth + i);
+  _mm_storeu_ps(depth + i, _mm_or_ps(_mm_and_ps(fresh, _mm_loadu_ps(bound + i)), _mm_andnot_ps(fresh, d)));
+  frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+  return bits_in_nibble(mask);
+}
+#endif
 
 inline std::uint64_t CoverageGrid::nearer_bits(const float* row, int lo, int hi, float limit) {
   std::uint64_t bits = 0;
@@ -282,15 +287,35 @@ inline void CoverageGrid::lower_row_flat(float* row, int i0, int i1, float lowes
   for (; i <= i1; ++i) row[i] = std::min(row[i], lowest);
 }
 
-inline int CoverageGrid::accumulate_row(std::size_t base, int i0, int i1) {
+inline std::size_t CoverageGrid::accumulate_freeze_row(int j, int i0, int i1, int& last) {
+  const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
   std::int32_t* diff = diff_.data() + base;
   std::int32_t* count = net_.data() + base;
+  const float* bound = bound_.data() + base;
+  float* depth = depth_.data() + base;
+  std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+  std::size_t covered = 0;
   std::int32_t run = 0;
+  const auto freeze_cell = [&](int i) {
+    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+    if (count[i] >= 1 && (frozen[i >> 6] & bit) == 0) {
+      depth[i] = bound[i];
+      frozen[i >> 6] |= bit;
+      ++covered;
+    }
+  };
+  const auto one = [&](int i) {
+    run += diff[i];
+    diff[i] = 0;
+    count[i] += run;
+    freeze_cell(i);
+  };
   int i = i0;
 #if CULLKIT_COVERAGE_AVX2
   // Eight cells at a time: a prefix sum within each half, the low half's total added to the high
   // half, plus the carry so far (exact integer sums, as the scalar loop's).
-  __m256i carry8 = _mm256_setzero_si256();
+  for (; i <= i1 && (i & 7) != 0; ++i) one(i);
+  __m256i carry8 = _mm256_set1_epi32(run);
   const __m256i zero8 = _mm256_setzero_si256(), last_lane = _mm256_set1_epi32(7);
   for (; i + 7 <= i1; i += 8) {
     __m256i d = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(diff + i));
@@ -299,14 +324,16 @@ inline int CoverageGrid::accumulate_row(std::size_t base, int i0, int i1) {
     d = _mm256_add_epi32(d, _mm256_slli_si256(d, 8));
     d = _mm256_add_epi32(d, _mm256_shuffle_epi32(_mm256_permute2x128_si256(d, d, 0x08), 0xFF));
     d = _mm256_add_epi32(d, carry8);
-    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), _mm256_add_epi32(c, d));
+    const __m256i c = _mm256_add_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i)), d);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), c);
+    covered += freeze8(c, i, bound, depth, frozen);
     carry8 = _mm256_permutevar8x32_epi32(d, last_lane);
   }
   run = _mm256_cvtsi256_si32(carry8);
 #endif
 #if CULLKIT_HAS_SSE2
   // Four cells at a time: an in-register prefix sum (two shifted adds) plus the carry so far.
+  for (; i <= i1 && (i & 3) != 0; ++i) one(i);
   __m128i carry = _mm_set1_epi32(run);
   const __m128i zero = _mm_setzero_si128();
   for (; i + 3 <= i1; i += 4) {
@@ -315,34 +342,44 @@ inline int CoverageGrid::accumulate_row(std::size_t base, int i0, int i1) {
     d = _mm_add_epi32(d, _mm_slli_si128(d, 4));
     d = _mm_add_epi32(d, _mm_slli_si128(d, 8));
     d = _mm_add_epi32(d, carry);
-    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(count + i), _mm_add_epi32(c, d));
+    const __m128i c = _mm_add_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i)), d);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(count + i), c);
+    covered += freeze4(c, i, bound, depth, frozen);
     carry = _mm_shuffle_epi32(d, 0xFF);
   }
   run = _mm_cvtsi128_si32(carry);
 #endif
-  for (; i <= i1; ++i) {
-    run += diff[i];
-    diff[i] = 0;
-    count[i] += run;
+  for (; i <= i1; ++i) one(i);
+  if (run == 0) {
+    last = i - 1;
+    return covered;
   }
-  if (run == 0) return i;
+  // Past the band's last crossing the sum is constant: it is added on to the row's end.
+  const auto shift = [&](int k) {
+    count[k] += run;
+    freeze_cell(k);
+  };
 #if CULLKIT_COVERAGE_AVX2
+  for (; i < width_ && (i & 7) != 0; ++i) shift(i);
   const __m256i add8 = _mm256_set1_epi32(run);
   for (; i + 8 <= width_; i += 8) {
-    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), _mm256_add_epi32(c, add8));
+    const __m256i c = _mm256_add_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i)), add8);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), c);
+    covered += freeze8(c, i, bound, depth, frozen);
   }
 #endif
 #if CULLKIT_HAS_SSE2
+  for (; i < width_ && (i & 3) != 0; ++i) shift(i);
   const __m128i add = _mm_set1_epi32(run);
   for (; i + 4 <= width_; i += 4) {
-    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(count + i), _mm_add_epi32(c, add));
+    const __m128i c = _mm_add_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i)), add);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(count + i), c);
+    covered += freeze4(c, i, bound, depth, frozen);
   }
 #endif
-  for (; i < width_; ++i) count[i] += run;
-  return i;
+  for (; i < width_; ++i) shift(i);
+  last = width_ - 1;
+  return covered;
 }
 
 }  // namespace mesh_occlusion
