@@ -279,8 +279,11 @@ class CoverageGrid {
     return open;
   }
 
-  /// Adds `patch` (a grid of the same size, after its last band) into this one, in one pass over
-  /// every cell it changed: its counts, outline counters and running bounds; then the cells this
+  /// Adds `patch` (a grid of the same size) into this one, in one pass over every cell it changed:
+  /// first the patch's band still open ends there (as its `end_band` would: the band's crossings
+  /// summed into its counts, and the cells it covers frozen in the patch's grid, so a patch needs
+  /// no pass of its own for its last band); then its counts, outline counters and running bounds
+  /// are added; then the cells this
   /// grid now covers freeze at its running bound; then, with `layers`, a cell the patch covers with
   /// a nearer bound takes the patch's (either set of occluders bounds the depth of every ray through
   /// the cell, so the nearer bound holds). Returns the cells newly covered by the counts.
@@ -463,8 +466,17 @@ class CoverageGrid {
   // Bit (i & 63) set for each i in [lo, hi] (one word's cells, lo <= hi) with row[i] >= limit.
   static std::uint64_t nearer_bits(const float* row, int lo, int hi, float limit);
 
-  // absorb's pass over the cells [i0, i1] of row j: returns the cells newly covered by the counts.
-  std::size_t absorb_row(CoverageGrid& patch, int j, int i0, int i1, bool layers);
+  // What absorb does to the cells of one row of `patch`: `band_row` when the patch's open band
+  // changed the row (its cells then freeze in the patch's grid first), `accumulate` when that band
+  // added crossings (summed into the patch's counts on the way).
+  struct AbsorbPass {
+    CoverageGrid& patch;
+    int j;
+    bool band_row, accumulate, layers;
+  };
+  // absorb's pass over the cells [a, b] of the row, `run` the crossings' sum carried in and out:
+  // returns the cells newly covered here by the counts.
+  std::size_t absorb_span(const AbsorbPass& pass, int a, int b, std::int32_t& run);
 
   // True when every cell of row j in [i0, i1] is covered (0 <= i0 <= i1 < width).
   [[nodiscard]] bool row_frozen(int j, int i0, int i1) const {
