@@ -1,8 +1,10 @@
 // cullkit/detail/mesh_occlusion/coverage_rows.hpp: the row kernels of CoverageGrid (coverage.hpp),
-// the loops that run over the cells of one grid row: freezing covered cells, adding a patch's grid
-// into the union (freezing and taking its nearer bounds in the same pass), lowering depth bounds along a row, accumulating crossings and
-// the per-tile minimum. Each has its scalar form and, where the compiler targets them, SSE2 and AVX2
-// forms with the same comparisons and float operations, so the answers never depend on the build.
+// the loops that run over the cells of one grid row: freezing covered cells, accumulating crossings
+// (and freezing in the same pass), adding a patch's grid into the union (ending its last band,
+// freezing and taking its nearer bounds in the same pass), seeding a patch's covered bits, lowering
+// depth bounds along a row and the per-tile minimum. Each has its scalar form and, where the
+// compiler targets them, SSE2 and AVX2 forms with the same comparisons and float operations, so the
+// answers never depend on the build.
 // Included by coverage.hpp after the class; not on its own.
 #pragma once
 
