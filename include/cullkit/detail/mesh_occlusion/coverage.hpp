@@ -221,16 +221,19 @@ class CoverageGrid {
     std::size_t covered = 0;
     for (int n = 0; n < band_row_count_; ++n) {
       const int j = band_rows_[static_cast<std::size_t>(n)];
-      const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
       const int i0 = band_lo_[static_cast<std::size_t>(j)], i1 = band_hi_[static_cast<std::size_t>(j)];
       band_lo_[static_cast<std::size_t>(j)] = width_;
       band_hi_[static_cast<std::size_t>(j)] = -1;
       // A band that added no crossings (the union's, which takes whole patches' counts) leaves the
       // row's counts as they are: nothing to accumulate.
-      const int last = band_crossings_ ? accumulate_row(base, i0, i1) - 1 : i1;
+      int last = i1;
+      if (band_crossings_) {
+        covered += accumulate_freeze_row(j, i0, i1, last);
+      } else {
+        covered += freeze(j, i0, last);
+      }
       grow(dirty_, CellRect{i0, j, last, j});
       use(j, i0, last);
-      covered += freeze(j, i0, last);
     }
     band_row_count_ = 0;
     band_crossings_ = false;
@@ -244,58 +247,43 @@ class CoverageGrid {
 
   /// Starts a patch's own grid over the cells `r` of `main` (the union, a grid of the same size): a
   /// cell that `main` covers with an inverse depth of at least `nearest` (the patch's nearest point)
-  /// can gain nothing from the patch, so it starts frozen at `main`'s depth and the patch's depth and
-  /// outline work skips it (as it skips cells its own earlier bands covered). Returns false when every
-  /// cell of `r` is such a cell.
+  /// can gain nothing from the patch, so it starts covered and the patch's depth and outline work
+  /// skips it (as it skips cells its own earlier bands covered). Only its covered bit is set: its
+  /// depth stays 0 here, since the union's is already at least as near and a patch's depth only
+  /// matters where it is nearer (`absorb`). Returns false when every cell of `r` is such a cell.
+  ///
+  /// A cell `main` has not covered holds depth 0, below any `nearest`: only the words of `main`'s
+  /// covered bits that have some bit set are compared cell by cell.
   bool seed_frozen(const CoverageGrid& main, const CellRect& r, float nearest) {
     if (r.empty()) return false;
     grow(dirty_, r);
+    // A `nearest` that is not positive (or NaN) is compared against every cell, covered or not, as
+    // a plain comparison would.
+    const bool every_cell = !(nearest > 0.0f);
     bool open = false;
     for (int j = r.y0; j <= r.y1; ++j) {
       const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
       const float* from = main.depth_.data() + base;
-      float* to = depth_.data() + base;
-      std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
-      const auto one = [&](int i) {
-        if (from[i] >= nearest) {
-          to[i] = from[i];
-          frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
-        } else {
-          open = true;
-        }
-      };
-      int i = r.x0;
-#if CULLKIT_COVERAGE_AVX2
-      for (; i <= r.x1 && (i & 7) != 0; ++i) one(i);
-      const __m256 limit8 = _mm256_set1_ps(nearest);
-      for (; i + 7 <= r.x1; i += 8) {
-        const __m256 d = _mm256_loadu_ps(from + i);
-        const __m256 near = _mm256_cmp_ps(d, limit8, _CMP_GE_OQ);
-        const int mask = _mm256_movemask_ps(near);
-        _mm256_storeu_ps(to + i, _mm256_and_ps(near, d));
-        frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
-        open = open || mask != 255;
+      const std::size_t word_base = static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+      const std::uint64_t* covered = main.frozen_bits_.data() + word_base;
+      std::uint64_t* frozen = frozen_bits_.data() + word_base;
+      for (int word = r.x0 >> 6; word <= r.x1 >> 6; ++word) {
+        const int lo = std::max(r.x0, word << 6), hi = std::min(r.x1, (word << 6) + 63);
+        const std::uint64_t range = (~std::uint64_t{0} << (lo & 63)) & (~std::uint64_t{0} >> (63 - (hi & 63)));
+        const std::uint64_t candidates = every_cell ? range : covered[word] & range;
+        const std::uint64_t seeded = candidates == 0 ? 0 : nearer_bits(from, lo, hi, nearest) & candidates;
+        frozen[word] |= seeded;
+        open = open || seeded != range;
       }
-#endif
-#if CULLKIT_HAS_SSE2
-      for (; i <= r.x1 && (i & 3) != 0; ++i) one(i);
-      const __m128 limit = _mm_set1_ps(nearest);
-      for (; i + 3 <= r.x1; i += 4) {
-        const __m128 d = _mm_loadu_ps(from + i);
-        const __m128 near = _mm_cmpge_ps(d, limit);
-        const int mask = _mm_movemask_ps(near);
-        _mm_storeu_ps(to + i, _mm_and_ps(near, d));  // the other cells start at 0 (uncovered)
-        frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
-        open = open || mask != 15;
-      }
-#endif
-      for (; i <= r.x1; ++i) one(i);
     }
     return open;
   }
 
-  /// Adds `patch` (a grid of the same size, after its last band) into this one, in one pass over
-  /// every cell it changed: its counts, outline counters and running bounds; then the cells this
+  /// Adds `patch` (a grid of the same size) into this one, in one pass over every cell it changed:
+  /// first the patch's band still open ends there (as its `end_band` would: the band's crossings
+  /// summed into its counts, and the cells it covers frozen in the patch's grid, so a patch needs
+  /// no pass of its own for its last band); then its counts, outline counters and running bounds
+  /// are added; then the cells this
   /// grid now covers freeze at its running bound; then, with `layers`, a cell the patch covers with
   /// a nearer bound takes the patch's (either set of occluders bounds the depth of every ray through
   /// the cell, so the nearer bound holds). Returns the cells newly covered by the counts.
@@ -304,7 +292,10 @@ class CoverageGrid {
   /// what freezing after it would: taking an edge out only raises counts, and bounds do not change.
   /// Taking the patch's bound before those later freezes does too: the running bound here is at
   /// most the patch's last running bound, which is at most the bound the patch froze the cell at.
-  std::size_t absorb(const CoverageGrid& patch, bool layers);
+  ///
+  /// The patch's grid is left empty where it was used (its counts, bounds and depths), so resetting
+  /// it for the next patch has only its covered bits left to clear.
+  std::size_t absorb(CoverageGrid& patch, bool layers);
 
   /// After the last band: per-tile minimum of the frozen inverse depths (0 where uncovered).
   void finish() {
@@ -472,9 +463,20 @@ class CoverageGrid {
   // row[i] = min(row[i], lowest) for i in [i0, i1].
   static void lower_row_flat(float* row, int i0, int i1, float lowest);
 
-  // Cells [i0, i1] of row j take the inverse depth in `from` (another grid's row) where it is larger,
-  // and count as covered.
-  void take_nearer(int j, int i0, int i1, const float* from);
+  // Bit (i & 63) set for each i in [lo, hi] (one word's cells, lo <= hi) with row[i] >= limit.
+  static std::uint64_t nearer_bits(const float* row, int lo, int hi, float limit);
+
+  // What absorb does to the cells of one row of `patch`: `band_row` when the patch's open band
+  // changed the row (its cells then freeze in the patch's grid first), `accumulate` when that band
+  // added crossings (summed into the patch's counts on the way).
+  struct AbsorbPass {
+    CoverageGrid& patch;
+    int j;
+    bool band_row, accumulate, layers;
+  };
+  // absorb's pass over the cells [a, b] of the row, `run` the crossings' sum carried in and out:
+  // returns the cells newly covered here by the counts.
+  std::size_t absorb_span(const AbsorbPass& pass, int a, int b, std::int32_t& run);
 
   // True when every cell of row j in [i0, i1] is covered (0 <= i0 <= i1 < width).
   [[nodiscard]] bool row_frozen(int j, int i0, int i1) const {
@@ -523,8 +525,20 @@ class CoverageGrid {
   // Adds the running sum of the row's crossings (diff_, cleared on the way) to its counts, from i0
   // through i1, and on to the row's end while the sum is not zero: a crossing beyond the last column
   // is dropped, so a row's sum need not return to zero. Every crossing of the band lies in
-  // [i0, i1] (`mark`), so past i1 the sum is constant. Returns one past the last cell changed.
-  int accumulate_row(std::size_t base, int i0, int i1);
+  // [i0, i1] (`mark`), so past i1 the sum is constant. In the same pass, freezes the cells whose
+  // count makes them covered (as `freeze` would after it). `last` gets the last cell changed;
+  // returns how many cells it covered.
+  std::size_t accumulate_freeze_row(int j, int i0, int i1, int& last);
+
+#if CULLKIT_COVERAGE_AVX2
+  // Freezes those of the eight cells from i (a multiple of 8) whose count `c` is at least one and
+  // that are not covered yet; returns how many.
+  static std::size_t freeze8(__m256i c, int i, const float* bound, float* depth, std::uint64_t* frozen);
+#endif
+#if CULLKIT_HAS_SSE2
+  // The same for the four cells from i (a multiple of 4).
+  static std::size_t freeze4(__m128i c, int i, const float* bound, float* depth, std::uint64_t* frozen);
+#endif
 
   // Cell range [i0, i1] of row j changed in this band: end_band scans it.
   void mark(int j, int i0, int i1) {
@@ -535,7 +549,7 @@ class CoverageGrid {
     band_hi_[r] = std::max(band_hi_[r], i1);
   }
 
-  // Cell range [i0, i1] of row j may have changed counters or bounds since the grid was last
+  // Cell range [i0, i1] of row j may have changed counters, bounds or depths since the grid was last
   // cleared: clear_dirty and absorb visit it.
   void use(int j, int i0, int i1) {
     const auto r = static_cast<std::size_t>(j);
@@ -583,24 +597,20 @@ class CoverageGrid {
 
   // Returns the touched part of the grid to the empty state.
   void clear_dirty() {
-    // Counters and bounds where they were used; depths and covered bits over the changed rectangle
-    // (seed_frozen and absorb write those across it).
+    // Counters, bounds and depths where they were used (only freezing writes a depth, on a used
+    // cell); covered bits over the changed rectangle's rows (seed_frozen sets them across it).
     for (int n = 0; n < used_row_count_; ++n) {
       const auto j = static_cast<std::size_t>(used_rows_[static_cast<std::size_t>(n)]);
       const std::size_t base = j * static_cast<std::size_t>(width_);
       const auto b = static_cast<std::ptrdiff_t>(base) + used_lo_[j], e = static_cast<std::ptrdiff_t>(base) + used_hi_[j] + 1;
       std::fill(net_.begin() + b, net_.begin() + e, 0);
       std::fill(bound_.begin() + b, bound_.begin() + e, std::numeric_limits<float>::infinity());
+      std::fill(depth_.begin() + b, depth_.begin() + e, 0.0f);
       used_lo_[j] = width_;
       used_hi_[j] = -1;
     }
     used_row_count_ = 0;
     if (dirty_.empty()) return;
-    for (int j = dirty_.y0; j <= dirty_.y1; ++j) {
-      const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-      const auto b = static_cast<std::ptrdiff_t>(base) + dirty_.x0, e = static_cast<std::ptrdiff_t>(base) + dirty_.x1 + 1;
-      std::fill(depth_.begin() + b, depth_.begin() + e, 0.0f);
-    }
     std::fill(frozen_bits_.begin() + static_cast<std::ptrdiff_t>(dirty_.y0) * words_,
               frozen_bits_.begin() + static_cast<std::ptrdiff_t>(dirty_.y1 + 1) * words_, 0);
     dirty_ = CellRect{width_, height_, -1, -1};

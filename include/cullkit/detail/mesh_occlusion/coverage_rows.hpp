@@ -1,8 +1,10 @@
 // cullkit/detail/mesh_occlusion/coverage_rows.hpp: the row kernels of CoverageGrid (coverage.hpp),
-// the loops that run over the cells of one grid row: freezing covered cells, adding a patch's grid
-// into the union (and taking its nearer bounds), lowering depth bounds along a row, accumulating crossings and
-// the per-tile minimum. Each has its scalar form and, where the compiler targets them, SSE2 and AVX2
-// forms with the same comparisons and float operations, so the answers never depend on the build.
+// the loops that run over the cells of one grid row: freezing covered cells, accumulating crossings
+// (and freezing in the same pass), adding a patch's grid into the union (ending its last band,
+// freezing and taking its nearer bounds in the same pass), seeding a patch's covered bits, lowering
+// depth bounds along a row and the per-tile minimum. Each has its scalar form and, where the
+// compiler targets them, SSE2 and AVX2 forms with the same comparisons and float operations, so the
+// answers never depend on the build.
 // Included by coverage.hpp after the class; not on its own.
 #pragma once
 
@@ -22,122 +24,291 @@ inline std::size_t CoverageGrid::freeze(int j, int a, int b) {
   float* depth = depth_.data() + base;
   std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
   std::size_t covered = 0;
+  // A cell is covered once its bit is set: by freezing, by a nearer patch bound, or by seed_frozen
+  // (whose cells keep depth 0 in a patch's grid), so the bit, not the depth, says it is taken.
   const auto one = [&](int i) {
-    if (net[i] >= 1 && depth[i] == 0.0f) {
+    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+    if (net[i] >= 1 && (frozen[i >> 6] & bit) == 0) {
       depth[i] = bound[i];
-      frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
+      frozen[i >> 6] |= bit;
       ++covered;
     }
   };
   int i = a;
 #if CULLKIT_COVERAGE_AVX2
   for (; i <= b && (i & 7) != 0; ++i) one(i);
-  const __m256i zero8_i = _mm256_setzero_si256();
-  const __m256 zero8_f = _mm256_setzero_ps();
-  for (; i + 7 <= b; i += 8) {
-    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(net + i));
-    const __m256 d = _mm256_loadu_ps(depth + i);
-    const __m256 fresh = _mm256_and_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(c, zero8_i)),
-                                       _mm256_cmp_ps(d, zero8_f, _CMP_EQ_OQ));
-    const int mask = _mm256_movemask_ps(fresh);
-    if (mask == 0) continue;
-    _mm256_storeu_ps(depth + i, _mm256_blendv_ps(d, _mm256_loadu_ps(bound + i), fresh));
-    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
-    covered += bits_in_nibble(mask & 15) + bits_in_nibble(mask >> 4);
-  }
+  for (; i + 7 <= b; i += 8)
+    covered += freeze8(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(net + i)), i, bound, depth, frozen);
 #endif
 #if CULLKIT_HAS_SSE2
   // Groups of four aligned on the row (a word of frozen bits holds 16 of them): the same
   // comparisons, four at once.
   for (; i <= b && (i & 3) != 0; ++i) one(i);
-  const __m128i zero_i = _mm_setzero_si128();
-  const __m128 zero_f = _mm_setzero_ps();
-  for (; i + 3 <= b; i += 4) {
-    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(net + i));
-    const __m128 d = _mm_loadu_ps(depth + i);
-    const __m128 fresh = _mm_and_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(c, zero_i)), _mm_cmpeq_ps(d, zero_f));
-    const int mask = _mm_movemask_ps(fresh);
-    if (mask == 0) continue;
-    _mm_storeu_ps(depth + i, _mm_or_ps(_mm_and_ps(fresh, _mm_loadu_ps(bound + i)), _mm_andnot_ps(fresh, d)));
-    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
-    covered += bits_in_nibble(mask);
-  }
+  for (; i + 3 <= b; i += 4)
+    covered += freeze4(_mm_loadu_si128(reinterpret_cast<const __m128i*>(net + i)), i, bound, depth, frozen);
 #endif
   for (; i <= b; ++i) one(i);
   return covered;
 }
 
-inline std::size_t CoverageGrid::absorb(const CoverageGrid& patch, bool layers) {
-  if (patch.dirty_.empty()) return 0;
-  grow(dirty_, patch.dirty_);
-  std::size_t covered = 0;
-  for (int n = 0; n < patch.used_row_count_; ++n) {
-    const int j = patch.used_rows_[static_cast<std::size_t>(n)];
-    const int i0 = patch.used_lo_[static_cast<std::size_t>(j)], i1 = patch.used_hi_[static_cast<std::size_t>(j)];
-    const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-    std::int32_t* net = net_.data() + base;
-    float* bound = bound_.data() + base;
-    const std::int32_t* from_net = patch.net_.data() + base;
-    const float* from_bound = patch.bound_.data() + base;
-    int i = i0;
 #if CULLKIT_COVERAGE_AVX2
-    for (; i + 7 <= i1; i += 8) {
-      const auto at = [i](const std::int32_t* p) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + i)); };
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(net + i), _mm256_add_epi32(at(net), at(from_net)));
-      _mm256_storeu_ps(bound + i, _mm256_min_ps(_mm256_loadu_ps(from_bound + i), _mm256_loadu_ps(bound + i)));
-    }
+inline std::size_t CoverageGrid::freeze8(__m256i c, int i, const float* bound, float* depth, std::uint64_t* frozen) {
+  const int positive = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(c, _mm256_setzero_si256())));
+  const int mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xffu);
+  if (mask == 0) return 0;
+  const __m256i lane_bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m256 fresh = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), lane_bit), lane_bit));
+  _mm256_storeu_ps(depth + i, _mm256_blendv_ps(_mm256_loadu_ps(depth + i), _mm256_loadu_ps(bound + i), fresh));
+  frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+  return bits_in_nibble(mask & 15) + bits_in_nibble(mask >> 4);
+}
+#endif
+
+#if CULLKIT_HAS_SSE2
+inline std::size_t CoverageGrid::freeze4(__m128i c, int i, const float* bound, float* depth, std::uint64_t* frozen) {
+  const int positive = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(c, _mm_setzero_si128())));
+  const int mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xfu);
+  if (mask == 0) return 0;
+  const __m128i lane_bit = _mm_setr_epi32(1, 2, 4, 8);
+  const __m128 fresh = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(mask), lane_bit), lane_bit));
+  const __m128 d = _mm_loadu_ps(depth + i);
+  _mm_storeu_ps(depth + i, _mm_or_ps(_mm_and_ps(fresh, _mm_loadu_ps(bound + i)), _mm_andnot_ps(fresh, d)));
+  frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+  return bits_in_nibble(mask);
+}
+#endif
+
+inline std::uint64_t CoverageGrid::nearer_bits(const float* row, int lo, int hi, float limit) {
+  std::uint64_t bits = 0;
+  int i = lo;
+  const auto one = [&](int k) {
+    if (row[k] >= limit) bits |= std::uint64_t{1} << (k & 63);
+  };
+#if CULLKIT_COVERAGE_AVX2
+  const __m256 limit8 = _mm256_set1_ps(limit);
+  for (; i + 7 <= hi; i += 8)
+    bits |= static_cast<std::uint64_t>(_mm256_movemask_ps(_mm256_cmp_ps(_mm256_loadu_ps(row + i), limit8, _CMP_GE_OQ)))
+            << (i & 63);
 #endif
 #if CULLKIT_HAS_SSE2
-    for (; i + 3 <= i1; i += 4) {
-      const auto at = [i](const std::int32_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + i)); };
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(net + i), _mm_add_epi32(at(net), at(from_net)));
-      // min(bound, from) as std::min takes it: `from` where it is smaller, else `bound`.
-      _mm_storeu_ps(bound + i, _mm_min_ps(_mm_loadu_ps(from_bound + i), _mm_loadu_ps(bound + i)));
-    }
+  const __m128 limit4 = _mm_set1_ps(limit);
+  for (; i + 3 <= hi; i += 4)
+    bits |= static_cast<std::uint64_t>(_mm_movemask_ps(_mm_cmpge_ps(_mm_loadu_ps(row + i), limit4))) << (i & 63);
 #endif
-    for (; i <= i1; ++i) {
-      net[i] += from_net[i];
-      bound[i] = std::min(bound[i], from_bound[i]);
+  for (; i <= hi; ++i) one(i);
+  return bits;
+}
+
+inline std::size_t CoverageGrid::absorb(CoverageGrid& patch, bool layers) {
+  if (patch.dirty_.empty() && patch.used_row_count_ == 0) return 0;
+  grow(dirty_, patch.dirty_);
+  const bool crossings = patch.band_crossings_;
+  std::size_t covered = 0;
+  for (int n = 0; n < patch.used_row_count_; ++n) {
+    const auto j = static_cast<std::size_t>(patch.used_rows_[static_cast<std::size_t>(n)]);
+    const int i0 = patch.used_lo_[j], i1 = patch.used_hi_[j];
+    patch.used_lo_[j] = width_;
+    patch.used_hi_[j] = -1;
+    // Every cell the open band changed is a used cell (`mark` uses it).
+    const bool band_row = patch.band_hi_[j] >= 0;
+    patch.band_lo_[j] = width_;
+    patch.band_hi_[j] = -1;
+    AbsorbPass pass{patch, static_cast<int>(j), band_row, band_row && crossings, layers};
+    std::int32_t run = 0;
+    covered += absorb_span(pass, i0, i1, run);
+    int last = i1;
+    if (run != 0) {
+      // A crossing beyond the last column was dropped: the band's sum is constant on to the row's end.
+      covered += absorb_span(pass, i1 + 1, width_ - 1, run);
+      last = width_ - 1;
     }
-    use(j, i0, i1);
-    covered += freeze(j, i0, i1);
-    if (layers) take_nearer(j, i0, i1, patch.depth_.data() + base);
+    grow(dirty_, CellRect{i0, pass.j, last, pass.j});
+    grow(patch.dirty_, CellRect{i0, pass.j, last, pass.j});
+    use(pass.j, i0, last);
   }
+  patch.used_row_count_ = 0;
+  patch.band_row_count_ = 0;
+  patch.band_crossings_ = false;
   return covered;
 }
 
-inline void CoverageGrid::take_nearer(int j, int i0, int i1, const float* from) {
-  float* to = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-  std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+inline std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int b, std::int32_t& run) {
+  CoverageGrid& patch = pass.patch;
+  const std::size_t base = static_cast<std::size_t>(pass.j) * static_cast<std::size_t>(width_);
+  const std::size_t word_base = static_cast<std::size_t>(pass.j) * static_cast<std::size_t>(words_);
+  std::int32_t* net = net_.data() + base;
+  float* bound = bound_.data() + base;
+  float* depth = depth_.data() + base;
+  std::uint64_t* frozen = frozen_bits_.data() + word_base;
+  std::int32_t* from_diff = patch.diff_.data() + base;
+  std::int32_t* from_net = patch.net_.data() + base;
+  float* from_bound = patch.bound_.data() + base;
+  float* from_depth = patch.depth_.data() + base;
+  std::uint64_t* from_frozen = patch.frozen_bits_.data() + word_base;
+  const bool accumulate = pass.accumulate, band = pass.band_row, layers = pass.layers;
+  constexpr float empty_bound = std::numeric_limits<float>::infinity();
+  std::size_t covered = 0;
+  // Per cell, in this order: the patch's open band ends (its crossings summed into its count, and
+  // the cell freezing in the patch's grid at the patch's bound), then the patch's cell is added
+  // into this grid, the cell freezes here at the running bound, takes the patch's bound where that
+  // is nearer, and the patch's cell is left empty behind.
   const auto one = [&](int i) {
-    if (!(from[i] > to[i])) return;
-    to[i] = from[i];
-    frozen[i >> 6] |= std::uint64_t{1} << (i & 63);
+    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+    if (accumulate) {
+      run += from_diff[i];
+      from_diff[i] = 0;
+      from_net[i] += run;
+    }
+    if (band && from_net[i] >= 1 && (from_frozen[i >> 6] & bit) == 0) {
+      from_depth[i] = from_bound[i];
+      from_frozen[i >> 6] |= bit;
+    }
+    net[i] += from_net[i];
+    bound[i] = std::min(bound[i], from_bound[i]);
+    if (net[i] >= 1 && (frozen[i >> 6] & bit) == 0) {
+      depth[i] = bound[i];
+      frozen[i >> 6] |= bit;
+      ++covered;
+    }
+    if (layers && from_depth[i] > depth[i]) {
+      depth[i] = from_depth[i];
+      frozen[i >> 6] |= bit;
+    }
+    from_net[i] = 0;
+    from_bound[i] = empty_bound;
+    from_depth[i] = 0.0f;
   };
-  int i = i0;
+  int i = a;
 #if CULLKIT_COVERAGE_AVX2
-  for (; i <= i1 && (i & 7) != 0; ++i) one(i);
-  for (; i + 7 <= i1; i += 8) {
-    const __m256 a = _mm256_loadu_ps(from + i), b = _mm256_loadu_ps(to + i);
-    const __m256 nearer = _mm256_cmp_ps(a, b, _CMP_GT_OQ);
-    const int mask = _mm256_movemask_ps(nearer);
-    if (mask == 0) continue;
-    _mm256_storeu_ps(to + i, _mm256_blendv_ps(b, a, nearer));
-    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+  for (; i <= b && (i & 7) != 0; ++i) one(i);
+  {
+    const __m256i zero8 = _mm256_setzero_si256(), last_lane = _mm256_set1_epi32(7);
+    const __m256i lane_bit8 = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    const __m256 empty8 = _mm256_set1_ps(empty_bound), zero8_f = _mm256_setzero_ps();
+    const auto lanes_of = [&](int mask) {
+      return _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), lane_bit8), lane_bit8));
+    };
+    __m256i carry8 = _mm256_set1_epi32(run);
+    for (; i + 7 <= b; i += 8) {
+      const auto load_i = [i](const std::int32_t* p) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + i)); };
+      __m256i own_count = load_i(from_net);
+      if (accumulate) {
+        // A prefix sum within each half, the low half's total added to the high half, plus the
+        // carry so far (exact integer sums, as the scalar loop's).
+        __m256i d = load_i(from_diff);
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(from_diff + i), zero8);
+        d = _mm256_add_epi32(d, _mm256_slli_si256(d, 4));
+        d = _mm256_add_epi32(d, _mm256_slli_si256(d, 8));
+        d = _mm256_add_epi32(d, _mm256_shuffle_epi32(_mm256_permute2x128_si256(d, d, 0x08), 0xFF));
+        d = _mm256_add_epi32(d, carry8);
+        own_count = _mm256_add_epi32(own_count, d);
+        carry8 = _mm256_permutevar8x32_epi32(d, last_lane);
+      }
+      const __m256 own_bound = _mm256_loadu_ps(from_bound + i);
+      __m256 own = _mm256_loadu_ps(from_depth + i);
+      if (band) {
+        const int positive = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(own_count, zero8)));
+        const int mask = positive & ~static_cast<int>((from_frozen[i >> 6] >> (i & 63)) & 0xffu);
+        if (mask != 0) {
+          own = _mm256_blendv_ps(own, own_bound, lanes_of(mask));
+          from_frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+        }
+      }
+      const __m256i c = _mm256_add_epi32(load_i(net), own_count);
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(net + i), c);
+      const __m256 bd = _mm256_min_ps(own_bound, _mm256_loadu_ps(bound + i));
+      _mm256_storeu_ps(bound + i, bd);
+      const int positive = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(c, zero8)));
+      const int fresh_mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xffu);
+      __m256 d = _mm256_loadu_ps(depth + i);
+      if (fresh_mask != 0) {
+        d = _mm256_blendv_ps(d, bd, lanes_of(fresh_mask));
+        covered += bits_in_nibble(fresh_mask & 15) + bits_in_nibble(fresh_mask >> 4);
+      }
+      int taken = fresh_mask;
+      if (layers) {
+        const __m256 nearer = _mm256_cmp_ps(own, d, _CMP_GT_OQ);
+        const int nearer_mask = _mm256_movemask_ps(nearer);
+        if (nearer_mask != 0) d = _mm256_blendv_ps(d, own, nearer);
+        taken |= nearer_mask;
+      }
+      if (taken != 0) {
+        _mm256_storeu_ps(depth + i, d);
+        frozen[i >> 6] |= static_cast<std::uint64_t>(taken) << (i & 63);
+      }
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(from_net + i), zero8);
+      _mm256_storeu_ps(from_bound + i, empty8);
+      _mm256_storeu_ps(from_depth + i, zero8_f);
+    }
+    run = _mm256_cvtsi256_si32(carry8);
   }
 #endif
 #if CULLKIT_HAS_SSE2
-  for (; i <= i1 && (i & 3) != 0; ++i) one(i);
-  for (; i + 3 <= i1; i += 4) {
-    const __m128 a = _mm_loadu_ps(from + i), b = _mm_loadu_ps(to + i);
-    const __m128 nearer = _mm_cmpgt_ps(a, b);
-    const int mask = _mm_movemask_ps(nearer);
-    if (mask == 0) continue;
-    _mm_storeu_ps(to + i, _mm_or_ps(_mm_and_ps(nearer, a), _mm_andnot_ps(nearer, b)));
-    frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+  for (; i <= b && (i & 3) != 0; ++i) one(i);
+  {
+    const __m128i zero = _mm_setzero_si128();
+    const __m128i lane_bit = _mm_setr_epi32(1, 2, 4, 8);
+    const __m128 empty4 = _mm_set1_ps(empty_bound), zero_f = _mm_setzero_ps();
+    const auto lanes_of = [&](int mask) {
+      return _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(mask), lane_bit), lane_bit));
+    };
+    const auto select = [](__m128 mask, __m128 yes, __m128 no) { return _mm_or_ps(_mm_and_ps(mask, yes), _mm_andnot_ps(mask, no)); };
+    __m128i carry = _mm_set1_epi32(run);
+    for (; i + 3 <= b; i += 4) {
+      const auto load_i = [i](const std::int32_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + i)); };
+      __m128i own_count = load_i(from_net);
+      if (accumulate) {
+        // An in-register prefix sum (two shifted adds) plus the carry so far.
+        __m128i d = load_i(from_diff);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(from_diff + i), zero);
+        d = _mm_add_epi32(d, _mm_slli_si128(d, 4));
+        d = _mm_add_epi32(d, _mm_slli_si128(d, 8));
+        d = _mm_add_epi32(d, carry);
+        own_count = _mm_add_epi32(own_count, d);
+        carry = _mm_shuffle_epi32(d, 0xFF);
+      }
+      const __m128 own_bound = _mm_loadu_ps(from_bound + i);
+      __m128 own = _mm_loadu_ps(from_depth + i);
+      if (band) {
+        const int positive = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(own_count, zero)));
+        const int mask = positive & ~static_cast<int>((from_frozen[i >> 6] >> (i & 63)) & 0xfu);
+        if (mask != 0) {
+          own = select(lanes_of(mask), own_bound, own);
+          from_frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+        }
+      }
+      const __m128i c = _mm_add_epi32(load_i(net), own_count);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(net + i), c);
+      // min(bound, from) as std::min takes it: `from` where it is smaller, else `bound`.
+      const __m128 bd = _mm_min_ps(own_bound, _mm_loadu_ps(bound + i));
+      _mm_storeu_ps(bound + i, bd);
+      const int positive = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(c, zero)));
+      const int fresh_mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xfu);
+      __m128 d = _mm_loadu_ps(depth + i);
+      if (fresh_mask != 0) {
+        d = select(lanes_of(fresh_mask), bd, d);
+        covered += bits_in_nibble(fresh_mask);
+      }
+      int taken = fresh_mask;
+      if (layers) {
+        const __m128 nearer = _mm_cmpgt_ps(own, d);
+        const int nearer_mask = _mm_movemask_ps(nearer);
+        if (nearer_mask != 0) d = select(nearer, own, d);
+        taken |= nearer_mask;
+      }
+      if (taken != 0) {
+        _mm_storeu_ps(depth + i, d);
+        frozen[i >> 6] |= static_cast<std::uint64_t>(taken) << (i & 63);
+      }
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(from_net + i), zero);
+      _mm_storeu_ps(from_bound + i, empty4);
+      _mm_storeu_ps(from_depth + i, zero_f);
+    }
+    run = _mm_cvtsi128_si32(carry);
   }
 #endif
-  for (; i <= i1; ++i) one(i);
+  for (; i <= b; ++i) one(i);
+  return covered;
 }
 
 inline float CoverageGrid::tile_minimum(int j0, int j1, int i0, int i1) const {
@@ -205,15 +376,35 @@ inline void CoverageGrid::lower_row_flat(float* row, int i0, int i1, float lowes
   for (; i <= i1; ++i) row[i] = std::min(row[i], lowest);
 }
 
-inline int CoverageGrid::accumulate_row(std::size_t base, int i0, int i1) {
+inline std::size_t CoverageGrid::accumulate_freeze_row(int j, int i0, int i1, int& last) {
+  const std::size_t base = static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
   std::int32_t* diff = diff_.data() + base;
   std::int32_t* count = net_.data() + base;
+  const float* bound = bound_.data() + base;
+  float* depth = depth_.data() + base;
+  std::uint64_t* frozen = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
+  std::size_t covered = 0;
   std::int32_t run = 0;
+  const auto freeze_cell = [&](int i) {
+    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+    if (count[i] >= 1 && (frozen[i >> 6] & bit) == 0) {
+      depth[i] = bound[i];
+      frozen[i >> 6] |= bit;
+      ++covered;
+    }
+  };
+  const auto one = [&](int i) {
+    run += diff[i];
+    diff[i] = 0;
+    count[i] += run;
+    freeze_cell(i);
+  };
   int i = i0;
 #if CULLKIT_COVERAGE_AVX2
   // Eight cells at a time: a prefix sum within each half, the low half's total added to the high
   // half, plus the carry so far (exact integer sums, as the scalar loop's).
-  __m256i carry8 = _mm256_setzero_si256();
+  for (; i <= i1 && (i & 7) != 0; ++i) one(i);
+  __m256i carry8 = _mm256_set1_epi32(run);
   const __m256i zero8 = _mm256_setzero_si256(), last_lane = _mm256_set1_epi32(7);
   for (; i + 7 <= i1; i += 8) {
     __m256i d = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(diff + i));
@@ -222,14 +413,16 @@ inline int CoverageGrid::accumulate_row(std::size_t base, int i0, int i1) {
     d = _mm256_add_epi32(d, _mm256_slli_si256(d, 8));
     d = _mm256_add_epi32(d, _mm256_shuffle_epi32(_mm256_permute2x128_si256(d, d, 0x08), 0xFF));
     d = _mm256_add_epi32(d, carry8);
-    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), _mm256_add_epi32(c, d));
+    const __m256i c = _mm256_add_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i)), d);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), c);
+    covered += freeze8(c, i, bound, depth, frozen);
     carry8 = _mm256_permutevar8x32_epi32(d, last_lane);
   }
   run = _mm256_cvtsi256_si32(carry8);
 #endif
 #if CULLKIT_HAS_SSE2
   // Four cells at a time: an in-register prefix sum (two shifted adds) plus the carry so far.
+  for (; i <= i1 && (i & 3) != 0; ++i) one(i);
   __m128i carry = _mm_set1_epi32(run);
   const __m128i zero = _mm_setzero_si128();
   for (; i + 3 <= i1; i += 4) {
@@ -238,34 +431,44 @@ inline int CoverageGrid::accumulate_row(std::size_t base, int i0, int i1) {
     d = _mm_add_epi32(d, _mm_slli_si128(d, 4));
     d = _mm_add_epi32(d, _mm_slli_si128(d, 8));
     d = _mm_add_epi32(d, carry);
-    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(count + i), _mm_add_epi32(c, d));
+    const __m128i c = _mm_add_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i)), d);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(count + i), c);
+    covered += freeze4(c, i, bound, depth, frozen);
     carry = _mm_shuffle_epi32(d, 0xFF);
   }
   run = _mm_cvtsi128_si32(carry);
 #endif
-  for (; i <= i1; ++i) {
-    run += diff[i];
-    diff[i] = 0;
-    count[i] += run;
+  for (; i <= i1; ++i) one(i);
+  if (run == 0) {
+    last = i - 1;
+    return covered;
   }
-  if (run == 0) return i;
+  // Past the band's last crossing the sum is constant: it is added on to the row's end.
+  const auto shift = [&](int k) {
+    count[k] += run;
+    freeze_cell(k);
+  };
 #if CULLKIT_COVERAGE_AVX2
+  for (; i < width_ && (i & 7) != 0; ++i) shift(i);
   const __m256i add8 = _mm256_set1_epi32(run);
   for (; i + 8 <= width_; i += 8) {
-    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), _mm256_add_epi32(c, add8));
+    const __m256i c = _mm256_add_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(count + i)), add8);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(count + i), c);
+    covered += freeze8(c, i, bound, depth, frozen);
   }
 #endif
 #if CULLKIT_HAS_SSE2
+  for (; i < width_ && (i & 3) != 0; ++i) shift(i);
   const __m128i add = _mm_set1_epi32(run);
   for (; i + 4 <= width_; i += 4) {
-    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(count + i), _mm_add_epi32(c, add));
+    const __m128i c = _mm_add_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(count + i)), add);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(count + i), c);
+    covered += freeze4(c, i, bound, depth, frozen);
   }
 #endif
-  for (; i < width_; ++i) count[i] += run;
-  return i;
+  for (; i < width_; ++i) shift(i);
+  last = width_ - 1;
+  return covered;
 }
 
 }  // namespace mesh_occlusion

@@ -317,11 +317,13 @@ struct RunMembers {
 /// Inserts the sorted triangles [first, last) (each a member of `members`) into `grid` nearest
 /// first, in bands of similar depth, so a cell freezes at the depth of the nearest layer that covers
 /// it. Within a band, an edge shared by two of its triangles is never touched: it cancels before the
-/// band ends. Returns the cells covered; counts the inserted triangles into `inserted`.
-inline std::size_t insert_run(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, CoverageGrid& grid,
-                              const std::pair<std::uint32_t, std::uint32_t>* first,
-                              const std::pair<std::uint32_t, std::uint32_t>* last, RunMembers members,
-                              std::size_t& inserted) {
+/// band ends. The last band is left open: `CoverageGrid::absorb`, which adds the grid into the
+/// union next, ends it in the same pass (or the caller calls `end_band`). Counts the inserted
+/// triangles into `inserted`.
+inline void insert_run(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, CoverageGrid& grid,
+                       const std::pair<std::uint32_t, std::uint32_t>* first,
+                       const std::pair<std::uint32_t, std::uint32_t>* last, RunMembers members,
+                       std::size_t& inserted) {
   const int orient = s.view.orient;
   const float ratio = 1.0f + std::max(0.0f, params.depth_band_ratio);
   const std::size_t count = static_cast<std::size_t>(last - first);
@@ -337,7 +339,6 @@ inline std::size_t insert_run(const MeshIndex& index, const MeshOcclusionParams&
     }
     s.triangle_band[first[i].second] = band;
   }
-  std::size_t covered = 0;
   const bool any_clipped = !s.clipped.empty();
   const auto corners_of = [&](std::uint32_t t, double* x, double* y, double* w) {
     return occluder_corners(index, s, t, x, y, w);
@@ -386,9 +387,8 @@ inline std::size_t insert_run(const MeshIndex& index, const MeshOcclusionParams&
         else grid.touch_edge(x[k], y[k], x[l], y[l], orient, 1);
       }
     }
-    covered += grid.end_band();
+    if (end < count) grid.end_band();
   }
-  return covered;
 }
 
 /// The segment of occluder triangle t along its edge k (0 to 2), as the triangle runs, into (x0, y0)
