@@ -31,14 +31,17 @@
 // 1: inside, or from above for the forest) of SCENE ("city", "bigcity" (10.1M triangles), "foliage"
 // (the 10.1M-triangle forest; "foliageN": N trees per side) or a real scene's file name); prints the
 // tested count, the call's NciSelectStats (triangles met and those with no pixel centre) and the mean
-// wall time per frame (the first frame included); env CULLKIT_NCI_GRID / CULLKIT_NCI_TILE set
-// NciParams::grid / tile_size.
+// wall and processor time per frame (the first frame included; on a loaded machine the processor
+// time moves far less between runs) and the index's build time (wall); env CULLKIT_NCI_GRID /
+// CULLKIT_NCI_TILE / CULLKIT_NCI_BUILD_THREADS set NciParams::grid / tile_size / build_threads
+// (default 1).
 // Env CULLKIT_NCI_PATH = walk | rays | auto sets NciParams::crowded_path for --profile, and for --hash
 // and the timing races unless --path is given (default: auto).
 // CULLKIT_BENCH_SMOKE=1: a tiny city at 64x48, one setting.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -437,20 +440,27 @@ int profile(const std::string& name, int view, int frames) {
   p.build_threads = 1;
   if (const char* g = std::getenv("CULLKIT_NCI_GRID")) p.grid = std::atoi(g);
   if (const char* t = std::getenv("CULLKIT_NCI_TILE")) p.tile_size = std::atoi(t);
+  if (const char* b = std::getenv("CULLKIT_NCI_BUILD_THREADS")) p.build_threads = static_cast<unsigned>(std::atoi(b));
   path_from_env(p);
+  const auto b0 = std::chrono::steady_clock::now();
   const NormalClassIndex<glm::vec3> index(s->mesh(), p);
+  const double build_ms = seconds_since(b0) * 1e3;
   const auto cams = views(*s, 640, 480, name.rfind("foliage", 0) == 0);
   NciContext ctx;
   VisibleSet out;
   const auto t0 = std::chrono::steady_clock::now();
+  const std::clock_t c0 = std::clock();
   for (int k = 0; k < frames; ++k) index.select_visible(cams[static_cast<std::size_t>(view) % 2], ctx, out, nullptr);
   const double ms = frames > 0 ? seconds_since(t0) * 1e3 / frames : 0.0;
+  // Processor time (the process's, one thread selecting): less moved than wall time by other
+  // processes on a loaded machine.
+  const double cpu_ms = frames > 0 ? double(std::clock() - c0) * 1e3 / CLOCKS_PER_SEC / frames : 0.0;
   const NciSelectStats& st = ctx.stats;
-  std::printf("profile,%s,view%d,grid=%d,frames=%d,ms_per_frame=%.2f,selected=%zu,tested=%zu,ray_tests=%zu,cells=%zu,"
-              "triangles_met=%zu,triangles_no_pixel=%zu,cells_walked=%zu,tiles_ray_cast=%zu,bytes_per_triangle=%.1f\n",
-              name.c_str(), view, index.params().grid, frames, ms, out.triangles.size(), out.triangles_tested,
+  std::printf("profile,%s,view%d,grid=%d,frames=%d,ms_per_frame=%.2f,cpu_ms_per_frame=%.2f,selected=%zu,tested=%zu,ray_tests=%zu,cells=%zu,"
+              "triangles_met=%zu,triangles_no_pixel=%zu,cells_walked=%zu,tiles_ray_cast=%zu,bytes_per_triangle=%.1f,build_ms=%.0f\n",
+              name.c_str(), view, index.params().grid, frames, ms, cpu_ms, out.triangles.size(), out.triangles_tested,
               st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel, st.cells_walked, st.tiles_ray_cast,
-              double(index.memory_bytes()) / double(std::max<std::size_t>(1, s->triangle_count())));
+              double(index.memory_bytes()) / double(std::max<std::size_t>(1, s->triangle_count())), build_ms);
   return 0;
 }
 
@@ -505,7 +515,7 @@ struct FrameCaster {
     bool busy = false;
   };
   struct LeafOps {
-    static constexpr std::uint32_t phases = 1;
+    [[nodiscard]] static std::uint32_t phases() noexcept { return 1; }
     const FrameCaster& fc;
     Slot& sl;
     const float* eye;
