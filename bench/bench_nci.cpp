@@ -9,16 +9,16 @@
 //     packets (rtcIntersect16), at 640x480 and 1024x768, 1 and 2 threads (both sides on the same
 //     count), on real scenes and two generated ones of >= 10M triangles (full runs only; `--no-big`
 //     skips them): the 10.1M-triangle city (outside and inside views) and crowded foliage
-//     (support::make_foliage, 10.1M triangles, mostly leaves of 0.12-0.24 m; seen whole from outside
-//     and straight down from high above). The racing peer is a plain Embree scene (default flags: not robust, two-sided): the
+//     (support::make_foliage, 10.1M triangles, mostly leaves of 0.12-0.24 m; seen whole from outside,
+//     straight down from high above, and from inside among the trunks). The racing peer is a plain Embree scene (default flags: not robust, two-sided): the
 //     fast configuration a user would pick. After each race, one `nci_cells` line per crowded path:
 //     the (tile, cell) pairs it walked and the tiles it cast through the triangle hierarchy, and its
 //     tested count; with two or more paths, one `nci_path_ratio` line per path: its median over the
 //     first path's; and one `nci_crowding` line: triangles per pixel of the scene box's rectangle.
 // Flags: --no-big, --only-big (both big scenes), --only-foliage, --foliage-trees N (trees per side of
 // the forest: default 70, 10.1M triangles; 23 gives 1.1M for quick runs), --no-precision, --quick (precision at the default parameters only,
-// timing at 640x480 only), --hash (only a hash of the per-pixel triangle and depth of both views at
-// 640x480 and 1024x768 per scene, to check that a change keeps every answer; env CULLKIT_NCI_TILE sets
+// timing at 640x480 only), --hash (only a hash of the per-pixel triangle and depth of every view at
+// 640x480 and 1024x768 per scene (the forest's inside view last), to check that a change keeps every answer; env CULLKIT_NCI_TILE sets
 // NciParams::tile_size for it). --path LIST: the crowded-cell paths raced (comma-separated walk, rays,
 // auto; default auto): `--path walk,auto` races the walk alone against the automatic choice in the
 // same run; with --hash, the first path of the list answers (every path must print the same hashes).
@@ -28,20 +28,24 @@
 // --profile SCENE VIEW [FRAMES]: for callgrind (instructions per frame: a run of 3 frames minus a run of 1,
 // halved; or `--collect-atstart=no --toggle-collect='*process_tile*'` for the tiles alone):
 // one thread, select_visible only, at 640x480, FRAMES frames (default 1) of view VIEW (0: outside,
-// 1: inside, or from above for the forest) of SCENE ("city", "bigcity" (10.1M triangles), "foliage"
+// 1: inside, or from above for the forest; 2: the forest from inside) of SCENE ("city", "bigcity" (10.1M triangles), "foliage"
 // (the 10.1M-triangle forest; "foliageN": N trees per side) or a real scene's file name); prints the
 // tested count, the call's NciSelectStats (triangles met and those with no pixel centre) and the mean
-// wall time per frame (the first frame included); env CULLKIT_NCI_GRID / CULLKIT_NCI_TILE set
-// NciParams::grid / tile_size.
+// wall and processor time per frame (the first frame included; on a loaded machine the processor
+// time moves far less between runs) and the index's build time (wall); env CULLKIT_NCI_GRID /
+// CULLKIT_NCI_TILE / CULLKIT_NCI_BUILD_THREADS set NciParams::grid / tile_size / build_threads
+// (default 1).
 // Env CULLKIT_NCI_PATH = walk | rays | auto sets NciParams::crowded_path for --profile, and for --hash
 // and the timing races unless --path is given (default: auto).
 // CULLKIT_BENCH_SMOKE=1: a tiny city at 64x48, one setting.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -49,6 +53,8 @@
 #include <vector>
 
 #include <embree3/rtcore.h>
+#include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
 
 #include <embree_oracle.hpp>
 
@@ -198,9 +204,32 @@ struct Embree {
   }
 };
 
+// The eye among a forest's trunks (objects named "trunk_*"): beside the trunk nearest `spot` (ground
+// level and position), 1.6 m above its foot, looking across the forest toward `across` and slightly
+// up, under and into the crowns (the usual game camera in a forest). The spot itself when the
+// scene has no trunk.
+Camera forest_inside_view(const Scene& s, glm::vec3 spot, glm::vec3 across, int w, int h) {
+  const support::SceneObject* nearest = nullptr;
+  float best = std::numeric_limits<float>::infinity();
+  for (const support::SceneObject& o : s.objects) {
+    if (o.name.rfind("trunk_", 0) != 0) continue;
+    const glm::vec3 c = o.bounds.center();
+    const float d = (c.x - spot.x) * (c.x - spot.x) + (c.z - spot.z) * (c.z - spot.z);
+    if (d < best) best = d, nearest = &o;
+  }
+  glm::vec3 eye = spot;
+  if (nearest) {
+    // Trunks stand 0.5 m into the ground; the eye 1.5 m aside, clear of the trunk (radius <= 0.3 m).
+    const glm::vec3 c = nearest->bounds.center();
+    eye = glm::vec3(c.x + 1.5f, nearest->bounds.min.y + 0.5f + 1.6f, c.z + 1.0f);
+  }
+  const glm::vec3 target(across.x, eye.y + 0.08f * glm::length(glm::vec2(across.x - eye.x, across.z - eye.z)), across.z);
+  return support::make_camera(eye, target, 70, w, h, 0.1f, 0.0f);
+}
+
 // The views of a scene: view 0 outside, seeing it whole; view 1 inside (the walk-through view) or,
 // for scenes seen `from_above` (the foliage), straight down from high above with the whole scene in
-// the frame.
+// the frame, and then view 2 from inside among the trunks, looking across (forest_inside_view).
 std::vector<Camera> views(const Scene& s, int w, int h, bool from_above = false) {
   const Aabb b = s.bounds;
   const glm::vec3 c = b.center(), e = b.extent();
@@ -212,6 +241,7 @@ std::vector<Camera> views(const Scene& s, int w, int h, bool from_above = false)
     // 60 degrees vertical: the larger ground side spans the shorter screen side.
     const float height = 0.5f * std::max(e.x, e.z) / std::tan(0.5235988f)  /* 30 degrees */;
     cams.push_back(support::make_camera(c + glm::vec3(0.0f, 0.5f * e.y + height, 0.0f), c, 60, w, h, 0.1f, 0.0f));
+    cams.push_back(forest_inside_view(s, b.min + e * glm::vec3(0.3f, 0.0f, 0.35f), b.min + e * glm::vec3(0.8f, 0.0f, 0.7f), w, h));
     return cams;
   }
   // Inside the box near the floor, looking across (the walk-through view).
@@ -290,7 +320,8 @@ void precision_table(const std::string& name, const Scene& s, unsigned threads, 
   std::printf("embree_build,%s,%zu,%.3f,%.1f\n", name.c_str(), s.triangle_count(), embree.build_seconds,
               double(embree.bytes) / double(s.triangle_count()));
   const int w = smoke ? 64 : 640, h = smoke ? 48 : 480;
-  const auto cams = views(s, w, h, from_above);
+  auto cams = views(s, w, h, from_above);
+  cams.resize(std::min<std::size_t>(cams.size(), 2));  // the table's views (comparable with earlier runs)
   std::vector<std::vector<std::uint32_t>> truth;
   {
     oracle::EmbreeScene robust;
@@ -394,9 +425,12 @@ void pixel_hash(const std::string& name, const Scene& s, unsigned threads, bool 
   if (const char* tile = std::getenv("CULLKIT_NCI_TILE")) p.tile_size = std::atoi(tile);  // answers must not move
   p.crowded_path = g_paths.front().path;  // neither must they
   const NormalClassIndex<glm::vec3> index(s.mesh(), p);
+  // Views 0 and 1 at both sizes, then any later view at both sizes (lines added after the earlier
+  // ones, which stay as they were).
+  for (const bool later : {false, true})
   for (auto [w, h] : std::vector<std::pair<int, int>>{{640, 480}, {1024, 768}}) {
     const auto cams = views(s, w, h, from_above);
-    for (std::size_t ci = 0; ci < cams.size(); ++ci) {
+    for (std::size_t ci = later ? 2 : 0; ci < (later ? cams.size() : std::min<std::size_t>(cams.size(), 2)); ++ci) {
       NciContext ctx;
       VisibleSet out;
       NciPixels px;
@@ -437,20 +471,27 @@ int profile(const std::string& name, int view, int frames) {
   p.build_threads = 1;
   if (const char* g = std::getenv("CULLKIT_NCI_GRID")) p.grid = std::atoi(g);
   if (const char* t = std::getenv("CULLKIT_NCI_TILE")) p.tile_size = std::atoi(t);
+  if (const char* b = std::getenv("CULLKIT_NCI_BUILD_THREADS")) p.build_threads = static_cast<unsigned>(std::atoi(b));
   path_from_env(p);
+  const auto b0 = std::chrono::steady_clock::now();
   const NormalClassIndex<glm::vec3> index(s->mesh(), p);
+  const double build_ms = seconds_since(b0) * 1e3;
   const auto cams = views(*s, 640, 480, name.rfind("foliage", 0) == 0);
   NciContext ctx;
   VisibleSet out;
   const auto t0 = std::chrono::steady_clock::now();
-  for (int k = 0; k < frames; ++k) index.select_visible(cams[static_cast<std::size_t>(view) % 2], ctx, out, nullptr);
+  const std::clock_t c0 = std::clock();
+  for (int k = 0; k < frames; ++k) index.select_visible(cams[static_cast<std::size_t>(view) % cams.size()], ctx, out, nullptr);
   const double ms = frames > 0 ? seconds_since(t0) * 1e3 / frames : 0.0;
+  // Processor time (the process's, one thread selecting): less moved than wall time by other
+  // processes on a loaded machine.
+  const double cpu_ms = frames > 0 ? double(std::clock() - c0) * 1e3 / CLOCKS_PER_SEC / frames : 0.0;
   const NciSelectStats& st = ctx.stats;
-  std::printf("profile,%s,view%d,grid=%d,frames=%d,ms_per_frame=%.2f,selected=%zu,tested=%zu,ray_tests=%zu,cells=%zu,"
-              "triangles_met=%zu,triangles_no_pixel=%zu,cells_walked=%zu,tiles_ray_cast=%zu,bytes_per_triangle=%.1f\n",
-              name.c_str(), view, index.params().grid, frames, ms, out.triangles.size(), out.triangles_tested,
+  std::printf("profile,%s,view%d,grid=%d,frames=%d,ms_per_frame=%.2f,cpu_ms_per_frame=%.2f,selected=%zu,tested=%zu,ray_tests=%zu,cells=%zu,"
+              "triangles_met=%zu,triangles_no_pixel=%zu,cells_walked=%zu,tiles_ray_cast=%zu,bytes_per_triangle=%.1f,build_ms=%.0f\n",
+              name.c_str(), view, index.params().grid, frames, ms, cpu_ms, out.triangles.size(), out.triangles_tested,
               st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel, st.cells_walked, st.tiles_ray_cast,
-              double(index.memory_bytes()) / double(std::max<std::size_t>(1, s->triangle_count())));
+              double(index.memory_bytes()) / double(std::max<std::size_t>(1, s->triangle_count())), build_ms);
   return 0;
 }
 
@@ -505,7 +546,7 @@ struct FrameCaster {
     bool busy = false;
   };
   struct LeafOps {
-    static constexpr std::uint32_t phases = 1;
+    [[nodiscard]] static std::uint32_t phases() noexcept { return 1; }
     const FrameCaster& fc;
     Slot& sl;
     const float* eye;

@@ -2,7 +2,8 @@
 // allocates nothing and starts no thread (global operator new is replaced here to count), the
 // default `threads = 0` uses as many workers as hardware threads, and a caller's job system
 // (NciParams::task_runner) receives the tasks and gives the same answer as the library's pool, a
-// single thread, or tasks run in reverse order on the calling thread.
+// single thread, or tasks run in reverse order on the calling thread. Warm frames are checked on a
+// generated city and on a small forest (meshes of unshared triangles keep further per-worker lists).
 #include <algorithm>
 #include <atomic>
 #include <condition_variable>
@@ -218,5 +219,9 @@ int main() {
   test_warm_frames_allocate_nothing(city, cams);
   test_task_runner(city, cams);
   test_concurrent_callers(city, cams);
+  // A small forest: unshared leaf triangles (per-slot corners), whose walk keeps its own lists of
+  // the triangles met per slice; they too grow to what any worker needed.
+  const Scene forest = support::make_foliage(1, 4, 300);
+  test_warm_frames_allocate_nothing(forest, nci_test::cameras_for(forest.bounds, 5, 256, 192, 9002));
   return cullkit_test::report("test_nci_warm_frames");
 }

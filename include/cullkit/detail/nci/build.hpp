@@ -239,6 +239,21 @@ inline void build_class_grids(const IndexData& data, const std::vector<std::uint
                     [](void* job, std::size_t task) { (*static_cast<Work*>(job))(task == 0); }, &work);
 }
 
+// Calls body(b, e) over consecutive blocks [b, e) of `block` items covering [0, n), on the build's
+// threads (the caller's task runner or the pool): for passes whose items are independent.
+template <class Body>
+void for_blocks(const IndexData& data, std::size_t n, std::size_t block, const Body& body) {
+  const std::size_t blocks = (n + block - 1) / block;
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t k = next.fetch_add(1, std::memory_order_relaxed); k < blocks; k = next.fetch_add(1, std::memory_order_relaxed))
+      body(k * block, std::min(n, (k + 1) * block));
+  };
+  using Work = decltype(work);
+  detail::run_tasks(data.params.task_runner, detail::resolve_threads(data.params.build_threads, blocks),
+                    [](void* job, std::size_t) { (*static_cast<Work*>(job))(); }, &work);
+}
+
 // Per vertex, the first vertex with bitwise the same position (itself when none comes before it),
 // through an open-addressing table over the position bits; `distinct` counts the vertices that are
 // their own. A table entry holds a vertex id and the upper half of its hash, so that most probes
@@ -313,11 +328,14 @@ inline void renumber(IndexData& data, const std::vector<std::uint16_t>& class_of
           order.push_back(by_class[k]);
         }
       }
+    }
+    // The classes' cell lists in the new ids, class by class on the build's threads.
+    for_blocks(data, classes, 1, [&](std::size_t c, std::size_t) {
       auto& p = parts[c];
       for (auto& e : p.cell_tris) e = new_id[e];
       for (std::size_t k = 0; k + 1 < p.cell_tri_begin.size(); ++k)
         std::sort(p.cell_tris.begin() + p.cell_tri_begin[k], p.cell_tris.begin() + p.cell_tri_begin[k + 1]);
-    }
+    });
     data.class_tri_begin[classes] = static_cast<std::uint32_t>(n);
     // Triangles, their mesh numbers and vertices in the new order; vertices renumbered by first
     // use and merged when their positions are bitwise equal (OBJ files often repeat a position
@@ -328,24 +346,33 @@ inline void renumber(IndexData& data, const std::vector<std::uint16_t>& class_of
     // distinct vertices and their ids: meshes of unshared triangles, such as foliage.
     const std::size_t id_bytes = distinct <= 65536 ? 2 : 4;
     data.slot_vertices = 36 * n <= 12 * distinct + 3 * n * id_bytes;
-    std::vector<std::uint32_t> vmap(data.slot_vertices ? 0 : data.vertices.size(), no_triangle);
     std::vector<glm::vec3> vertices;
-    vertices.reserve(data.slot_vertices ? 3 * n : distinct);
     std::vector<std::uint32_t> tri_vertices(data.slot_vertices ? 0 : 3 * n), tri_original(n);
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::uint32_t old = order[k];
-      tri_original[k] = data.tri_original[old];
-      for (std::size_t j = 0; j < 3; ++j) {
-        const std::uint32_t v = canon[data.tri_vertices[3 * old + j]];
-        if (data.slot_vertices) {
-          vertices.push_back(data.vertices[v]);
-          continue;
+    if (data.slot_vertices) {
+      // Each triangle's own corners: independent, so on the build's threads (a vertex and its
+      // canonical one hold bitwise the same position).
+      vertices.resize(3 * n);
+      for_blocks(data, n, std::size_t{1} << 16, [&](std::size_t b, std::size_t e) {
+        for (std::size_t k = b; k < e; ++k) {
+          const std::uint32_t old = order[k];
+          tri_original[k] = data.tri_original[old];
+          for (std::size_t j = 0; j < 3; ++j) vertices[3 * k + j] = data.vertices[data.tri_vertices[3 * old + j]];
         }
-        if (vmap[v] == no_triangle) {
-          vmap[v] = static_cast<std::uint32_t>(vertices.size());
-          vertices.push_back(data.vertices[v]);
+      });
+    } else {
+      std::vector<std::uint32_t> vmap(data.vertices.size(), no_triangle);
+      vertices.reserve(distinct);
+      for (std::size_t k = 0; k < n; ++k) {
+        const std::uint32_t old = order[k];
+        tri_original[k] = data.tri_original[old];
+        for (std::size_t j = 0; j < 3; ++j) {
+          const std::uint32_t v = canon[data.tri_vertices[3 * old + j]];
+          if (vmap[v] == no_triangle) {
+            vmap[v] = static_cast<std::uint32_t>(vertices.size());
+            vertices.push_back(data.vertices[v]);
+          }
+          tri_vertices[3 * k + j] = vmap[v];
         }
-        tri_vertices[3 * k + j] = vmap[v];
       }
     }
     data.class_of.assign(data.stats.triangles_input, skipped_class);
@@ -482,6 +509,19 @@ inline void make_frame_hierarchy(IndexData& data) {
   builder.traversal_cost = frame_traversal_cost;
   data.bvh = builder.build();
   data.bvh.nodes.shrink_to_fit();
+  if (data.slot_vertices) {
+    // Per-slot corners move into the leaves' order (IndexData::vertices), on the build's threads.
+    std::vector<glm::vec3> vertices(data.vertices.size());
+    data.tri_slot.assign(n, 0u);
+    for_blocks(data, n, std::size_t{1} << 16, [&](std::size_t b, std::size_t e) {
+      for (std::size_t p = b; p < e; ++p) {
+        const std::uint32_t tri = data.bvh.tris[p];
+        data.tri_slot[tri] = static_cast<std::uint32_t>(p);
+        for (std::size_t k = 0; k < 3; ++k) vertices[3 * p + k] = data.vertices[3 * std::size_t{tri} + k];
+      }
+    });
+    data.vertices = std::move(vertices);
+  }
 }
 
 inline void narrow_forms(IndexData& data) {

@@ -82,6 +82,11 @@ struct Worker {
   std::vector<EdgeBandHit> edge_hits;
   std::vector<Extra> extra;  // selected beside the pixels' first hits (edge hits, solid)
   std::vector<Candidate> candidates;
+  // With per-slot corners in leaf order: the triangles a tile met in the slice being walked, as
+  // (leaf position << 32 | internal id), admitted in position order (slice_walk.hpp,
+  // admit_met_in_leaf_order), with that pass's buckets and ordered ids.
+  std::vector<std::uint64_t> met_in_slice;
+  std::vector<std::uint32_t> met_bucket, met_order;
   std::vector<std::uint16_t> active_classes;
   std::vector<TileState> tile_rays;  // empty or one: the worker's tile scratch
   std::vector<FrameSlot> frame_slots;  // the packets of a tile cast through the triangle hierarchy
@@ -115,7 +120,9 @@ namespace cullkit {
 /// context per concurrent caller; not thread-safe.
 /// Size: 16 bytes per indexed triangle per worker thread (test stamps and cached screen
 /// rectangles), about 320 KB of tile scratch per worker thread (made on first use), on crowded
-/// indexes 12 bytes per 16 cell entries per worker thread (chunk rectangles), 2 bits per indexed
+/// indexes 12 bytes per 16 cell entries per worker thread (chunk rectangles), on meshes of unshared
+/// triangles (such as foliage) about 16 bytes per triangle a tile meets in one slice of its walk
+/// (the order they are admitted in) per worker thread, 2 bits per indexed
 /// triangle per worker thread and 1 bit per mesh triangle for the merge, 12 bytes per pixel, and
 /// 12 bytes per edge-band triangle selected beside a pixel's first hit (rare outside very narrow
 /// views), kept by every worker.

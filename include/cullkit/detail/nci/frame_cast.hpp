@@ -65,7 +65,7 @@ struct FrameCastStats {
 struct FrameCursor {
   struct Entry {
     std::uint32_t code;
-    std::uint32_t phase;  // leaves: the preparation steps done (Leaf::phases before its test)
+    std::uint32_t phase;  // leaves: the preparation steps done (Leaf::phases() before its test)
     std::uint64_t mask;
     float near;  // the smallest entry distance of its rays into its box (a lower bound)
     std::uint32_t carry;  // leaves: what the last preparation step hands to the next one
@@ -223,7 +223,7 @@ CULLKIT_FORCEINLINE void frame_node_test(const TriangleBvhNode& node, const floa
 
 // One step of cursor `c` over packet `p`: pops an entry, drops the rays whose solid hit now lies
 // before its box; a leaf is prepared (`carry = leaf.prepare(first, count, phase, carry)`,
-// Leaf::phases times: load what the previous phase prefetched, prefetch what it names) and then
+// leaf.phases() times: load what the previous phase prefetched, prefetch what it names) and then
 // tested (`leaf.test(first, count, mask, carry)`, which lowers p.t); a node pushes the children its
 // rays reach, nearest last (popped first), prefetching them (`leaf.prefetch(first, count)` for
 // leaves).
@@ -258,7 +258,7 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const TriangleBvh& bvh, const float e
   if (!mask) return;
   if (TriangleBvhNode::is_leaf(e.code)) {
     const std::uint32_t first = TriangleBvhNode::leaf_first(e.code), count = TriangleBvhNode::leaf_count(e.code);
-    if (e.phase < Leaf::phases) {
+    if (e.phase < leaf.phases()) {
       const std::uint32_t carry = leaf.prepare(first, count, e.phase, e.carry);
       c.stack[c.top++] = FrameCursor::Entry{e.code, e.phase + 1u, mask, e.near, carry};
       return;

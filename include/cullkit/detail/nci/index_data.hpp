@@ -39,11 +39,16 @@ struct IndexData {
   // parameters (see build.hpp, grid_size).
   double delta = 0.0;
   int dims[3] = {1, 1, 1};
-  // Corners: with slot_vertices, corner k of internal triangle t is vertices[3 t + k] (no ids: chosen
-  // when it takes no more bytes, as on meshes of unshared triangles); else vertices are shared and
-  // named by 3 ids per triangle in tri_vertices or, at most 65536 vertices, tri_vertices16.
+  // Corners: with slot_vertices, each triangle holds its own three corners (no ids: chosen when it
+  // takes no more bytes, as on meshes of unshared triangles), in the order of the hierarchy's
+  // leaves: corner k of the triangle at leaf position p (bvh.tris[p]) is vertices[3 p + k], so a
+  // leaf's corners are one contiguous run the cast loads without an id first, and tri_slot maps an
+  // internal triangle to its position (while the build runs, before the hierarchy exists,
+  // tri_slot is empty and the position is the internal id). Else vertices are shared and named by
+  // 3 ids per triangle in tri_vertices or, at most 65536 vertices, tri_vertices16.
   std::vector<glm::vec3> vertices;
   bool slot_vertices = false;
+  std::vector<std::uint32_t> tri_slot;  // with slot_vertices: internal triangle -> leaf position
   std::vector<std::uint32_t> tri_vertices;    // 3 per kept triangle, into vertices, or empty:
   std::vector<std::uint16_t> tri_vertices16;  // the same in 16 bits (at most 65536 vertices)
   std::vector<std::uint32_t> tri_original;    // internal triangle -> mesh triangle
@@ -95,8 +100,13 @@ struct IndexData {
   // Corner k of internal triangle tri.
   [[nodiscard]] const glm::vec3& corner(std::uint32_t tri, int k) const noexcept {
     const std::size_t i = 3 * std::size_t{tri} + static_cast<std::size_t>(k);
-    if (slot_vertices) return vertices[i];
+    if (slot_vertices) return vertices[tri_slot.empty() ? i : 3 * std::size_t{tri_slot[tri]} + static_cast<std::size_t>(k)];
     return vertices[tri_vertices.empty() ? tri_vertices16[i] : tri_vertices[i]];
+  }
+  // Corner k of the triangle at leaf position pos of the hierarchy (bvh.tris[pos] = tri).
+  [[nodiscard]] const glm::vec3& leaf_corner(std::uint32_t pos, std::uint32_t tri, int k) const noexcept {
+    if (slot_vertices) return vertices[3 * std::size_t{pos} + static_cast<std::size_t>(k)];
+    return corner(tri, k);
   }
   // The internal triangle of entry e, which belongs to a cell of class c.
   [[nodiscard]] std::uint32_t entry_triangle(std::uint32_t e, std::uint32_t c) const noexcept {
@@ -111,7 +121,7 @@ struct IndexData {
   }
   // Bytes held (capacity of every array), the struct itself included.
   [[nodiscard]] std::size_t memory_bytes() const noexcept {
-    return sizeof(*this) + bytes(vertices) + bytes(tri_vertices) + bytes(tri_vertices16) + bytes(cell_begin16) +
+    return sizeof(*this) + bytes(vertices) + bytes(tri_slot) + bytes(tri_vertices) + bytes(tri_vertices16) + bytes(cell_begin16) +
            bytes(class_entry_base) + bytes(tri_original) + bytes(class_axis) + bytes(class_sin) + bytes(class_cos) +
            bytes(cell_tri_begin) + bytes(cell_tris) + bytes(cell_tris16) + bytes(chunk_box) + bytes(class_tri_begin) +
            bytes(grid_base) + bytes(slice_rows) + bytes(row_coord) + bytes(row_begin) + bytes(cell_col) +

@@ -273,6 +273,18 @@ namespace cullkit::detail::nci {
   return true;
 }
 
+// Whether admit_triangle would reject `tri` from its cached rectangle alone, reading neither its
+// corners nor anything else: a rectangle of this frame, not empty (an empty one is counted in
+// NciSelectStats::triangles_no_pixel after a beam test), with no live pixel of the tile under it.
+[[nodiscard]] inline bool cached_rect_misses(const Worker& worker, std::uint32_t tri, int x0, int y0, int tw, int th,
+                                             const Mask* live) noexcept {
+  const auto& slot = worker.tri[tri];
+  if (slot.epoch != worker.frame_epoch || slot.rect.x0 > slot.rect.x1) return false;
+  int rx0, ry0, rx1, ry1;
+  Mask span;
+  return !live_under(slot.rect, x0, y0, tw, th, live, rx0, ry0, rx1, ry1, span);
+}
+
 // Tests `tri` against the unfinished rays of the tile inside its screen rectangle; false when no
 // ray was tested (a back face seen from the eye, or no live pixel under its rectangle).
 // Whether `tri` may be hit by an unfinished ray of the tile (beam, screen rectangle, live

@@ -153,16 +153,21 @@ inline void merge_workers(const IndexData& data, NciContext& context, Scratch& s
   {
     // Every worker's lists grow to what any worker needed (the extras to this call's total), so
     // a later frame that spreads the same tiles over the workers differently does not allocate.
-    std::size_t cand = 0, unsure = 0;
+    std::size_t cand = 0, unsure = 0, met = 0, buckets = 0;
     bool frames = false;  // some worker cast a tile through the triangle hierarchy: all get its packets
     for (unsigned i = 0; i < count; ++i) {
       cand = std::max(cand, scratch.workers[i].candidates.capacity());
+      met = std::max({met, scratch.workers[i].met_in_slice.capacity(), scratch.workers[i].met_order.capacity()});
+      buckets = std::max(buckets, scratch.workers[i].met_bucket.capacity());
       unsure = std::max(unsure, scratch.workers[i].edge_hits.capacity());
       frames = frames || !scratch.workers[i].frame_slots.empty();
     }
     for (unsigned i = 0; i < count; ++i) {
       auto& worker = scratch.workers[i];
       worker.candidates.reserve(cand);
+      worker.met_in_slice.reserve(met);
+      worker.met_order.reserve(met);
+      worker.met_bucket.reserve(buckets);
       worker.edge_hits.reserve(unsure);
       worker.extra.reserve(scratch.extras.size());
       worker.active_classes.reserve(data.class_axis.size());

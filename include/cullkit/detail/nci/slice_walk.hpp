@@ -310,10 +310,17 @@ CULLKIT_FORCEINLINE void visit_cell(TileWalk& w, std::uint16_t k, std::uint32_t 
   Worker& worker = w.worker;
   const std::uint32_t stamp = w.stamp;
   std::size_t met = w.met;
+  const bool gather = !data.tri_slot.empty();
   auto visit = [&](std::uint32_t tri) {
     if (worker.tri[tri].stamp == stamp) return;
     worker.tri[tri].stamp = stamp;
     ++met;
+    if (gather) {
+      // Those rejected by their cached rectangle need no corners and are settled here.
+      if (!cached_rect_misses(worker, tri, w.x0, w.y0, w.tw, w.th, w.live))
+        worker.met_in_slice.push_back(std::uint64_t{data.tri_slot[tri]} << 32 | tri);
+      return;
+    }
     Candidate cand;
     if (admit_triangle(data, f, tri, w.x0, w.y0, w.tw, w.th, w.live, r, worker, cand)) worker.candidates.push_back(cand);
   };
@@ -386,6 +393,45 @@ CULLKIT_FORCEINLINE bool visit_slice(TileWalk& w, const std::vector<std::uint16_
     }
   }
   return true;
+}
+
+// With per-slot corners in the hierarchy's leaf order, the triangles the slice's cells met are
+// admitted in leaf order, not class by class: a class's triangles are spread over the leaves
+// (their neighbours there belong to other classes), so admitting them cell by cell reads one
+// scattered corner line per triangle, while in leaf order the triangles of every class met in the
+// slice share the lines they lie on and the reads run forward. Admission does not depend on the
+// order (the tile's rays do not change until test_candidates), so the candidates are the same.
+CULLKIT_FORCEINLINE void admit_met_in_leaf_order(TileWalk& w) {
+  Worker& worker = w.worker;
+  auto& met = worker.met_in_slice;
+  const std::size_t n = met.size();
+  if (n == 0) return;
+  auto admit = [&](std::uint32_t tri) {
+    Candidate cand;
+    if (admit_triangle(w.data, w.f, tri, w.x0, w.y0, w.tw, w.th, w.live, w.r, worker, cand)) worker.candidates.push_back(cand);
+  };
+  // One counting pass over about n buckets of the positions' range: the order only needs to be
+  // close to the leaves' (triangles a bucket apart seldom share a line), and any order admits the
+  // same candidates. A comparison sort of the same lists took more time than the reads it saved.
+  std::uint32_t lo = 0xFFFFFFFFu, hi = 0;
+  for (const std::uint64_t m : met) {
+    const auto pos = static_cast<std::uint32_t>(m >> 32);
+    lo = std::min(lo, pos);
+    hi = std::max(hi, pos);
+  }
+  std::uint32_t buckets = 1;
+  while (buckets < n && buckets < (1u << 16)) buckets <<= 1;
+  int shift = 0;
+  while (((hi - lo) >> shift) >= buckets) ++shift;
+  auto& count = worker.met_bucket;
+  count.assign(buckets + 1, 0u);
+  for (const std::uint64_t m : met) ++count[((static_cast<std::uint32_t>(m >> 32) - lo) >> shift) + 1];
+  for (std::uint32_t b = 1; b <= buckets; ++b) count[b] += count[b - 1];
+  auto& order = worker.met_order;
+  order.resize(n);
+  for (const std::uint64_t m : met) order[count[(static_cast<std::uint32_t>(m >> 32) - lo) >> shift]++] = static_cast<std::uint32_t>(m);
+  for (const std::uint32_t tri : order) admit(tri);
+  met.clear();
 }
 
 // Ray-tests the slice's candidates nearest first, so hits found early let behind_hits drop the
@@ -463,6 +509,7 @@ CULLKIT_FORCEINLINE bool walk_slices(TileWalk& w, const std::vector<std::uint16_
       beam_cells(w, s0, s1, rlo, rhi, clo, chi);
       if (rlo <= rhi && clo <= chi) {
         const bool whole = visit_slice(w, active, s, rlo, rhi, clo, chi);
+        admit_met_in_leaf_order(w);
         test_candidates(w);
         if (!whole) return false;
       }
