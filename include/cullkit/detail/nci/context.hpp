@@ -87,6 +87,11 @@ struct Worker {
   // admit_met_in_leaf_order), with that pass's buckets and ordered ids.
   std::vector<std::uint64_t> met_in_slice;
   std::vector<std::uint32_t> met_bucket, met_order;
+  // Triangles met in the slice being walked, those settled by their cached rectangle included, and
+  // the most met in one slice so far: what the three lists above may need. Unlike their sizes it
+  // does not depend on which tiles this worker walked before (the cached rectangles do), so
+  // reserving it for every worker keeps a warm frame from allocating under any schedule.
+  std::size_t met_in_slice_count = 0, met_in_slice_peak = 0;
   std::vector<std::uint16_t> active_classes;
   std::vector<TileState> tile_rays;  // empty or one: the worker's tile scratch
   std::vector<FrameSlot> frame_slots;  // the packets of a tile cast through the triangle hierarchy

@@ -157,11 +157,16 @@ inline void merge_workers(const IndexData& data, NciContext& context, Scratch& s
     bool frames = false;  // some worker cast a tile through the triangle hierarchy: all get its packets
     for (unsigned i = 0; i < count; ++i) {
       cand = std::max(cand, scratch.workers[i].candidates.capacity());
-      met = std::max({met, scratch.workers[i].met_in_slice.capacity(), scratch.workers[i].met_order.capacity()});
+      met = std::max({met, scratch.workers[i].met_in_slice_peak, scratch.workers[i].met_in_slice.capacity(),
+                      scratch.workers[i].met_order.capacity()});
       buckets = std::max(buckets, scratch.workers[i].met_bucket.capacity());
       unsure = std::max(unsure, scratch.workers[i].edge_hits.capacity());
       frames = frames || !scratch.workers[i].frame_slots.empty();
     }
+    // The buckets of admit_met_in_leaf_order: a power of two at least the count, at most 2^16, + 1.
+    std::size_t met_buckets = 1;
+    while (met_buckets < met && met_buckets < (std::size_t{1} << 16)) met_buckets <<= 1;
+    buckets = std::max(buckets, met > 0 ? met_buckets + 1 : 0);
     for (unsigned i = 0; i < count; ++i) {
       auto& worker = scratch.workers[i];
       worker.candidates.reserve(cand);

@@ -316,6 +316,7 @@ CULLKIT_FORCEINLINE void visit_cell(TileWalk& w, std::uint16_t k, std::uint32_t 
     worker.tri[tri].stamp = stamp;
     ++met;
     if (gather) {
+      ++worker.met_in_slice_count;
       // Those rejected by their cached rectangle need no corners and are settled here.
       if (!cached_rect_misses(worker, tri, w.x0, w.y0, w.tw, w.th, w.live))
         worker.met_in_slice.push_back(std::uint64_t{data.tri_slot[tri]} << 32 | tri);
@@ -404,6 +405,8 @@ CULLKIT_FORCEINLINE bool visit_slice(TileWalk& w, const std::vector<std::uint16_
 CULLKIT_FORCEINLINE void admit_met_in_leaf_order(TileWalk& w) {
   Worker& worker = w.worker;
   auto& met = worker.met_in_slice;
+  worker.met_in_slice_peak = std::max(worker.met_in_slice_peak, worker.met_in_slice_count);
+  worker.met_in_slice_count = 0;
   const std::size_t n = met.size();
   if (n == 0) return;
   auto admit = [&](std::uint32_t tri) {
