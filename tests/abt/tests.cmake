@@ -15,8 +15,10 @@ function(_abt_compile_fail name source message)
   set_tests_properties(${name}_message PROPERTIES LABELS "abt;compile_fail" RESOURCE_LOCK cullkit_build_dir
                        PASS_REGULAR_EXPRESSION "${message}")
 endfunction()
-_abt_compile_fail(compile_fail_abt_bounds_traits ${PROJECT_SOURCE_DIR}/tests/compile_fail/missing_bounds_traits.cpp
-                  "no bounds for this Object type")
-_abt_compile_fail(compile_fail_abt_getter ${_abt}/compile_fail_getter.cpp "from_getter needs a callable")
+if(CULLKIT_TESTS_COMPILE_CHECKS)
+  _abt_compile_fail(compile_fail_abt_bounds_traits ${PROJECT_SOURCE_DIR}/tests/compile_fail/missing_bounds_traits.cpp
+                    "no bounds for this Object type")
+  _abt_compile_fail(compile_fail_abt_getter ${_abt}/compile_fail_getter.cpp "from_getter needs a callable")
+endif()
 cullkit_add_test(test_abt_dynamic SOURCES ${_abt}/test_abt_dynamic.cpp LABELS abt)
 cullkit_add_test(test_abt_volume_scale SOURCES ${_abt}/test_abt_volume_scale.cpp LABELS abt)
