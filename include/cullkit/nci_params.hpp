@@ -19,7 +19,7 @@ namespace cullkit {
 enum class NciCrowdedPath : std::uint8_t {
   automatic,  ///< per frame: the hierarchy for crowded views seen from outside the scene box, else the walk,
               ///< a tile's walk handing its unfinished rays to the hierarchy where it meets many triangles
-  walk_only,  ///< always the walk
+  walk_only,  ///< always the walk; the index then builds no hierarchy (less build time and memory)
   rays_only,  ///< always the hierarchy
 };
 

@@ -263,6 +263,12 @@ class NormalClassIndex {
     data.stats.triangles_input = index_count / 3;
     detail::nci::report(data, 0.0f);
     std::vector<std::uint32_t> remap;
+    // Room for every triangle up front (most meshes keep nearly all): no regrowth copies on large
+    // meshes. The build trims what it keeps.
+    data.tri_vertices.reserve(3 * data.stats.triangles_input);
+    data.tri_original.reserve(data.stats.triangles_input);
+    data.vertices.reserve(std::min(vertex_count, 3 * data.stats.triangles_input));
+    normals.reserve(data.stats.triangles_input);
     for (std::size_t t = 0; t < data.stats.triangles_input; ++t) {
       std::size_t idx[3];
       bool in_range = true;

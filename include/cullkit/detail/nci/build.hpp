@@ -39,7 +39,9 @@ struct ClassGrids {
   std::vector<std::uint32_t> cell_id[3];
 };
 
-inline void build_class(const IndexData& data, const std::uint32_t* tris, std::size_t count, ClassGrids& out) {
+// `corners`: the three corners of tris[i] at 3 i, 3 i + 1 and 3 i + 2.
+inline void build_class(const IndexData& data, const std::uint32_t* tris, const glm::vec3* corners, std::size_t count,
+                        ClassGrids& out) {
   struct Pair {
     std::uint64_t key;
     std::uint32_t place;  // Morton code of the centroid (clamped into the cell) within the cell
@@ -53,8 +55,8 @@ inline void build_class(const IndexData& data, const std::uint32_t* tris, std::s
     const std::uint32_t tri = tris[i];
     double v[3][3];
     double mn[3], mx[3];
-    for (int k = 0; k < 3; ++k) {
-      const glm::vec3& p = data.vertices[data.tri_vertices[3 * tri + static_cast<std::uint32_t>(k)]];
+    for (std::size_t k = 0; k < 3; ++k) {
+      const glm::vec3& p = corners[3 * i + k];
       for (int a = 0; a < 3; ++a) v[k][a] = p[a];
     }
     int c0[3], c1[3];
@@ -217,9 +219,17 @@ inline void build_class_grids(const IndexData& data, const std::vector<std::uint
   for (std::size_t i = 0; i < n; ++i) ++class_begin[class_of[i] + 1];
   for (std::size_t c = 0; c < classes; ++c) class_begin[c + 1] += class_begin[c];
   by_class.resize(n);
+  // Each triangle's corners beside it in class order: a class's pass then reads them in order,
+  // where reading them through the vertex ids would miss the cache on nearly every triangle of a
+  // large mesh (a class's triangles lie scattered over the mesh's arrays).
+  std::vector<glm::vec3> corners(3 * n);
   {
     std::vector<std::uint32_t> fill(class_begin.begin(), class_begin.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) by_class[fill[class_of[i]]++] = static_cast<std::uint32_t>(i);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t at = fill[class_of[i]]++;
+      by_class[at] = static_cast<std::uint32_t>(i);
+      for (std::size_t k = 0; k < 3; ++k) corners[3 * std::size_t{at} + k] = data.vertices[data.tri_vertices[3 * i + k]];
+    }
   }
   parts.resize(classes);
   std::atomic<std::size_t> next{0}, done{0};
@@ -229,7 +239,8 @@ inline void build_class_grids(const IndexData& data, const std::vector<std::uint
     for (;;) {
       const std::size_t c = next.fetch_add(1, std::memory_order_relaxed);
       if (c >= classes) break;
-      build_class(data, by_class.data() + class_begin[c], class_begin[c + 1] - class_begin[c], parts[c]);
+      build_class(data, by_class.data() + class_begin[c], corners.data() + 3 * std::size_t{class_begin[c]},
+                  class_begin[c + 1] - class_begin[c], parts[c]);
       const std::size_t d = done.fetch_add(1) + 1;
       if (reporter) report(data, 0.2f + 0.7f * static_cast<float>(d) / static_cast<float>(classes));
     }
@@ -254,51 +265,107 @@ void for_blocks(const IndexData& data, std::size_t n, std::size_t block, const B
                     [](void* job, std::size_t) { (*static_cast<Work*>(job))(); }, &work);
 }
 
-// Per vertex, the first vertex with bitwise the same position (itself when none comes before it),
-// through an open-addressing table over the position bits; `distinct` counts the vertices that are
-// their own. A table entry holds a vertex id and the upper half of its hash, so that most probes
-// settle without reading a position; the slot of the vertex `ahead` places on is prefetched.
-inline std::vector<std::uint32_t> canonical_vertices(const std::vector<glm::vec3>& vertices, std::size_t& distinct) {
-  const std::size_t count = vertices.size();
-  std::vector<std::uint32_t> canon(count);
+// The hash of a position's bits (`bits` receives them) for the vertex merge.
+inline std::uint64_t position_hash(const glm::vec3& p, std::uint32_t bits[3]) noexcept {
+  std::memcpy(bits, &p, 3 * sizeof(std::uint32_t));
+  const std::uint64_t h = (std::uint64_t{bits[0]} * 0x9E3779B97F4A7C15ull) ^ (std::uint64_t{bits[1]} * 0xC2B2AE3D27D4EB4Full) ^
+                          (std::uint64_t{bits[2]} * 0x165667B19E3779F9ull);
+  return h ^ (h >> 29);
+}
+
+// A vertex in a bucket of the merge: its position's bits and its id.
+struct BucketVertex {
+  std::uint32_t bits[3];
+  std::uint32_t id;
+};
+
+// Per vertex of `list` (ascending ids, one bucket), canon[id] becomes the id of the first vertex of
+// the list with bitwise the same position, through an open-addressing table; returns how many are
+// their own. A table entry holds a list position and the upper half of the hash, so that most probes
+// settle without reading a position. `table` is scratch.
+inline std::size_t merge_bucket(const BucketVertex* list, std::size_t count, std::vector<std::uint64_t>& table,
+                                std::uint32_t* canon) {
   std::size_t size = 16;
   while (size < 2 * count) size *= 2;
   constexpr std::uint64_t vacant = ~std::uint64_t{0};
-  std::vector<std::uint64_t> table(size, vacant);
-  const auto hash_of = [&](std::size_t v, std::uint32_t b[3]) {
-    std::memcpy(b, &vertices[v], 3 * sizeof(std::uint32_t));
-    std::uint64_t h = (std::uint64_t{b[0]} * 0x9E3779B97F4A7C15ull) ^ (std::uint64_t{b[1]} * 0xC2B2AE3D27D4EB4Full) ^
-                      (std::uint64_t{b[2]} * 0x165667B19E3779F9ull);
-    return h ^ (h >> 29);
-  };
-  constexpr std::size_t ahead = 16;
-  distinct = 0;
+  table.assign(size, vacant);
+  std::size_t distinct = 0;
   for (std::size_t v = 0; v < count; ++v) {
-    if (v + ahead < count) {
-      std::uint32_t b[3];
-      detail::prefetch(&table[static_cast<std::size_t>(hash_of(v + ahead, b)) & (size - 1)]);
-    }
     std::uint32_t b[3];
-    const std::uint64_t hash = hash_of(v, b);
+    glm::vec3 p;
+    std::memcpy(&p, list[v].bits, sizeof p);
+    const std::uint64_t hash = position_hash(p, b);
     const std::uint64_t tag = hash >> 32 << 32;
     for (std::size_t at = static_cast<std::size_t>(hash) & (size - 1);; at = (at + 1) & (size - 1)) {
       const std::uint64_t entry = table[at];
       if (entry == vacant) {
         table[at] = tag | v;
-        canon[v] = static_cast<std::uint32_t>(v);
+        canon[list[v].id] = list[v].id;
         ++distinct;
         break;
       }
       if ((entry >> 32 << 32) != tag) continue;
-      const std::uint32_t other = static_cast<std::uint32_t>(entry);
-      std::uint32_t o[3];
-      std::memcpy(o, &vertices[other], sizeof o);
-      if (o[0] == b[0] && o[1] == b[1] && o[2] == b[2]) {
-        canon[v] = other;
+      const BucketVertex& other = list[static_cast<std::uint32_t>(entry)];
+      if (other.bits[0] == b[0] && other.bits[1] == b[1] && other.bits[2] == b[2]) {
+        canon[list[v].id] = other.id;
         break;
       }
     }
   }
+  return distinct;
+}
+
+// Per vertex, the first vertex with bitwise the same position (itself when none comes before it);
+// `distinct` counts the vertices that are their own. Equal positions have equal hashes, so the
+// vertices are first scattered into buckets by the hash's top bits (each bucket in ascending ids),
+// then each bucket is merged on its own, on the build's threads: a bucket's table stays in cache,
+// where one table over every vertex would miss on almost every probe.
+inline std::vector<std::uint32_t> canonical_vertices(const IndexData& data, const std::vector<glm::vec3>& vertices,
+                                                     std::size_t& distinct) {
+  const std::size_t count = vertices.size();
+  std::vector<std::uint32_t> canon(count);
+  distinct = 0;
+  if (count == 0) return canon;
+  int bucket_bits = 0;
+  while (bucket_bits < 12 && (count >> 14 >> bucket_bits) > 0) ++bucket_bits;
+  const std::size_t buckets = std::size_t{1} << bucket_bits;
+  const auto bucket_of = [&](std::size_t v) {
+    std::uint32_t b[3];
+    return bucket_bits == 0 ? std::size_t{0} : static_cast<std::size_t>(position_hash(vertices[v], b) >> (64 - bucket_bits));
+  };
+  // Per block of vertices, its count per bucket; then each (bucket, block) pair's first place.
+  constexpr std::size_t block = std::size_t{1} << 16;
+  const std::size_t blocks = (count + block - 1) / block;
+  std::vector<std::size_t> place(blocks * buckets + 1, 0);  // bucket-major: [bucket][block]
+  for_blocks(data, count, block, [&](std::size_t b, std::size_t e) {
+    std::size_t* mine = place.data() + b / block;
+    for (std::size_t v = b; v < e; ++v) ++mine[bucket_of(v) * blocks];
+  });
+  std::size_t sum = 0;
+  for (std::size_t& p : place) {
+    const std::size_t c = p;
+    p = sum;
+    sum += c;
+  }
+  std::vector<BucketVertex> list(count);
+  for_blocks(data, count, block, [&](std::size_t b, std::size_t e) {
+    std::vector<std::size_t> at(buckets);
+    for (std::size_t k = 0; k < buckets; ++k) at[k] = place[k * blocks + b / block];
+    for (std::size_t v = b; v < e; ++v) {
+      BucketVertex& out = list[at[bucket_of(v)]++];
+      std::memcpy(out.bits, &vertices[v], sizeof out.bits);
+      out.id = static_cast<std::uint32_t>(v);
+    }
+  });
+  std::atomic<std::size_t> own{0};
+  for_blocks(data, buckets, 1, [&](std::size_t b, std::size_t e) {
+    std::vector<std::uint64_t> table;
+    for (std::size_t k = b; k < e; ++k) {
+      const std::size_t first = place[k * blocks], last = place[(k + 1) * blocks];
+      own += merge_bucket(list.data() + first, last - first, table, canon.data());
+    }
+  });
+  distinct = own.load();
   return canon;
 }
 
@@ -341,7 +408,7 @@ inline void renumber(IndexData& data, const std::vector<std::uint16_t>& class_of
     // use and merged when their positions are bitwise equal (OBJ files often repeat a position
     // per normal or texture coordinate).
     std::size_t distinct = 0;
-    const std::vector<std::uint32_t> canon = canonical_vertices(data.vertices, distinct);
+    const std::vector<std::uint32_t> canon = canonical_vertices(data, data.vertices, distinct);
     // Per-slot storage (corner k of triangle t at 3 t + k, no ids) when it takes no more bytes than
     // distinct vertices and their ids: meshes of unshared triangles, such as foliage.
     const std::size_t id_bytes = distinct <= 65536 ? 2 : 4;
@@ -497,14 +564,16 @@ inline void make_chunk_boxes(IndexData& data, const std::vector<std::uint32_t>& 
 inline void make_frame_hierarchy(IndexData& data) {
   const std::size_t n = data.triangle_count();
   std::vector<TriangleBvhItem> items(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t tri = static_cast<std::uint32_t>(i);
-    const glm::vec3 &a = data.corner(tri, 0), &b = data.corner(tri, 1), &c = data.corner(tri, 2);
-    for (int k = 0; k < 3; ++k) {
-      items[i].lo[k] = std::min({a[k], b[k], c[k]});
-      items[i].hi[k] = std::max({a[k], b[k], c[k]});
+  for_blocks(data, n, std::size_t{1} << 16, [&](std::size_t first, std::size_t end) {
+    for (std::size_t i = first; i < end; ++i) {
+      const std::uint32_t tri = static_cast<std::uint32_t>(i);
+      const glm::vec3 &a = data.corner(tri, 0), &b = data.corner(tri, 1), &c = data.corner(tri, 2);
+      for (int k = 0; k < 3; ++k) {
+        items[i].lo[k] = std::min({a[k], b[k], c[k]});
+        items[i].hi[k] = std::max({a[k], b[k], c[k]});
+      }
     }
-  }
+  });
   TriangleBvhBuilder builder(items, detail::resolve_threads(data.params.build_threads, 16), data.params.task_runner);
   builder.traversal_cost = frame_traversal_cost;
   data.bvh = builder.build();
@@ -558,6 +627,9 @@ CULLKIT_CORE_FN void build(IndexData& data, std::vector<glm::vec3>& normals) {
   data.stats.triangles_indexed = data.tri_original.size();
   report(data, 0.1f);
   if (data.tri_original.empty()) {
+    std::vector<glm::vec3>().swap(data.vertices);  // the gathering's reserved room
+    std::vector<std::uint32_t>().swap(data.tri_vertices);
+    std::vector<std::uint32_t>().swap(data.tri_original);
     data.class_of.assign(data.stats.triangles_input, skipped_class);
     report(data, 1.0f);
     return;
@@ -573,7 +645,9 @@ CULLKIT_CORE_FN void build(IndexData& data, std::vector<glm::vec3>& normals) {
   make_chunk_boxes(data, class_entry_end);
   narrow_forms(data);
   report(data, 0.9f);
-  make_frame_hierarchy(data);
+  // The hierarchy serves only the cast: an index fixed to the walk never reads it (tri_slot stays
+  // empty, so per-slot corners stay in internal order).
+  if (data.params.crowded_path != NciCrowdedPath::walk_only) make_frame_hierarchy(data);
   data.vertices.shrink_to_fit();
   data.tri_vertices.shrink_to_fit();
   data.tri_original.shrink_to_fit();

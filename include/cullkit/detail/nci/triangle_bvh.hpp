@@ -15,6 +15,11 @@
 #include <vector>
 
 #include "../parallel.hpp"
+#include "../../config.hpp"
+
+#if CULLKIT_HAS_SSE2
+#include <emmintrin.h>
+#endif
 
 namespace cullkit::detail::nci {
 
@@ -118,8 +123,12 @@ struct TriangleBvhItem {
 
 // Binned SAH build (16 bins on each axis) of a 4-wide tree: each node splits its largest child
 // until it has four or none can be split. Leaves hold at most leaf_max triangles and are cut where
-// the heuristic says a leaf costs less than a split. The two top levels' subtrees are built on
-// `threads` threads and spliced in subtree order, so the tree does not depend on the thread count.
+// the heuristic says a leaf costs less than a split. The top is cut into up to 16 ranges (the bins
+// of its long ranges filled on `threads` threads), whose subtrees are built on `threads` threads
+// and spliced in range order, so the tree does not depend on the thread count. Each range carries
+// the box of its centroids, measured by the partition that made it, and a split weighs only the
+// planes after occupied bins (the others cut the same sides at the same cost): the tree is the
+// plain binned build's, bit for bit, with fewer passes over the ranges.
 class TriangleBvhBuilder {
  public:
   TriangleBvhBuilder(const std::vector<TriangleBvhItem>& items, unsigned threads, const TaskRunner& runner)
@@ -139,6 +148,7 @@ class TriangleBvhBuilder {
         refs_[i].hi[a] = items_[i].hi[a];
       }
       refs_[i].id = static_cast<std::uint32_t>(i);
+      refs_[i].zero = 0.0f;
     }
     if (n == 0) return out;
     const Range all = bounds_of(0, n);
@@ -146,15 +156,17 @@ class TriangleBvhBuilder {
       out.root_lo[a] = all.lo[a];
       out.root_hi[a] = all.hi[a];
     }
-    // The top: split the whole set down to at most 16 ranges, serially; then each range's subtree
-    // on its own thread, spliced below the top in range order.
-    std::vector<Range> tops;
-    split_into(all, 16, tops);
+    // The top: split the whole set down to at most 16 ranges (the large ranges' bins filled on
+    // all threads); then each range's subtree on its own thread, spliced below the top in range order.
+    Range cut[16];
+    top_ = true;
+    const std::vector<Range> tops(cut, cut + split_into(all, 16, cut));
+    top_ = false;
     std::vector<std::vector<TriangleBvhNode>> sub(tops.size());
     std::vector<std::uint32_t> sub_root(tops.size());
     struct Job {
       TriangleBvhBuilder* self;
-      std::vector<Range>* tops;
+      const std::vector<Range>* tops;
       std::vector<std::vector<TriangleBvhNode>>* sub;
       std::vector<std::uint32_t>* sub_root;
       std::atomic<std::size_t> next{0};  // ranges are taken in turn: their sizes differ
@@ -175,15 +187,32 @@ class TriangleBvhBuilder {
   }
 
  private:
+  // A run of refs_ with its box and the box of its centroids (doubled: lo + hi per axis), which
+  // the split that made it measured while partitioning, so no split reads its range only for them.
   struct Range {
     std::size_t b, e;
     float lo[3], hi[3];
+    float cl[3], ch[3];
+    bool whole;  // split() kept it whole (a leaf): not asked again
   };
   static constexpr int bins = 16;
-  struct Ref {
-    float lo[3], hi[3];
+  // A triangle's box with its id between the two corners: 32 bytes, each corner and the id or a
+  // zero in four lanes (the id's lane masked off before any arithmetic).
+  struct alignas(16) Ref {
+    float lo[3];
     std::uint32_t id;
+    float hi[3];
+    float zero;
   };
+  // A bin of the heuristic: the union of its triangles' boxes (the fourth lane unused) and their count.
+  struct alignas(16) Bin {
+    float lo[4], hi[4];
+    std::size_t n;
+  };
+  // While the top is cut (before the subtrees' tasks, which never dispatch tasks of their own),
+  // ranges at least this long fill their bins on all threads (slices merged in slice order).
+  static constexpr std::size_t parallel_bins = std::size_t{1} << 17;
+  bool top_ = false;
   const std::vector<TriangleBvhItem>& items_;
   std::vector<Ref> refs_;  // the items in the tree's order as it is built
   unsigned threads_;
@@ -194,61 +223,59 @@ class TriangleBvhBuilder {
     return x < 0.0f ? 0.0f : x * y + y * z + z * x;
   }
 
-  Range bounds_of(std::size_t b, std::size_t e) const noexcept {
-    Range r{b, e, {0, 0, 0}, {0, 0, 0}};
-    for (int a = 0; a < 3; ++a) {
-      r.lo[a] = std::numeric_limits<float>::infinity();
-      r.hi[a] = -std::numeric_limits<float>::infinity();
+  static void empty_box(float lo[], float hi[], int lanes) noexcept {
+    for (int j = 0; j < lanes; ++j) {
+      lo[j] = std::numeric_limits<float>::infinity();
+      hi[j] = -std::numeric_limits<float>::infinity();
     }
+  }
+
+  Range bounds_of(std::size_t b, std::size_t e) const noexcept {
+    Range r{b, e, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, false};
+    empty_box(r.lo, r.hi, 3);
+    empty_box(r.cl, r.ch, 3);
     for (std::size_t i = b; i < e; ++i) {
       const Ref& it = refs_[i];
       for (int a = 0; a < 3; ++a) {
         r.lo[a] = std::min(r.lo[a], it.lo[a]);
         r.hi[a] = std::max(r.hi[a], it.hi[a]);
+        const float c = it.lo[a] + it.hi[a];
+        r.cl[a] = std::min(r.cl[a], c);
+        r.ch[a] = std::max(r.ch[a], c);
       }
     }
     return r;
   }
 
-  // Splits r in two by the binned heuristic (the median of the widest centroid axis when the
-  // centroids coincide or every plane leaves a side empty); false when r is a leaf.
-  bool split(const Range& r, Range& left, Range& right, bool median = false) {
-    const std::size_t n = r.e - r.b;
-    if (n <= 1) return false;
-    if (median && n > static_cast<std::size_t>(TriangleBvhNode::leaf_max)) return median_split(r, left, right);
-    float cl[3], ch[3];
-    for (int a = 0; a < 3; ++a) {
-      cl[a] = std::numeric_limits<float>::infinity();
-      ch[a] = -cl[a];
-    }
-    for (std::size_t i = r.b; i < r.e; ++i) {
-      const Ref& it = refs_[i];
+  // Adds refs_[b, e) to the bins, `scale` and `cl` mapping a centroid to its bin on each axis.
+  // The same float operations as the scalar form (the SSE2 min and max equal std::min and
+  // std::max on finite values but for the sign of a zero, which no bound or area reads).
+  void fill_bins(std::size_t b, std::size_t e, const float cl[3], const float scale[3], Bin (&bin)[3][bins]) const noexcept {
+#if CULLKIT_HAS_SSE2
+    const __m128 keep3 = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
+    const __m128 c0 = _mm_set_ps(0.0f, cl[2], cl[1], cl[0]), s = _mm_set_ps(0.0f, scale[2], scale[1], scale[0]);
+    const __m128i last = _mm_set1_epi32(bins - 1), first = _mm_setzero_si128();
+    for (std::size_t i = b; i < e; ++i) {
+      const __m128 lo = _mm_and_ps(_mm_load_ps(refs_[i].lo), keep3), hi = _mm_load_ps(refs_[i].hi);
+      __m128i k = _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(_mm_add_ps(lo, hi), c0), s));
+      // Clamped to [0, bins - 1] (SSE2 has no 32-bit integer min / max).
+      const __m128i over = _mm_cmpgt_epi32(k, last);
+      k = _mm_or_si128(_mm_and_si128(over, last), _mm_andnot_si128(over, k));
+      k = _mm_and_si128(k, _mm_cmpgt_epi32(k, first));
+      alignas(16) std::int32_t kk[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(kk), k);
       for (int a = 0; a < 3; ++a) {
-        const float c = it.lo[a] + it.hi[a];
-        cl[a] = std::min(cl[a], c);
-        ch[a] = std::max(ch[a], c);
+        Bin& bb = bin[a][kk[a]];
+        _mm_store_ps(bb.lo, _mm_min_ps(_mm_load_ps(bb.lo), lo));
+        _mm_store_ps(bb.hi, _mm_max_ps(_mm_load_ps(bb.hi), hi));
+        ++bb.n;
       }
     }
-    struct Bin {
-      float lo[3], hi[3];
-      std::size_t n;
-    };
-    Bin bin[3][bins];
-    float scale[3];
-    for (int a = 0; a < 3; ++a) {
-      scale[a] = ch[a] > cl[a] ? float(bins) * 0.99999f / (ch[a] - cl[a]) : 0.0f;
-      for (int k = 0; k < bins; ++k) {
-        for (int j = 0; j < 3; ++j) {
-          bin[a][k].lo[j] = std::numeric_limits<float>::infinity();
-          bin[a][k].hi[j] = -std::numeric_limits<float>::infinity();
-        }
-        bin[a][k].n = 0;
-      }
-    }
-    for (std::size_t i = r.b; i < r.e; ++i) {
+#else
+    for (std::size_t i = b; i < e; ++i) {
       const Ref& it = refs_[i];
       for (int a = 0; a < 3; ++a) {
-        const int k = std::min(bins - 1, static_cast<int>((it.lo[a] + it.hi[a] - cl[a]) * scale[a]));
+        const int k = std::clamp(static_cast<int>((it.lo[a] + it.hi[a] - cl[a]) * scale[a]), 0, bins - 1);
         Bin& bb = bin[a][k];
         for (int j = 0; j < 3; ++j) {
           bb.lo[j] = std::min(bb.lo[j], it.lo[j]);
@@ -257,43 +284,112 @@ class TriangleBvhBuilder {
         ++bb.n;
       }
     }
+#endif
+  }
+
+  // lo, hi: the union of the box and the bin's (in the first three lanes).
+  static void grow(float (&lo)[4], float (&hi)[4], const Bin& bin) noexcept {
+#if CULLKIT_HAS_SSE2
+    _mm_store_ps(lo, _mm_min_ps(_mm_load_ps(lo), _mm_load_ps(bin.lo)));
+    _mm_store_ps(hi, _mm_max_ps(_mm_load_ps(hi), _mm_load_ps(bin.hi)));
+#else
+    for (int j = 0; j < 3; ++j) {
+      lo[j] = std::min(lo[j], bin.lo[j]);
+      hi[j] = std::max(hi[j], bin.hi[j]);
+    }
+#endif
+  }
+
+  static void clear_bins(Bin (&bin)[3][bins]) noexcept {
+    for (int a = 0; a < 3; ++a)
+      for (int k = 0; k < bins; ++k) {
+        empty_box(bin[a][k].lo, bin[a][k].hi, 4);
+        bin[a][k].n = 0;
+      }
+  }
+
+  // The bins of r: on all threads for long ranges (each slice into its own bins, merged in order).
+  void bin_range(const Range& r, const float scale[3], Bin (&bin)[3][bins]) const {
+    clear_bins(bin);
+    const std::size_t n = r.e - r.b;
+    if (!top_ || threads_ < 2 || n < parallel_bins) {
+      fill_bins(r.b, r.e, r.cl, scale, bin);
+      return;
+    }
+    struct Slice {
+      Bin bin[3][bins];
+    };
+    const std::size_t slices = std::min<std::size_t>(threads_, 64);
+    std::vector<Slice> part(slices);
+    for (Slice& sl : part) clear_bins(sl.bin);
+    struct Job {
+      const TriangleBvhBuilder* self;
+      const Range* r;
+      const float* scale;
+      std::vector<Slice>* part;
+    } job{this, &r, scale, &part};
+    detail::run_tasks(runner_, slices, [](void* j, std::size_t t) {
+      const Job& jb = *static_cast<const Job*>(j);
+      const std::size_t len = jb.r->e - jb.r->b, count = jb.part->size();
+      jb.self->fill_bins(jb.r->b + len * t / count, jb.r->b + len * (t + 1) / count, jb.r->cl, jb.scale, (*jb.part)[t].bin);
+    }, &job);
+    for (const Slice& sl : part)
+      for (int a = 0; a < 3; ++a)
+        for (int k = 0; k < bins; ++k) {
+          for (int j = 0; j < 3; ++j) {
+            bin[a][k].lo[j] = std::min(bin[a][k].lo[j], sl.bin[a][k].lo[j]);
+            bin[a][k].hi[j] = std::max(bin[a][k].hi[j], sl.bin[a][k].hi[j]);
+          }
+          bin[a][k].n += sl.bin[a][k].n;
+        }
+  }
+
+  // Splits r in two by the binned heuristic (the median of the widest centroid axis when the
+  // centroids coincide or every plane leaves a side empty); false when r is a leaf.
+  bool split(const Range& r, Range& left, Range& right, bool median = false) {
+    const std::size_t n = r.e - r.b;
+    if (n <= 1) return false;
+    if (median && n > static_cast<std::size_t>(TriangleBvhNode::leaf_max)) return median_split(r, left, right);
+    float scale[3];
+    for (int a = 0; a < 3; ++a) scale[a] = r.ch[a] > r.cl[a] ? float(bins) * 0.99999f / (r.ch[a] - r.cl[a]) : 0.0f;
+    Bin bin[3][bins];
+    bin_range(r, scale, bin);
     float best = std::numeric_limits<float>::infinity();
     int best_axis = -1, best_plane = 0;
     for (int a = 0; a < 3; ++a) {
       if (scale[a] == 0.0f) continue;
+      // Planes between two bins with no triangle between them cut the same sides at the same
+      // cost: only the first plane after each occupied bin is weighed (empty bins skipped).
       float rarea[bins];
       std::size_t rn[bins];
-      float lo[3] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
-                     std::numeric_limits<float>::infinity()};
-      float hi[3] = {-lo[0], -lo[1], -lo[2]};
+      alignas(16) float lo[4], hi[4];
+      empty_box(lo, hi, 4);
       std::size_t cnt = 0;
       for (int k = bins - 1; k > 0; --k) {
-        for (int j = 0; j < 3; ++j) {
-          lo[j] = std::min(lo[j], bin[a][k].lo[j]);
-          hi[j] = std::max(hi[j], bin[a][k].hi[j]);
-        }
+        if (bin[a][k].n == 0) continue;
+        grow(lo, hi, bin[a][k]);
         cnt += bin[a][k].n;
         rarea[k] = area(lo, hi);
         rn[k] = cnt;
       }
-      for (int j = 0; j < 3; ++j) {
-        lo[j] = std::numeric_limits<float>::infinity();
-        hi[j] = -std::numeric_limits<float>::infinity();
-      }
+      empty_box(lo, hi, 4);
       cnt = 0;
-      for (int k = 0; k + 1 < bins; ++k) {
-        for (int j = 0; j < 3; ++j) {
-          lo[j] = std::min(lo[j], bin[a][k].lo[j]);
-          hi[j] = std::max(hi[j], bin[a][k].hi[j]);
+      int prev = -1;  // the last occupied bin so far, the left side's box and area up to it
+      float prev_area = 0.0f;
+      for (int k = 0; k < bins; ++k) {
+        if (bin[a][k].n == 0) continue;
+        if (prev >= 0) {
+          const float cost = prev_area * float(cnt) + rarea[k] * float(rn[k]);
+          if (cost < best) {
+            best = cost;
+            best_axis = a;
+            best_plane = prev + 1;
+          }
         }
+        grow(lo, hi, bin[a][k]);
         cnt += bin[a][k].n;
-        if (cnt == 0 || rn[k + 1] == 0) continue;
-        const float cost = area(lo, hi) * float(cnt) + rarea[k + 1] * float(rn[k + 1]);
-        if (cost < best) {
-          best = cost;
-          best_axis = a;
-          best_plane = k + 1;
-        }
+        prev = k;
+        prev_area = area(lo, hi);
       }
     }
     if (n <= static_cast<std::size_t>(TriangleBvhNode::leaf_max) && best_axis >= 0 &&
@@ -303,25 +399,14 @@ class TriangleBvhBuilder {
       if (n <= static_cast<std::size_t>(TriangleBvhNode::leaf_max)) return false;
       return median_split(r, left, right);
     }
-    std::size_t mid;
-    {
-      const int a = best_axis;
-      const float c0 = cl[a], s = scale[a];
-      Ref* const base = refs_.data();
-      Ref* m = std::partition(base + r.b, base + r.e, [&](const Ref& it) {
-        return std::min(bins - 1, static_cast<int>((it.lo[a] + it.hi[a] - c0) * s)) < best_plane;
-      });
-      mid = static_cast<std::size_t>(m - base);
-    }
+    left = Range{r.b, r.b, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, false};
+    right = Range{r.e, r.e, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, false};
+    empty_box(left.lo, left.hi, 3);
+    empty_box(right.lo, right.hi, 3);
+    const std::size_t mid = partition(r, best_axis, scale[best_axis], best_plane, left, right);
     // The sides' boxes are the unions of their bins' (each triangle lies in one bin of the axis),
     // unless the partition disagreed with the binning (then measured again).
     std::size_t left_count = 0;
-    left = Range{r.b, mid, {0, 0, 0}, {0, 0, 0}};
-    right = Range{mid, r.e, {0, 0, 0}, {0, 0, 0}};
-    for (int j = 0; j < 3; ++j) {
-      left.lo[j] = right.lo[j] = std::numeric_limits<float>::infinity();
-      left.hi[j] = right.hi[j] = -std::numeric_limits<float>::infinity();
-    }
     for (int k = 0; k < bins; ++k) {
       const Bin& bb = bin[best_axis][k];
       Range& side = k < best_plane ? left : right;
@@ -332,29 +417,94 @@ class TriangleBvhBuilder {
       }
     }
     if (mid - r.b != left_count || mid == r.b || mid == r.e) {
-      if (mid == r.b || mid == r.e) mid = r.b + n / 2;
-      left = bounds_of(r.b, mid);
-      right = bounds_of(mid, r.e);
+      const std::size_t cut = mid == r.b || mid == r.e ? r.b + n / 2 : mid;
+      left = bounds_of(r.b, cut);
+      right = bounds_of(cut, r.e);
     }
     return true;
   }
 
+  // Moves the refs of r whose centroid falls below bin `plane` of axis a to its front (the
+  // two-ended exchange of std::partition, so the order it leaves is the same), measuring each
+  // side's centroid box on the way; left.e and right.b become the cut, which it returns.
+  std::size_t partition(const Range& r, int a, float scale, int plane, Range& left, Range& right) noexcept {
+    const float c0 = r.cl[a];
+#if CULLKIT_HAS_SSE2
+    const __m128 keep3 = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
+    __m128 lcl4 = _mm_set1_ps(std::numeric_limits<float>::infinity()), rcl4 = lcl4;
+    __m128 lch4 = _mm_set1_ps(-std::numeric_limits<float>::infinity()), rch4 = lch4;
+    const auto goes_left = [&](const Ref& it) {
+      const __m128 c4 = _mm_add_ps(_mm_and_ps(_mm_load_ps(it.lo), keep3), _mm_load_ps(it.hi));
+      alignas(16) float c[4];
+      _mm_store_ps(c, c4);
+      const bool l = std::clamp(static_cast<int>((c[a] - c0) * scale), 0, bins - 1) < plane;
+      if (l) {
+        lcl4 = _mm_min_ps(lcl4, c4);
+        lch4 = _mm_max_ps(lch4, c4);
+      } else {
+        rcl4 = _mm_min_ps(rcl4, c4);
+        rch4 = _mm_max_ps(rch4, c4);
+      }
+      return l;
+    };
+#else
+    float lcl[3], lch[3], rcl[3], rch[3];
+    empty_box(lcl, lch, 3);
+    empty_box(rcl, rch, 3);
+    const auto goes_left = [&](const Ref& it) {
+      float c[3];
+      for (int j = 0; j < 3; ++j) c[j] = it.lo[j] + it.hi[j];
+      const bool l = std::clamp(static_cast<int>((c[a] - c0) * scale), 0, bins - 1) < plane;
+      float* cl = l ? lcl : rcl;
+      float* ch = l ? lch : rch;
+      for (int j = 0; j < 3; ++j) {
+        cl[j] = std::min(cl[j], c[j]);
+        ch[j] = std::max(ch[j], c[j]);
+      }
+      return l;
+    };
+#endif
+    Ref* first = refs_.data() + r.b;
+    Ref* last = refs_.data() + r.e;
+    while (first != last) {
+      if (goes_left(*first)) {
+        ++first;
+        continue;
+      }
+      bool exchanged = false;  // *first goes right: the last unread ref going left takes its place
+      while (first != --last) {
+        if (goes_left(*last)) {
+          std::swap(*first, *last);
+          ++first;
+          exchanged = true;
+          break;
+        }
+      }
+      if (!exchanged) break;
+    }
+    const std::size_t mid = static_cast<std::size_t>(first - refs_.data());
+    left.e = right.b = mid;
+#if CULLKIT_HAS_SSE2
+    alignas(16) float lcl[4], lch[4], rcl[4], rch[4];
+    _mm_store_ps(lcl, lcl4);
+    _mm_store_ps(lch, lch4);
+    _mm_store_ps(rcl, rcl4);
+    _mm_store_ps(rch, rch4);
+#endif
+    for (int j = 0; j < 3; ++j) {
+      left.cl[j] = lcl[j];
+      left.ch[j] = lch[j];
+      right.cl[j] = rcl[j];
+      right.ch[j] = rch[j];
+    }
+    return mid;
+  }
+
   // Cuts r in two halves at the median of its centroids along their widest axis (ties by id).
   bool median_split(const Range& r, Range& left, Range& right) {
-    float cl[3], ch[3];
-    for (int a = 0; a < 3; ++a) {
-      cl[a] = std::numeric_limits<float>::infinity();
-      ch[a] = -cl[a];
-    }
-    for (std::size_t i = r.b; i < r.e; ++i)
-      for (int a = 0; a < 3; ++a) {
-        const float c = refs_[i].lo[a] + refs_[i].hi[a];
-        cl[a] = std::min(cl[a], c);
-        ch[a] = std::max(ch[a], c);
-      }
     int a = 0;
     for (int j = 1; j < 3; ++j)
-      if (ch[j] - cl[j] > ch[a] - cl[a]) a = j;
+      if (r.ch[j] - r.cl[j] > r.ch[a] - r.cl[a]) a = j;
     const std::size_t mid = r.b + (r.e - r.b) / 2;
     Ref* const base = refs_.data();
     std::nth_element(base + r.b, base + mid, base + r.e, [&](const Ref& x, const Ref& y) {
@@ -366,63 +516,73 @@ class TriangleBvhBuilder {
     return true;
   }
 
-  // Cuts r into at most `most` ranges, splitting the largest-area splittable range first.
-  void split_into(const Range& r, std::size_t most, std::vector<Range>& out, bool median = false) {
-    out.assign(1, r);
-    std::vector<bool> done(1, false);
-    while (out.size() < most) {
-      int pick = -1;
+  // Cuts r into at most `most` (at most 16) ranges, into `out` in range order, splitting the
+  // largest-area splittable range first; returns how many. `first`, when given, is r's split,
+  // already made.
+  std::size_t split_into(const Range& r, std::size_t most, Range* out, bool median = false, const Range* first = nullptr) {
+    std::size_t count = 1;
+    out[0] = r;
+    while (count < most) {
+      std::size_t pick = count;
       float big = -1.0f;
-      for (std::size_t k = 0; k < out.size(); ++k)
-        if (!done[k] && out[k].e - out[k].b > static_cast<std::size_t>(TriangleBvhNode::leaf_max) &&
+      for (std::size_t k = 0; k < count; ++k)
+        if (!out[k].whole && out[k].e - out[k].b > static_cast<std::size_t>(TriangleBvhNode::leaf_max) &&
             area(out[k].lo, out[k].hi) > big) {
           big = area(out[k].lo, out[k].hi);
-          pick = static_cast<int>(k);
+          pick = k;
         }
-      if (pick < 0) {  // small ranges: split them too unless the heuristic keeps them whole
-        for (std::size_t k = 0; k < out.size() && pick < 0; ++k)
-          if (!done[k] && out[k].e - out[k].b > 1) pick = static_cast<int>(k);
-        if (pick < 0) break;
+      if (pick == count) {  // small ranges: split them too unless the heuristic keeps them whole
+        for (std::size_t k = 0; k < count && pick == count; ++k)
+          if (!out[k].whole && out[k].e - out[k].b > 1) pick = k;
+        if (pick == count) break;
       }
       Range a, b;
-      if (!split(out[static_cast<std::size_t>(pick)], a, b, median)) {
-        done[static_cast<std::size_t>(pick)] = true;
+      if (first != nullptr) {  // the first pick is r itself
+        a = first[0];
+        b = first[1];
+        first = nullptr;
+      } else if (!split(out[pick], a, b, median)) {
+        out[pick].whole = true;
         continue;
       }
-      out[static_cast<std::size_t>(pick)] = a;
-      done[static_cast<std::size_t>(pick)] = false;
-      out.insert(out.begin() + pick + 1, b);
-      done.insert(done.begin() + pick + 1, false);
+      for (std::size_t k = count; k > pick + 1; --k) out[k] = out[k - 1];
+      out[pick] = a;
+      out[pick + 1] = b;
+      ++count;
     }
-    std::sort(out.begin(), out.end(), [](const Range& x, const Range& y) { return x.b < y.b; });
+    for (std::size_t k = 1; k < count; ++k)  // in range order (the starts differ)
+      for (std::size_t j = k; j > 0 && out[j].b < out[j - 1].b; --j) std::swap(out[j], out[j - 1]);
+    return count;
   }
 
   std::uint32_t leaf_or_node(const Range& r, std::vector<TriangleBvhNode>& nodes, int depth) {
     const std::size_t n = r.e - r.b;
     if (n <= static_cast<std::size_t>(TriangleBvhNode::leaf_max)) {
-      Range a, b;
-      if (!split(r, a, b)) return TriangleBvhNode::leaf(static_cast<std::uint32_t>(r.b), static_cast<std::uint32_t>(n));
+      Range halves[2];
+      if (r.whole || !split(r, halves[0], halves[1]))
+        return TriangleBvhNode::leaf(static_cast<std::uint32_t>(r.b), static_cast<std::uint32_t>(n));
+      return make(r, nodes, depth, halves);
     }
     return make(r, nodes, depth);
   }
 
   // A subtree over r (more than a leaf), its nodes appended to `nodes`; returns its root index.
   // Below depth_limit nodes split at medians (a balanced bound on the depth, which the cast's
-  // stack relies on).
+  // stack relies on). `first`, when given, is r's split, already made.
   static constexpr int depth_limit = 48;
-  std::uint32_t make(const Range& r, std::vector<TriangleBvhNode>& nodes, int depth = 2) {
-    std::vector<Range> kids;
-    split_into(r, 4, kids, depth >= depth_limit);
-    if (kids.size() == 1) {  // cannot be split: one leaf per leaf_max run
-      kids.clear();
+  std::uint32_t make(const Range& r, std::vector<TriangleBvhNode>& nodes, int depth = 2, const Range* first = nullptr) {
+    Range kids[4];
+    std::size_t count = split_into(r, 4, kids, depth >= depth_limit, first);
+    if (count == 1) {  // cannot be split: one leaf per leaf_max run
+      count = 0;
       const std::size_t n = r.e - r.b, step = std::max<std::size_t>((n + 3) / 4, 1);
-      for (std::size_t b = r.b; b < r.e; b += step) kids.push_back(bounds_of(b, std::min(r.e, b + step)));
+      for (std::size_t b = r.b; b < r.e; b += step) kids[count++] = bounds_of(b, std::min(r.e, b + step));
     }
     const std::size_t index = nodes.size();
     nodes.emplace_back();
     float lo[3][4], hi[3][4];
     std::uint32_t codes[4];
-    for (std::size_t j = 0; j < kids.size(); ++j) {
+    for (std::size_t j = 0; j < count; ++j) {
       const Range& k = kids[j];
       codes[j] = leaf_or_node(k, nodes, depth + 1);
       for (int a = 0; a < 3; ++a) {
@@ -431,8 +591,8 @@ class TriangleBvhBuilder {
       }
     }
     TriangleBvhNode& node = nodes[index];
-    node.quantize(lo, hi, static_cast<int>(kids.size()));
-    for (std::size_t j = 0; j < kids.size(); ++j) node.child[j] = codes[j];
+    node.quantize(lo, hi, static_cast<int>(count));
+    for (std::size_t j = 0; j < count; ++j) node.child[j] = codes[j];
     return static_cast<std::uint32_t>(index);
   }
 
