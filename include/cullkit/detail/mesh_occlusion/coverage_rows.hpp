@@ -311,6 +311,98 @@ inline std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int 
   return covered;
 }
 
+inline unsigned CoverageGrid::row_spans4(const TriangleEdges& e, int j, double m, int* i0, int* i1) const {
+#if CULLKIT_COVERAGE_AVX2
+  // a + b * c as row_span's `e.xa[k] + (y - e.ya[k]) * e.slope[k]` is compiled: fused under FMA.
+  const auto mul_add = [](__m256d b, __m256d c, __m256d a) {
+#if defined(__FMA__)
+    return _mm256_fmadd_pd(b, c, a);
+#else
+    return _mm256_add_pd(a, _mm256_mul_pd(b, c));
+#endif
+  };
+  const __m256d rows = _mm256_add_pd(_mm256_set1_pd(static_cast<double>(j)), _mm256_setr_pd(0.0, 1.0, 2.0, 3.0));
+  const __m256d margin = _mm256_set1_pd(m);
+  const __m256d lo = _mm256_sub_pd(rows, margin);
+  const __m256d hi = _mm256_add_pd(_mm256_add_pd(rows, _mm256_set1_pd(1.0)), margin);
+  __m256d xl = _mm256_set1_pd(HUGE_VAL), xr = _mm256_set1_pd(-HUGE_VAL);
+  for (int k = 0; k < 3; ++k) {
+    const __m256d ya = _mm256_set1_pd(e.ya[k]), yb = _mm256_set1_pd(e.yb[k]);
+    // row_span's `e.yb[k] < lo || e.ya[k] > hi` skips the edge: its negation, NaN included.
+    const __m256d meets = _mm256_and_pd(_mm256_cmp_pd(yb, lo, _CMP_NLT_UQ), _mm256_cmp_pd(ya, hi, _CMP_NGT_UQ));
+    __m256d x0, x1;
+    if (e.yb[k] > e.ya[k]) {
+      const __m256d xa = _mm256_set1_pd(e.xa[k]), slope = _mm256_set1_pd(e.slope[k]);
+      // std::max(ya, lo) and std::min(yb, hi): the same values as the lanes' max and min (no NaN;
+      // equal operands are equal values).
+      x0 = mul_add(_mm256_sub_pd(_mm256_max_pd(lo, ya), ya), slope, xa);
+      x1 = mul_add(_mm256_sub_pd(_mm256_min_pd(hi, yb), ya), slope, xa);
+    } else {
+      x0 = _mm256_set1_pd(e.xa[k]);
+      x1 = _mm256_set1_pd(e.xb[k]);
+    }
+    xl = _mm256_blendv_pd(xl, _mm256_min_pd(xl, _mm256_min_pd(x0, x1)), meets);
+    xr = _mm256_blendv_pd(xr, _mm256_max_pd(xr, _mm256_max_pd(x0, x1)), meets);
+  }
+  const __m256d left = _mm256_sub_pd(xl, margin), right = _mm256_add_pd(xr, margin);
+  const __m256d zero = _mm256_setzero_pd(), w = _mm256_set1_pd(static_cast<double>(width_));
+  // row_span's `!(xl <= xr) || xr + m < 0.0 || xl - m >= width_` rejects the row.
+  const __m256d ok = _mm256_and_pd(_mm256_cmp_pd(xl, xr, _CMP_LE_OQ),
+                                   _mm256_and_pd(_mm256_cmp_pd(right, zero, _CMP_NLT_UQ), _mm256_cmp_pd(left, w, _CMP_NGE_UQ)));
+  // clamp_cell on the rows kept (finite there): below 0 gives 0, from width - 1 on gives width - 1,
+  // else the value truncated.
+  const __m256d top = _mm256_set1_pd(static_cast<double>(width_ - 1));
+  const __m128i first = _mm256_cvttpd_epi32(_mm256_min_pd(_mm256_max_pd(_mm256_blendv_pd(zero, left, ok), zero), top));
+  const __m128i last = _mm256_cvttpd_epi32(_mm256_min_pd(_mm256_max_pd(_mm256_blendv_pd(zero, right, ok), zero), top));
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(i0), first);
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(i1), last);
+  return static_cast<unsigned>(_mm256_movemask_pd(ok));
+#elif CULLKIT_HAS_SSE2 && !defined(__FMA__)
+  // Two rows per register, as the AVX2 form above (no FMA here: row_span's products and sums are
+  // not fused either).
+  unsigned found = 0;
+  const __m128d margin = _mm_set1_pd(m), zero = _mm_setzero_pd(), w = _mm_set1_pd(static_cast<double>(width_));
+  const __m128d top = _mm_set1_pd(static_cast<double>(width_ - 1));
+  const auto select = [](__m128d mask, __m128d yes, __m128d no) { return _mm_or_pd(_mm_and_pd(mask, yes), _mm_andnot_pd(mask, no)); };
+  for (int half = 0; half < 2; ++half) {
+    const __m128d rows = _mm_add_pd(_mm_set1_pd(static_cast<double>(j + 2 * half)), _mm_setr_pd(0.0, 1.0));
+    const __m128d lo = _mm_sub_pd(rows, margin);
+    const __m128d hi = _mm_add_pd(_mm_add_pd(rows, _mm_set1_pd(1.0)), margin);
+    __m128d xl = _mm_set1_pd(HUGE_VAL), xr = _mm_set1_pd(-HUGE_VAL);
+    for (int k = 0; k < 3; ++k) {
+      const __m128d ya = _mm_set1_pd(e.ya[k]), yb = _mm_set1_pd(e.yb[k]);
+      const __m128d meets = _mm_and_pd(_mm_cmpnlt_pd(yb, lo), _mm_cmpngt_pd(ya, hi));
+      __m128d x0, x1;
+      if (e.yb[k] > e.ya[k]) {
+        const __m128d xa = _mm_set1_pd(e.xa[k]), slope = _mm_set1_pd(e.slope[k]);
+        x0 = _mm_add_pd(xa, _mm_mul_pd(_mm_sub_pd(_mm_max_pd(lo, ya), ya), slope));
+        x1 = _mm_add_pd(xa, _mm_mul_pd(_mm_sub_pd(_mm_min_pd(hi, yb), ya), slope));
+      } else {
+        x0 = _mm_set1_pd(e.xa[k]);
+        x1 = _mm_set1_pd(e.xb[k]);
+      }
+      xl = select(meets, _mm_min_pd(xl, _mm_min_pd(x0, x1)), xl);
+      xr = select(meets, _mm_max_pd(xr, _mm_max_pd(x0, x1)), xr);
+    }
+    const __m128d left = _mm_sub_pd(xl, margin), right = _mm_add_pd(xr, margin);
+    const __m128d ok = _mm_and_pd(_mm_cmple_pd(xl, xr), _mm_and_pd(_mm_cmpnlt_pd(right, zero), _mm_cmpnge_pd(left, w)));
+    const __m128i first = _mm_cvttpd_epi32(_mm_min_pd(_mm_max_pd(select(ok, left, zero), zero), top));
+    const __m128i last = _mm_cvttpd_epi32(_mm_min_pd(_mm_max_pd(select(ok, right, zero), zero), top));
+    i0[2 * half] = _mm_cvtsi128_si32(first);
+    i0[2 * half + 1] = _mm_cvtsi128_si32(_mm_shuffle_epi32(first, 0x55));
+    i1[2 * half] = _mm_cvtsi128_si32(last);
+    i1[2 * half + 1] = _mm_cvtsi128_si32(_mm_shuffle_epi32(last, 0x55));
+    found |= static_cast<unsigned>(_mm_movemask_pd(ok)) << (2 * half);
+  }
+  return found;
+#else
+  unsigned found = 0;
+  for (int q = 0; q < 4; ++q)
+    if (row_span(e, j + q, m, i0[q], i1[q])) found |= 1u << q;
+  return found;
+#endif
+}
+
 inline float CoverageGrid::tile_minimum(int j0, int j1, int i0, int i1) const {
   float v = std::numeric_limits<float>::infinity();
 #if CULLKIT_HAS_SSE2

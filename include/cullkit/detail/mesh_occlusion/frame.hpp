@@ -41,6 +41,13 @@ struct ClippedPolygon {
   int n;
 };
 
+/// A gathered occluder triangle's screen box and nearest depth, set up once per frame when it is
+/// gathered (over its projected corners, or its clipped polygon's, in their order) and read by the
+/// steps of its insertion that need no more than the box.
+struct OccluderBox {
+  double xmin, ymin, xmax, ymax, wmin;
+};
+
 /// Working memory of one task of a cull on several threads (parallel_frame.hpp): the corners and
 /// patch boxes it projects itself, per vertex and per patch (valid where the stamp equals `frame`).
 /// Sized by the index, not by the objects a task happens to take, so a warm context never grows
@@ -69,6 +76,10 @@ struct Scratch {
   std::vector<std::uint32_t> vertex_stamp, vertex_slot, triangle_stamp, triangle_band, patch_stamp;
   std::vector<std::uint32_t> clip_stamp, clip_slot;  // per triangle: its polygon in `clipped`
   std::vector<ClippedPolygon> clipped;                // this frame's clipped occluder triangles
+  // This frame's gathered occluder triangles' boxes, in the order gathered (patch by patch), and per
+  // triangle its box's position there (valid for the gathered ones).
+  std::vector<OccluderBox> occluder_boxes;
+  std::vector<std::uint32_t> box_slot;
   std::vector<BoxView> patch_boxes;       // per patch, valid where patch_stamp equals `frame`
   std::vector<Projected> projected;
   View view;
@@ -132,6 +143,7 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
     s.member_stamp.assign(index.corners.size() / 3, 0);
     s.member_value = 0;
     s.clip_slot.assign(index.corners.size() / 3, 0);
+    s.box_slot.assign(index.corners.size() / 3, 0);
     s.patch_stamp.assign(index.patches.patches.size(), 0);
     s.patch_boxes.resize(index.patches.patches.size());
     s.frame = 0;
@@ -146,6 +158,7 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
   }
   s.projected.clear();
   s.clipped.clear();
+  s.occluder_boxes.clear();
 }
 
 inline const Projected& project_vertex(const MeshIndex& index, Scratch& s, std::uint32_t v) {

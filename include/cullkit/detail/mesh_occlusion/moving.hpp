@@ -147,6 +147,8 @@ inline void gather_moving(MovingScratch& m, int grid_width, int grid_height, dou
   s.triangle_band.resize(count);
   s.member_stamp.assign(count, 0);
   s.member_value = 1;
+  s.occluder_boxes.clear();
+  s.box_slot.resize(count);
   PolygonExtent all(nullptr, nullptr, nullptr, 0);
   for (std::size_t t = 0; t < count; ++t) {
     const std::uint32_t* c = &m.index.corners[3 * t];
@@ -177,6 +179,8 @@ inline void gather_moving(MovingScratch& m, int grid_width, int grid_height, dou
     std::uint32_t bits;
     std::memcpy(&bits, &key, sizeof bits);
     s.triangles.emplace_back(bits, static_cast<std::uint32_t>(t));
+    s.box_slot[t] = static_cast<std::uint32_t>(s.occluder_boxes.size());
+    s.occluder_boxes.push_back(OccluderBox{e.x0, e.y0, e.x1, e.y1, e.w0});
     s.member_stamp[t] = s.member_value;
     all.add(e.x0, e.y0, e.w0);
     all.add(e.x1, e.y1, e.w0);

@@ -244,6 +244,8 @@ inline void gather_triangles(const MeshIndex& index, Scratch& s) {
       s.triangles.emplace_back(bits, t);
       s.triangle_stamp[t] = s.frame;
       s.triangle_owner[t] = static_cast<std::uint32_t>(q);
+      s.box_slot[t] = static_cast<std::uint32_t>(s.occluder_boxes.size());
+      s.occluder_boxes.push_back(OccluderBox{xmin, ymin, xmax, ymax, wmin});
     }
   }
   radix_sort(s.triangles, s.sort_buffer);
@@ -284,6 +286,9 @@ inline void insert_clipped(CoverageGrid& grid, const ClippedPolygon& poly, int o
     else grid.touch_edge(poly.x[k], poly.y[k], poly.x[l], poly.y[l], orient, 1);
   }
 }
+
+/// A gathered occluder triangle's screen box and nearest depth (set up once when it was gathered).
+inline const OccluderBox& occluder_box(const Scratch& s, std::uint32_t t) { return s.occluder_boxes[s.box_slot[t]]; }
 
 /// A gathered occluder triangle's projected corners, or its clipped polygon's (up to 4); returns
 /// their number.
@@ -352,9 +357,8 @@ inline void insert_run(const MeshIndex& index, const MeshOcclusionParams& params
     // cancel against a neighbour's).
     for (std::size_t i = begin; i < end; ++i) {
       const std::uint32_t t = first[i].second;
-      double x[4], y[4], w[4];
-      const int n = corners_of(t, x, y, w);
-      if (grid.all_frozen(x, y, n)) members.stamp[t] = 0;
+      const OccluderBox& r = occluder_box(s, t);
+      if (grid.all_frozen(r.xmin, r.ymin, r.xmax, r.ymax)) members.stamp[t] = 0;
     }
     for (std::size_t i = begin; i < end; ++i) {
       const std::uint32_t t = first[i].second;
@@ -465,15 +469,12 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
     for (std::uint32_t i = b; i < e; ++i) {
       const std::uint32_t t = s.by_patch[i].second;
       s.member_stamp[t] = s.member_value;
-      double x[4], y[4], w[4];
-      const int m = occluder_corners(index, s, t, x, y, w);
-      for (int k = 0; k < m; ++k) {
-        xmin = std::min(xmin, x[k]);
-        xmax = std::max(xmax, x[k]);
-        ymin = std::min(ymin, y[k]);
-        ymax = std::max(ymax, y[k]);
-        wmin = std::min(wmin, w[k]);
-      }
+      const OccluderBox& r = occluder_box(s, t);
+      xmin = std::min(xmin, r.xmin);
+      xmax = std::max(xmax, r.xmax);
+      ymin = std::min(ymin, r.ymin);
+      ymax = std::max(ymax, r.ymax);
+      wmin = std::min(wmin, r.wmin);
     }
     // Cells the union covers at least as near as the patch's nearest point start covered: the patch
     // can change nothing there. When that is all of them, it is skipped whole (as if no occluder).
