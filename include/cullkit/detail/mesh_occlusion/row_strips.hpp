@@ -92,9 +92,12 @@ inline TriangleExtent triangle_extent(const MeshIndex& index, const Scratch& s, 
   return e;
 }
 
-/// Makes a task's memory fit `index` and a grid of width x height; `own_grid`: the task keeps the
-/// union's rows in a grid of its own, emptied here.
-inline void begin_strip_task(const MeshIndex& index, StripTask& task, int width, int height, bool own_grid) {
+/// Makes a task's memory fit `index`, a grid of width x height and patches of up to `largest`
+/// gathered triangles, whichever strips the task takes (so a warm context allocates nothing however
+/// the strips fall to the tasks); `own_grid`: the task keeps the union's rows in a grid of its own,
+/// emptied here.
+inline void begin_strip_task(const MeshIndex& index, StripTask& task, int width, int height, std::size_t largest,
+                             bool own_grid) {
   const std::size_t triangles = index.corners.size() / 3;
   if (task.member_stamp.size() != triangles || task.done_stamp.size() != triangles) {
     task.member_stamp.assign(triangles, 0);
@@ -102,6 +105,8 @@ inline void begin_strip_task(const MeshIndex& index, StripTask& task, int width,
     task.member_value = 0;
     task.done_value = 0;
   }
+  task.run.reserve(largest);
+  task.patch_grid.reset(width, height);
   if (own_grid) task.grid.reset(width, height);
 }
 
@@ -198,6 +203,9 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
   const unsigned tasks = params.threads == 1 ? 1u : resolve_threads(params.threads, static_cast<std::size_t>(strips));
   group_by_patch(params, s);
   const std::size_t n = s.by_patch.size();
+  std::size_t largest = 0;
+  for (const auto& entry : s.patch_order)
+    largest = std::max<std::size_t>(largest, s.patch_first[entry.second + 1] - s.patch_first[entry.second]);
   s.triangle_extents.resize(n);
   if (s.strips.size() < static_cast<std::size_t>(strips)) s.strips.resize(static_cast<std::size_t>(strips));
   for (int k = 0; k < strips; ++k) {
@@ -210,7 +218,7 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
   if (tasks <= 1) {
     for (std::size_t i = 0; i < n; ++i) s.triangle_extents[i] = triangle_extent(index, s, i);
     if (s.strip_tasks.empty()) s.strip_tasks.resize(1);
-    begin_strip_task(index, s.strip_tasks[0], width, height, false);
+    begin_strip_task(index, s.strip_tasks[0], width, height, largest, false);
     for (int k = 0; k < strips; ++k) insert_strip(index, params, s, s.strips[static_cast<std::size_t>(k)], s.strip_tasks[0], s.grid);
   } else {
     BatchCounter extents(n, extent_batch);
@@ -234,7 +242,7 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
     BatchCounter batches(static_cast<std::size_t>(strips), 1);
     const unsigned used = batches.tasks_for(tasks);
     if (s.strip_tasks.size() < used) s.strip_tasks.resize(used);
-    for (unsigned k = 0; k < used; ++k) begin_strip_task(index, s.strip_tasks[k], width, height, k > 0);
+    for (unsigned k = 0; k < used; ++k) begin_strip_task(index, s.strip_tasks[k], width, height, largest, k > 0);
     run_each_task(params.task_runner, used, [&](std::size_t task) {
       StripTask& own = s.strip_tasks[task];
       CoverageGrid& grid = task == 0 ? s.grid : own.grid;
