@@ -96,11 +96,13 @@ struct MeshOcclusionParams {
   /// Parameters of the frustum-culling tree over object bounds.
   AbtParams tree = {};
   /// Tasks for one `cull`: 1 (the default) runs it on the calling thread only; 0 uses all hardware
-  /// threads; N > 1 up to N tasks. The object boxes' projection and the object tests are split
-  /// into batches that the tasks take from a shared counter; the occluder insertion stays on the
-  /// calling thread. Never changes the answer: the same objects, in the same order, for every
-  /// count and every task order. One thread is the default because a frame's cull is short (a few
-  /// ms) and an engine usually has other work for its other threads; the gain is measured in
+  /// threads; N > 1 up to N tasks. The object boxes' projection, the occluders' corners and the
+  /// object tests are split into batches that the tasks take from a shared counter; with N > 1 the
+  /// occluder insertion into the grid is split into strips of the grid's rows (a number set by
+  /// `grid_height` alone), each inserted on its own by whichever task takes it. Never changes the
+  /// answer: the same objects, in the same order, for every count and every task order (only
+  /// `MeshOcclusionStats::occluder_triangles`, the triangles worked on, may differ by a few). One thread is the default because a frame's cull is short (a few ms) and an
+  /// engine usually has other work for its other threads; the gain is measured in
   /// docs/mesh_occlusion.md. Does not apply to the frustum tree's build (`tree.threads`).
   unsigned threads = 1;
   /// The caller's job system for those tasks (see TaskRunner); by default the library's own
@@ -129,7 +131,7 @@ struct MeshOcclusionBuildStats {
 struct MeshOcclusionStats {
   std::size_t objects_in_frustum = 0;          ///< usable objects whose box may meet the frustum
   std::size_t occluders_used = 0;              ///< occluder patches rasterized
-  std::size_t occluder_triangles = 0;          ///< occluder triangles rasterized (front-facing, beyond the near plane)
+  std::size_t occluder_triangles = 0;          ///< occluder triangles rasterized (front-facing, beyond the near plane; with threads > 1, in some strip of rows)
   std::size_t moving_triangles = 0;            ///< of which moving occluders' triangles
   std::size_t objects_hidden = 0;              ///< objects in the frustum left out as hidden
   std::size_t objects_unusable_visible = 0;    ///< objects with unusable bounds, reported visible

@@ -3,14 +3,18 @@
 // same box queries afterwards, for 2 and 3 threads on the library's pool, on a job system that runs
 // each task on a thread of its own, and on job systems that run the tasks on the calling thread in
 // reverse or shuffled order. On generated scenes (always) and the real scenes when present. A warm
-// context then allocates nothing on several tasks either.
+// context then allocates nothing on several tasks either. The occluder insertion runs on the tasks
+// strip by strip of the grid's rows, so this also checks that the strips do not depend on the tasks.
 //
 // Mutants this test caught (each applied by hand to parallel_frame.hpp, then reverted; with the
 // real scenes present, two runs each):
 //   a batch one object short (BatchCounter::claim's `last` one less): 992 of 1,010 checks failed;
 //   a task's caches not starting a new frame (the last camera's projections): 219 and 223 failed;
 //   every task on task 0's caches (a race between the threads' projections): a different answer
-//   on oacmpdm9 (pool, 3 threads), then a crash, in both runs.
+//   on oacmpdm9 (pool, 3 threads), then a crash, in both runs;
+//   twice the strips when threads != 1 (row_strips.hpp): 6 of 16 frames differ on fzk_haus, 8 on
+//   oacmpdm9, 14 on the car, in every setup (the generated scenes' frames all agree: their strips
+//   skip the same occluders however many there are).
 #include <algorithm>
 #include <cstdio>
 #include <string>
@@ -80,9 +84,12 @@ struct Answer {
   std::vector<bool> box_hidden;
 };
 
+// Several tasks insert the occluders strip by strip of the grid's rows, each strip skipping what is
+// covered on its own rows, so `occluder_triangles` (the triangles worked on) may differ from one
+// thread's by a few. Everything else, the covered cells included, is the same.
 bool same_stats(const cullkit::MeshOcclusionStats& a, const cullkit::MeshOcclusionStats& b) {
   return a.objects_in_frustum == b.objects_in_frustum && a.occluders_used == b.occluders_used &&
-         a.occluder_triangles == b.occluder_triangles && a.objects_hidden == b.objects_hidden &&
+         a.objects_hidden == b.objects_hidden &&
          a.objects_unusable_visible == b.objects_unusable_visible && a.cells_covered == b.cells_covered &&
          a.occlusion_enabled == b.occlusion_enabled;
 }

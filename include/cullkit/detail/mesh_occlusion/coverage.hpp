@@ -75,9 +75,41 @@ class CoverageGrid {
       band_row_count_ = 0;
       band_crossings_ = false;
       dirty_ = CellRect{width, height, -1, -1};
+      row_first_ = 0;
+      row_last_ = height - 1;
       return;
     }
     clear_dirty();
+    row_first_ = 0;
+    row_last_ = height_ - 1;
+  }
+
+  /// Limits the grid's work to rows [first, last] (full-height row numbers, within the grid; the
+  /// whole grid after `reset`): counts, outline marks, depth bounds, seeding and the covered test
+  /// of `all_frozen` clamp to them, every other row is left as it is. Every per-cell operation
+  /// depends on its own row only, so rows [first, last] end as the same operations on the whole
+  /// grid would leave them.
+  void set_rows(int first, int last) {
+    row_first_ = std::max(first, 0);
+    row_last_ = std::min(last, height_ - 1);
+  }
+
+  /// Copies the rows `from` (a grid of the same size) has used since it was last reset, counts,
+  /// bounds, depths and covered bits, into this grid, which must not have used them. The rows of a
+  /// strip inserted into a grid of its own join the frame's grid so.
+  void take_rows(const CoverageGrid& from) {
+    for (int n = 0; n < from.used_row_count_; ++n) {
+      const int j = from.used_rows_[static_cast<std::size_t>(n)];
+      const int lo = from.used_lo_[static_cast<std::size_t>(j)], hi = from.used_hi_[static_cast<std::size_t>(j)];
+      const auto b = static_cast<std::ptrdiff_t>(j) * width_ + lo, e = static_cast<std::ptrdiff_t>(j) * width_ + hi + 1;
+      std::copy(from.net_.begin() + b, from.net_.begin() + e, net_.begin() + b);
+      std::copy(from.bound_.begin() + b, from.bound_.begin() + e, bound_.begin() + b);
+      std::copy(from.depth_.begin() + b, from.depth_.begin() + e, depth_.begin() + b);
+      const auto words = static_cast<std::ptrdiff_t>(j) * words_;
+      std::copy(from.frozen_bits_.begin() + words, from.frozen_bits_.begin() + words + words_, frozen_bits_.begin() + words);
+      use(j, lo, hi);
+      grow(dirty_, CellRect{lo, j, hi, j});
+    }
   }
 
   [[nodiscard]] int width() const { return width_; }
@@ -123,7 +155,7 @@ class CoverageGrid {
     }
     const double magnitude = std::max(std::max(std::fabs(xa), std::fabs(xb)), std::max(std::fabs(ya), std::fabs(yb)));
     const double m = cell_margin(magnitude);
-    const int j0 = clamp_cell(ya - m, height_), j1 = clamp_cell(yb + m, height_);
+    const int j0 = std::max(row_first_, clamp_cell(ya - m, height_)), j1 = std::min(row_last_, clamp_cell(yb + m, height_));
     if (yb + m < 0.0 || ya - m >= height_) return;
     const double dx = xb - xa, dy = yb - ya;
     const double slope = dy > 0.0 ? dx / dy : 0.0;
@@ -169,6 +201,7 @@ class CoverageGrid {
     if (xmax + m < 0.0 || xmin - m >= width_ || ymax + m < 0.0 || ymin - m >= height_) return r;
     r = CellRect{clamp_cell(xmin - m, width_), clamp_cell(ymin - m, height_), clamp_cell(xmax + m, width_),
                  clamp_cell(ymax + m, height_)};
+    if (!window_rows(r)) return r;
     // Depth bounds alone never make a cell covered (counts and outline marks do, and those mark
     // their rows for end_band), so rows are not marked here; the bounds only need clearing later.
     grow(dirty_, r);
@@ -249,8 +282,8 @@ class CoverageGrid {
   ///
   /// A cell `main` has not covered holds depth 0, below any `nearest`: only the words of `main`'s
   /// covered bits that have some bit set are compared cell by cell.
-  bool seed_frozen(const CoverageGrid& main, const CellRect& r, float nearest) {
-    if (r.empty()) return false;
+  bool seed_frozen(const CoverageGrid& main, CellRect r, float nearest) {
+    if (r.empty() || !window_rows(r)) return false;
     grow(dirty_, r);
     // A `nearest` that is not positive (or NaN) is compared against every cell, covered or not, as
     // a plain comparison would.
@@ -381,8 +414,8 @@ class CoverageGrid {
   /// True when every cell the box [xmin, xmax] x [ymin, ymax] touches (with a margin) is covered
   /// already.
   [[nodiscard]] bool all_frozen(double xmin, double ymin, double xmax, double ymax) const {
-    const CellRect r = cells_of(xmin, ymin, xmax, ymax);
-    if (r.empty()) return false;
+    CellRect r = cells_of(xmin, ymin, xmax, ymax);
+    if (r.empty() || !window_rows(r)) return false;
     for (int j = r.y0; j <= r.y1; ++j)
       if (!row_frozen(j, r.x0, r.x1)) return false;
     return true;
@@ -519,7 +552,7 @@ class CoverageGrid {
 
   // Narrows the cells [i0, i1] of row j to those between its first and last cell not yet covered
   // (a covered cell's depth is frozen and its counters no longer matter). False when none is left.
-  bool unfrozen_span(int j, int& i0, int& i1) const {
+  CULLKIT_FORCEINLINE bool unfrozen_span(int j, int& i0, int& i1) const {
     const std::uint64_t* w = frozen_bits_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(words_);
     for (;;) {
       // Bits past the last column are clear, so they read as "not covered" and end the search.
@@ -585,6 +618,13 @@ class CoverageGrid {
     used_hi_[r] = std::max(used_hi_[r], i1);
   }
 
+  // Narrows r's rows to those set by set_rows; false when none is left.
+  bool window_rows(CellRect& r) const {
+    r.y0 = std::max(r.y0, row_first_);
+    r.y1 = std::min(r.y1, row_last_);
+    return r.y0 <= r.y1;
+  }
+
   static int clamp_cell(double v, int n) {
     if (!(v >= 0.0)) return 0;
     if (v >= n) return n - 1;
@@ -607,8 +647,8 @@ class CoverageGrid {
     while (j0 < height_ && j0 + 0.5 < ya) ++j0;
     while (j1 + 1 < height_ && j1 + 1.5 < yb) ++j1;
     while (j1 >= 0 && j1 + 0.5 >= yb) --j1;
-    j0 = std::max(j0, 0);
-    j1 = std::min(j1, height_ - 1);
+    j0 = std::max(j0, row_first_);
+    j1 = std::min(j1, row_last_);
     const double slope = (xb - xa) / (yb - ya);
     for (int j = j0; j <= j1; ++j) {
       const double x = xa + (j + 0.5 - ya) * slope;
@@ -658,6 +698,7 @@ class CoverageGrid {
   std::vector<int> used_lo_, used_hi_, used_rows_;  // per row: cells whose counters or bound changed since clear_dirty
   int used_row_count_ = 0;                          // rows listed in used_rows_
   CellRect dirty_{0, 0, -1, -1};
+  int row_first_ = 0, row_last_ = -1;  // the rows worked on (set_rows)
 };
 
 }  // namespace mesh_occlusion

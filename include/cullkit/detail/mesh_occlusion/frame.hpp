@@ -60,6 +60,34 @@ struct TaskScratch {
   std::vector<BoxView> patch_boxes;
 };
 
+/// A strip of the grid's rows [first_row, last_row] in the occluder insertion (row_strips.hpp):
+/// which gathered triangles (by their place in Scratch::by_patch) it inserted (1), and the cells it
+/// covered.
+struct Strip {
+  int first_row = 0, last_row = -1;
+  std::vector<std::uint8_t> inserted;
+  std::size_t covered = 0;
+};
+
+/// A gathered occluder triangle's screen box and nearest depth, and the rows its cells reach with
+/// the margin (row_strips.hpp): every operation of the triangle on the grid stays within them.
+struct TriangleExtent {
+  double x0, y0, x1, y1, w_min;
+  int row0, row1;  // row0 > row1: it reaches no row
+};
+
+/// Working memory of one task of the occluder insertion (row_strips.hpp): the union's rows of the
+/// strips it takes (task 0 works in the frame's own grid instead), the grid each patch goes into
+/// alone, and per triangle a stamp for the members of the patch going in and one for the
+/// triangles the current strip has inserted. Sized by the index, so a warm context never grows
+/// however the strips fall to the tasks.
+struct StripTask {
+  CoverageGrid grid, patch_grid;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> run;  // (place in by_patch, triangle) of one patch
+  std::vector<std::uint32_t> member_stamp, done_stamp;
+  std::uint32_t member_value = 0, done_value = 0;
+};
+
 /// Per-thread working memory of a query; only grows.
 struct Scratch {
   MeshOcclusionStats stats;
@@ -84,10 +112,10 @@ struct Scratch {
   std::vector<Projected> projected;
   View view;
   CoverageGrid grid;
-  // Insertion patch by patch (insert_patches): the occluder that gathered each triangle, the
-  // gathered triangles grouped by it (`by_patch`, group q starting at patch_first[q]), the order of
-  // the groups, a stamp for the members of the group being inserted, one for the triangles
-  // inserted so far, and the grid each group goes into alone.
+  // Insertion patch by patch (insert_patches, row_strips.hpp): the occluder that gathered each
+  // triangle, the gathered triangles grouped by it (`by_patch`, group q starting at
+  // patch_first[q]), the order of the groups; and, for the moving occluders (moving.hpp), a stamp
+  // for the members of the run going in and the grid each goes into alone.
   std::vector<std::uint32_t> triangle_owner, patch_first;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> by_patch;
   // (nearest key, patch), nearest first, and its own sort buffer (radix_sort swaps the two: sharing
@@ -95,7 +123,6 @@ struct Scratch {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> patch_order, patch_sort_buffer;
   std::vector<std::uint32_t> member_stamp;
   std::uint32_t member_value = 0;
-  std::vector<std::uint32_t> done_stamp;
   CoverageGrid patch_grid;
   std::vector<std::pair<float, std::uint32_t>> box_candidates;  // (screen cells, object)
   std::vector<Aabb> box_occluders;
@@ -105,6 +132,12 @@ struct Scratch {
   std::vector<TaskScratch> tasks;
   std::vector<std::uint8_t> hidden;
   std::vector<std::uint32_t> corner_list;  // occluder corners given a slot in `projected`, in slot order
+  // The occluder insertion strip by strip: the strips, each task's memory, the gathered triangles'
+  // extents (by place in by_patch), and the order the strips are handed out in (biggest first).
+  std::vector<Strip> strips;
+  std::vector<StripTask> strip_tasks;
+  std::vector<TriangleExtent> triangle_extents;
+  std::vector<std::uint32_t> strip_order, strip_work;
 };
 
 
@@ -139,9 +172,6 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
     s.triangle_band.assign(index.corners.size() / 3, 0);
     s.clip_stamp.assign(index.corners.size() / 3, 0);
     s.triangle_owner.assign(index.corners.size() / 3, 0);
-    s.done_stamp.assign(index.corners.size() / 3, 0);
-    s.member_stamp.assign(index.corners.size() / 3, 0);
-    s.member_value = 0;
     s.clip_slot.assign(index.corners.size() / 3, 0);
     s.box_slot.assign(index.corners.size() / 3, 0);
     s.patch_stamp.assign(index.patches.patches.size(), 0);
@@ -152,7 +182,6 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
     std::fill(s.vertex_stamp.begin(), s.vertex_stamp.end(), 0);
     std::fill(s.triangle_stamp.begin(), s.triangle_stamp.end(), 0);
     std::fill(s.clip_stamp.begin(), s.clip_stamp.end(), 0);
-    std::fill(s.done_stamp.begin(), s.done_stamp.end(), 0);
     std::fill(s.patch_stamp.begin(), s.patch_stamp.end(), 0);
     s.frame = 1;
   }

@@ -216,8 +216,10 @@ inline std::size_t insert_moving(const MeshOcclusionParams& params, const Moving
     if (!s.patch_grid.seed_frozen(s.grid, cells, static_cast<float>(1.0 / box[4]))) continue;
     const RunMembers members{m.s.member_stamp, m.s.member_value};
     std::size_t inserted = 0;
-    insert_run(m.index, params, m.s, s.patch_grid, m.s.triangles.data(), m.s.triangles.data() + m.s.triangles.size(),
-               members, inserted);
+    const auto* first = m.s.triangles.data();
+    const auto* last = first + m.s.triangles.size();
+    assign_depth_bands(params, first, last, m.s.triangle_band);
+    insert_run(m.index, m.s, s.patch_grid, first, last, members, inserted);
     covered += s.grid.absorb(s.patch_grid, params.patch_layers);
     covered += s.grid.end_band();
     s.stats.occluder_triangles += inserted;

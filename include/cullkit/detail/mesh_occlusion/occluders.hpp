@@ -319,31 +319,38 @@ struct RunMembers {
   [[nodiscard]] bool has(std::uint32_t t) const { return stamp[t] == value; }
 };
 
-/// Inserts the sorted triangles [first, last) (each a member of `members`) into `grid` nearest
-/// first, in bands of similar depth, so a cell freezes at the depth of the nearest layer that covers
-/// it. Within a band, an edge shared by two of its triangles is never touched: it cancels before the
-/// band ends. The last band is left open: `CoverageGrid::absorb`, which adds the grid into the
-/// union next, ends it in the same pass (or the caller calls `end_band`). Counts the inserted
-/// triangles into `inserted`.
-inline void insert_run(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, CoverageGrid& grid,
+/// Numbers the depth bands of the sorted triangles [first, last) of one patch into `triangle_band`
+/// (1, 2, ...): runs whose nearest depth is within `depth_band_ratio` of the run's first.
+inline void assign_depth_bands(const MeshOcclusionParams& params, const std::pair<std::uint32_t, std::uint32_t>* first,
+                               const std::pair<std::uint32_t, std::uint32_t>* last,
+                               std::vector<std::uint32_t>& triangle_band) {
+  const float ratio = 1.0f + std::max(0.0f, params.depth_band_ratio);
+  std::uint32_t band = 0;
+  float band_start = 0.0f;
+  for (const auto* it = first; it != last; ++it) {
+    float key;
+    std::memcpy(&key, &it->first, sizeof key);
+    if (it == first || !(key <= band_start * ratio)) {
+      band_start = key;
+      ++band;
+    }
+    triangle_band[it->second] = band;
+  }
+}
+
+/// Inserts the sorted triangles [first, last) (each a member of `members`, depth bands numbered by
+/// assign_depth_bands) into `grid` nearest first, in bands of similar depth, so a cell freezes at
+/// the depth of the nearest layer that covers it. Within a band, an edge shared by two of its
+/// triangles is never touched: it cancels before the band ends. The last band is left open:
+/// `CoverageGrid::absorb`, which adds the grid into the union next, ends it in the same pass (or
+/// the caller calls `end_band`). Counts the inserted triangles into `inserted`. Only reads `s`, so
+/// several tasks may insert into grids of their own at once.
+inline void insert_run(const MeshIndex& index, const Scratch& s, CoverageGrid& grid,
                        const std::pair<std::uint32_t, std::uint32_t>* first,
                        const std::pair<std::uint32_t, std::uint32_t>* last, RunMembers members,
                        std::size_t& inserted) {
   const int orient = s.view.orient;
-  const float ratio = 1.0f + std::max(0.0f, params.depth_band_ratio);
   const std::size_t count = static_cast<std::size_t>(last - first);
-  // Bands: runs of the sorted triangles whose nearest depth is within `ratio` of the run's first.
-  std::uint32_t band = 0;
-  float band_start = 0.0f;
-  for (std::size_t i = 0; i < count; ++i) {
-    float key;
-    std::memcpy(&key, &first[i].first, sizeof key);
-    if (i == 0 || !(key <= band_start * ratio)) {
-      band_start = key;
-      ++band;
-    }
-    s.triangle_band[first[i].second] = band;
-  }
   const bool any_clipped = !s.clipped.empty();
   const auto corners_of = [&](std::uint32_t t, double* x, double* y, double* w) {
     return occluder_corners(index, s, t, x, y, w);
@@ -421,86 +428,6 @@ inline bool edge_segment(const MeshIndex& index, const Scratch& s, std::uint32_t
   x1 = b.x;
   y1 = b.y;
   return true;
-}
-
-/// Inserts every gathered triangle, patch by patch (a patch's nearest triangle first decides its
-/// turn), each patch alone into a grid of its own in depth bands, then added into the frame's grid.
-///
-/// The frame's grid holds the union of all occluders: an edge that a patch shares with a patch
-/// inserted before it is no outline there, so the earlier patch's mark of it and this patch's (its
-/// own grid's, now added) are both taken out again, and the seam fuses. The patch's own grid says
-/// which cells the patch covers by itself, at the patch's own depth bound: where that is nearer than
-/// the union's, the cell takes it (`patch_layers`). A wall standing on a floor that went in before
-/// it leaves its own depth, not the floor's, in front of what is behind it.
-///
-/// Why a patch's grid can be added into the union as it is: the patch's grid leaves out the cells it
-/// holds as covered (seeded from the union, or covered by the patch alone in an earlier band) when it
-/// marks outline edges, so the union may lack such a mark there; a later patch taking that edge out
-/// again may then leave the cell's outline counter low, and the cell may count as covered. Seeded
-/// cells are covered in the union already and never change again; a cell the patch covers alone is
-/// covered by the union too, and its bound holds (the triangles that covered it gave their bounds
-/// there before it was left out). So no cell that the union does not cover counts as covered.
-inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
-  const std::size_t n = s.occluders.size();
-  if (s.triangles.empty()) return 0;
-  // The gathered triangles grouped by patch, each group still nearest first.
-  s.patch_first.assign(n + 1, 0);
-  for (const auto& tr : s.triangles) ++s.patch_first[s.triangle_owner[tr.second] + 1];
-  for (std::size_t q = 0; q < n; ++q) s.patch_first[q + 1] += s.patch_first[q];
-  s.by_patch.resize(s.triangles.size());
-  for (const auto& tr : s.triangles) s.by_patch[s.patch_first[s.triangle_owner[tr.second]]++] = tr;
-  for (std::size_t q = n; q > 0; --q) s.patch_first[q] = s.patch_first[q - 1];
-  s.patch_first[0] = 0;
-  s.patch_order.clear();
-  for (std::size_t q = 0; q < n; ++q)
-    if (s.patch_first[q] != s.patch_first[q + 1])
-      s.patch_order.emplace_back(s.by_patch[s.patch_first[q]].first, static_cast<std::uint32_t>(q));
-  radix_sort(s.patch_order, s.patch_sort_buffer);
-  const int orient = s.view.orient;
-  std::size_t covered = 0, inserted = 0;
-  for (const auto& entry : s.patch_order) {
-    const std::uint32_t q = entry.second;
-    const std::uint32_t b = s.patch_first[q], e = s.patch_first[q + 1];
-    if (++s.member_value == 0) {
-      std::fill(s.member_stamp.begin(), s.member_stamp.end(), 0);
-      s.member_value = 1;
-    }
-    double xmin = HUGE_VAL, ymin = HUGE_VAL, xmax = -HUGE_VAL, ymax = -HUGE_VAL, wmin = HUGE_VAL;
-    for (std::uint32_t i = b; i < e; ++i) {
-      const std::uint32_t t = s.by_patch[i].second;
-      s.member_stamp[t] = s.member_value;
-      const OccluderBox& r = occluder_box(s, t);
-      xmin = std::min(xmin, r.xmin);
-      xmax = std::max(xmax, r.xmax);
-      ymin = std::min(ymin, r.ymin);
-      ymax = std::max(ymax, r.ymax);
-      wmin = std::min(wmin, r.wmin);
-    }
-    // Cells the union covers at least as near as the patch's nearest point start covered: the patch
-    // can change nothing there. When that is all of them, it is skipped whole (as if no occluder).
-    s.patch_grid.reset(s.grid.width(), s.grid.height());
-    const bool open = s.patch_grid.seed_frozen(s.grid, s.grid.cells_of(xmin, ymin, xmax, ymax), static_cast<float>(1.0 / wmin));
-    if (!open) continue;
-    const RunMembers members{s.member_stamp, s.member_value};
-    insert_run(index, params, s, s.patch_grid, s.by_patch.data() + b, s.by_patch.data() + e, members, inserted);
-    covered += s.grid.absorb(s.patch_grid, params.patch_layers);
-    for (std::uint32_t i = b; i < e; ++i) {
-      const std::uint32_t t = s.by_patch[i].second;
-      if (!members.has(t)) continue;  // dropped over covered cells
-      s.done_stamp[t] = s.frame;
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
-        if (twin == none || s.done_stamp[twin / 3] != s.frame || s.triangle_owner[twin / 3] == q) continue;
-        double x0, y0, x1, y1;
-        if (!edge_segment(index, s, t, k, x0, y0, x1, y1)) continue;
-        s.grid.touch_edge(x1, y1, x0, y0, orient, -1);  // the earlier patch's edge, as its triangle runs
-        s.grid.touch_edge(x0, y0, x1, y1, orient, -1);  // this patch's
-      }
-    }
-    covered += s.grid.end_band();
-  }
-  s.stats.occluder_triangles += inserted;
-  return covered;
 }
 
 }  // namespace mesh_occlusion

@@ -2,11 +2,11 @@
 // that run on several tasks (MeshOcclusionParams::threads), through the caller's TaskRunner or the
 // library's pool: the projection of the objects' boxes (with the patch boxes the occluder choice
 // reads), the projection of the occluders' corners, and the object tests against the finished grid.
+// The occluder insertion runs on tasks strip by strip of the grid's rows (row_strips.hpp).
 //
 // Why the answer cannot depend on the tasks: each object's box, each patch's box, each corner and
 // each object's test is a function of the frame's view and finished grid alone, computed by the same code in
-// every task; a task writes only the slots of the objects it took and its own caches. The occluder
-// insertion, whose order decides the grid, stays on the calling thread.
+// every task; a task writes only the slots of the objects it took and its own caches.
 #pragma once
 
 #include <algorithm>

@@ -1,0 +1,263 @@
+// cullkit/detail/mesh_occlusion/row_strips.hpp: the insertion of a frame's occluder patches into the
+// coverage grid, strip by strip: on several tasks the grid's rows are cut into strips (a number set
+// by the grid's height alone) and every patch goes into each strip's rows on their own, so the
+// strips can be inserted on several tasks; one thread inserts the whole grid as one strip.
+//
+// Why a strip can go in alone: every per-cell operation of the grid reads and writes cells of its
+// own row only (an edge's crossings per row, counts summed left to right along the row, outline
+// marks, depth bounds, freezing, a patch's grid added into the union), so a strip's rows end as the
+// whole grid's would after the same operations clamped to them. What a strip decides on its own
+// rows are the skips: a triangle whose cells in the strip are all covered is dropped there, and a
+// patch none of whose cells in the strip is open is skipped there. Either is inserting fewer
+// occluders into the strip (as if the triangle or patch were no occluder), which only covers less,
+// and a triangle dropped over covered cells changes nothing in the strip: the outline marks its
+// neighbours' edges then keep fall on cells of its box, all covered, which every later operation
+// skips; its crossings sum to its own winding, zero outside it along a row. Covered cells never
+// change again, so every strip count leaves the same uncovered cells and the same covered cells'
+// depths: the one-strip answer (test_mesh_occlusion_threads, fuzz_mesh_occlusion). See
+// docs/mesh_occlusion.md, "One cull on several threads".
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "coverage.hpp"
+#include "frame.hpp"
+#include "index.hpp"
+#include "occluders.hpp"
+#include "parallel_frame.hpp"
+
+namespace cullkit {
+namespace detail {
+namespace mesh_occlusion {
+
+/// Strips of a grid `height` rows high on several tasks: one per 32 rows, 1 to 8 (4 for the default
+/// 144 rows), never a function of the task count. More strips split the work finer between tasks,
+/// but a triangle reaching several strips is set up in each (on one thread, 4 strips cost 3 to 7% of
+/// the frame over 1, 6 strips 8 to 15%, `bench_mesh_occlusion --hash`): one thread takes one strip.
+inline int strip_count(int height) { return std::max(1, std::min(8, height / 32)); }
+
+/// The strip holding row j when `height` rows are cut into `strips`: strip k holds the rows
+/// [k * height / strips, (k + 1) * height / strips).
+inline int strip_of_row(int j, int height, int strips) {
+  return static_cast<int>((static_cast<long long>(j + 1) * strips - 1) / height);
+}
+
+/// Gathered triangles per batch of the extents' pass.
+inline constexpr std::size_t extent_batch = 512;
+
+/// Groups the gathered triangles by patch (`s.by_patch`, each group nearest first, group q from
+/// `s.patch_first[q]`), orders the groups by their nearest triangle (`s.patch_order`) and numbers
+/// each group's depth bands.
+inline void group_by_patch(const MeshOcclusionParams& params, Scratch& s) {
+  const std::size_t n = s.occluders.size();
+  s.patch_first.assign(n + 1, 0);
+  for (const auto& tr : s.triangles) ++s.patch_first[s.triangle_owner[tr.second] + 1];
+  for (std::size_t q = 0; q < n; ++q) s.patch_first[q + 1] += s.patch_first[q];
+  s.by_patch.resize(s.triangles.size());
+  for (const auto& tr : s.triangles) s.by_patch[s.patch_first[s.triangle_owner[tr.second]]++] = tr;
+  for (std::size_t q = n; q > 0; --q) s.patch_first[q] = s.patch_first[q - 1];
+  s.patch_first[0] = 0;
+  s.patch_order.clear();
+  for (std::size_t q = 0; q < n; ++q) {
+    const std::uint32_t b = s.patch_first[q], e = s.patch_first[q + 1];
+    if (b == e) continue;
+    s.patch_order.emplace_back(s.by_patch[b].first, static_cast<std::uint32_t>(q));
+    assign_depth_bands(params, s.by_patch.data() + b, s.by_patch.data() + e, s.triangle_band);
+  }
+  radix_sort(s.patch_order, s.patch_sort_buffer);
+}
+
+/// The extent of the gathered triangle at place i of `s.by_patch`.
+inline TriangleExtent triangle_extent(const Scratch& s, std::size_t i) {
+  const OccluderBox& box = occluder_box(s, s.by_patch[i].second);
+  TriangleExtent e{box.xmin, box.ymin, box.xmax, box.ymax, box.wmin, 0, -1};
+  // The rows of the triangle's cells, with the margin: its depth, its crossings, its edges' marks
+  // and the covered test stay within them (each takes its margin from coordinates no larger).
+  const CellRect r = s.grid.cells_of(e.x0, e.y0, e.x1, e.y1);
+  if (!r.empty()) {
+    e.row0 = r.y0;
+    e.row1 = r.y1;
+  }
+  return e;
+}
+
+/// Makes a task's memory fit `index`, a grid of width x height and patches of up to `largest`
+/// gathered triangles, whichever strips the task takes (so a warm context allocates nothing however
+/// the strips fall to the tasks); `own_grid`: the task keeps the union's rows in a grid of its own,
+/// emptied here.
+inline void begin_strip_task(const MeshIndex& index, StripTask& task, int width, int height, std::size_t largest,
+                             bool own_grid) {
+  const std::size_t triangles = index.corners.size() / 3;
+  if (task.member_stamp.size() != triangles || task.done_stamp.size() != triangles) {
+    task.member_stamp.assign(triangles, 0);
+    task.done_stamp.assign(triangles, 0);
+    task.member_value = 0;
+    task.done_value = 0;
+  }
+  task.run.reserve(largest);
+  task.patch_grid.reset(width, height);
+  if (own_grid) task.grid.reset(width, height);
+}
+
+/// Inserts every patch into the rows of `strip`, in the order of `s.patch_order`, with the memory
+/// of `task`, into `grid` (the union: the frame's grid or the task's own). Per patch, its
+/// triangles whose cells reach the strip's rows are its run there; its own grid is seeded from the
+/// union over the run's box (a cell the union covers at least as near as the run's nearest point
+/// starts covered: the run can change nothing there), the run goes in by depth bands, the patch's
+/// grid is added into the union, and the edges the run shares with triangles this strip inserted
+/// from earlier patches leave the union's outline. A patch with no run, or none of whose cells is
+/// open, is skipped in the strip. Reads `s` only (`grid` may be the frame's, which only this task
+/// writes while it runs).
+///
+/// Why a patch's grid can be added into the union as it is: the patch's grid leaves out the cells it
+/// holds as covered (seeded from the union, or covered by the patch alone in an earlier band) when it
+/// marks outline edges, so the union may lack such a mark there; a later patch taking that edge out
+/// again may then leave the cell's outline counter low, and the cell may count as covered. Seeded
+/// cells are covered in the union already and never change again; a cell the patch covers alone is
+/// covered by the union too, and its bound holds (the triangles that covered it gave their bounds
+/// there before it was left out). So no cell that the union does not cover counts as covered.
+inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& params, const Scratch& s, Strip& strip,
+                         StripTask& task, CoverageGrid& grid) {
+  const int width = grid.width(), height = grid.height();
+  const int orient = s.view.orient;
+  grid.set_rows(strip.first_row, strip.last_row);
+  if (++task.done_value == 0) {
+    std::fill(task.done_stamp.begin(), task.done_stamp.end(), 0);
+    task.done_value = 1;
+  }
+  std::size_t inserted = 0;
+  for (const auto& entry : s.patch_order) {
+    const std::uint32_t q = entry.second;
+    const std::uint32_t b = s.patch_first[q], e = s.patch_first[q + 1];
+    if (++task.member_value == 0) {
+      std::fill(task.member_stamp.begin(), task.member_stamp.end(), 0);
+      task.member_value = 1;
+    }
+    task.run.clear();
+    double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, w_min = HUGE_VAL;
+    for (std::uint32_t i = b; i < e; ++i) {
+      const TriangleExtent& t = s.triangle_extents[i];
+      if (t.row1 < strip.first_row || t.row0 > strip.last_row) continue;
+      task.run.emplace_back(i, s.by_patch[i].second);
+      task.member_stamp[s.by_patch[i].second] = task.member_value;
+      x0 = std::min(x0, t.x0);
+      y0 = std::min(y0, t.y0);
+      x1 = std::max(x1, t.x1);
+      y1 = std::max(y1, t.y1);
+      w_min = std::min(w_min, t.w_min);
+    }
+    if (task.run.empty()) continue;
+    task.patch_grid.reset(width, height);
+    task.patch_grid.set_rows(strip.first_row, strip.last_row);
+    if (!task.patch_grid.seed_frozen(grid, grid.cells_of(x0, y0, x1, y1), static_cast<float>(1.0 / w_min))) continue;
+    const RunMembers members{task.member_stamp, task.member_value};
+    const auto* first = task.run.data();
+    insert_run(index, s, task.patch_grid, first, first + task.run.size(), members, inserted);
+    strip.covered += grid.absorb(task.patch_grid, params.patch_layers);
+    for (const auto& member : task.run) {
+      const std::uint32_t t = member.second;
+      if (!members.has(t)) continue;  // dropped over covered cells
+      strip.inserted[member.first] = 1;
+      task.done_stamp[t] = task.done_value;
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
+        if (twin == none || task.done_stamp[twin / 3] != task.done_value || s.triangle_owner[twin / 3] == q) continue;
+        double ex0, ey0, ex1, ey1;
+        if (!edge_segment(index, s, t, k, ex0, ey0, ex1, ey1)) continue;
+        grid.touch_edge(ex1, ey1, ex0, ey0, orient, -1);  // the earlier patch's edge, as its triangle runs
+        grid.touch_edge(ex0, ey0, ex1, ey1, orient, -1);  // this patch's
+      }
+    }
+    strip.covered += grid.end_band();
+  }
+}
+
+/// Inserts every gathered triangle into the frame's grid, patch by patch (a patch's nearest
+/// triangle first decides its turn), each patch alone into a grid of its own in depth bands, then
+/// added into the frame's grid; strip by strip of the grid's rows, the triangles' extents and the
+/// strips on up to MeshOcclusionParams::threads tasks (through its task_runner), however few
+/// objects the frame has. Returns the cells covered;
+/// counts the triangles inserted (into some strip) into the statistics.
+///
+/// The frame's grid holds the union of all occluders: an edge that a patch shares with a patch
+/// inserted before it is no outline there, so the earlier patch's mark of it and this patch's (its
+/// own grid's, now added) are both taken out again, and the seam fuses. The patch's own grid says
+/// which cells the patch covers by itself, at the patch's own depth bound: where that is nearer than
+/// the union's, the cell takes it (`patch_layers`). A wall standing on a floor that went in before
+/// it leaves its own depth, not the floor's, in front of what is behind it.
+inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+  if (s.triangles.empty()) return 0;
+  const int width = s.grid.width(), height = s.grid.height();
+  const int strips = params.threads == 1 ? 1 : strip_count(height);  // the same answer either way
+  const unsigned tasks = params.threads == 1 ? 1u : resolve_threads(params.threads, static_cast<std::size_t>(strips));
+  group_by_patch(params, s);
+  const std::size_t n = s.by_patch.size();
+  std::size_t largest = 0;
+  for (const auto& entry : s.patch_order)
+    largest = std::max<std::size_t>(largest, s.patch_first[entry.second + 1] - s.patch_first[entry.second]);
+  s.triangle_extents.resize(n);
+  if (s.strips.size() < static_cast<std::size_t>(strips)) s.strips.resize(static_cast<std::size_t>(strips));
+  for (int k = 0; k < strips; ++k) {
+    Strip& strip = s.strips[static_cast<std::size_t>(k)];
+    strip.first_row = k * height / strips;
+    strip.last_row = (k + 1) * height / strips - 1;
+    strip.inserted.assign(n, 0);
+    strip.covered = 0;
+  }
+  if (tasks <= 1) {
+    for (std::size_t i = 0; i < n; ++i) s.triangle_extents[i] = triangle_extent(s, i);
+    if (s.strip_tasks.empty()) s.strip_tasks.resize(1);
+    begin_strip_task(index, s.strip_tasks[0], width, height, largest, false);
+    for (int k = 0; k < strips; ++k) insert_strip(index, params, s, s.strips[static_cast<std::size_t>(k)], s.strip_tasks[0], s.grid);
+  } else {
+    BatchCounter extents(n, extent_batch);
+    run_each_task(params.task_runner, extents.tasks_for(tasks), [&](std::size_t) {
+      std::size_t first, last;
+      while (extents.claim(first, last))
+        for (std::size_t i = first; i < last; ++i) s.triangle_extents[i] = triangle_extent(s, i);
+    });
+    // The strips that most triangles reach are handed out first, so the last ones are short: the
+    // order only decides which task takes a strip, never what the strip becomes.
+    s.strip_work.assign(static_cast<std::size_t>(strips), 0);
+    for (const TriangleExtent& e : s.triangle_extents)
+      if (e.row0 <= e.row1)
+        for (int k = strip_of_row(e.row0, height, strips); k <= strip_of_row(e.row1, height, strips); ++k)
+          ++s.strip_work[static_cast<std::size_t>(k)];
+    s.strip_order.resize(static_cast<std::size_t>(strips));
+    for (int k = 0; k < strips; ++k) s.strip_order[static_cast<std::size_t>(k)] = static_cast<std::uint32_t>(k);
+    std::sort(s.strip_order.begin(), s.strip_order.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return s.strip_work[a] > s.strip_work[b] || (s.strip_work[a] == s.strip_work[b] && a < b);
+    });
+    BatchCounter batches(static_cast<std::size_t>(strips), 1);
+    const unsigned used = batches.tasks_for(tasks);
+    if (s.strip_tasks.size() < used) s.strip_tasks.resize(used);
+    for (unsigned k = 0; k < used; ++k) begin_strip_task(index, s.strip_tasks[k], width, height, largest, k > 0);
+    run_each_task(params.task_runner, used, [&](std::size_t task) {
+      StripTask& own = s.strip_tasks[task];
+      CoverageGrid& grid = task == 0 ? s.grid : own.grid;
+      std::size_t first, last;
+      while (batches.claim(first, last)) insert_strip(index, params, s, s.strips[s.strip_order[first]], own, grid);
+    });
+    for (unsigned k = 1; k < used; ++k) s.grid.take_rows(s.strip_tasks[k].grid);
+  }
+  s.grid.set_rows(0, height - 1);
+  std::size_t covered = 0, inserted = 0;
+  for (int k = 0; k < strips; ++k) covered += s.strips[static_cast<std::size_t>(k)].covered;
+  for (std::size_t i = 0; i < n; ++i)
+    for (int k = 0; k < strips; ++k)
+      if (s.strips[static_cast<std::size_t>(k)].inserted[i]) {
+        ++inserted;
+        break;
+      }
+  s.stats.occluder_triangles += inserted;
+  return covered;
+}
+
+}  // namespace mesh_occlusion
+}  // namespace detail
+}  // namespace cullkit
