@@ -65,7 +65,8 @@ struct TaskScratch {
 /// covered.
 struct Strip {
   int first_row = 0, last_row = -1;
-  std::vector<std::uint8_t> inserted;
+  std::vector<std::uint8_t> inserted;  // per gathered triangle, inserted here (several strips)
+  std::size_t inserted_count = 0;      // triangles inserted (the whole grid as one strip)
   std::size_t covered = 0;
 };
 

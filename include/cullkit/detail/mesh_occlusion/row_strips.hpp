@@ -130,6 +130,9 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
     std::fill(task.done_stamp.begin(), task.done_stamp.end(), 0);
     task.done_value = 1;
   }
+  // The whole grid as one strip (one thread) takes every triangle, with its gathered box, and counts
+  // what it inserts directly: nothing to share with other strips.
+  const bool whole = strip.first_row == 0 && strip.last_row == height - 1 && s.triangle_extents.empty();
   std::size_t inserted = 0;
   for (const auto& entry : s.patch_order) {
     const std::uint32_t q = entry.second;
@@ -141,15 +144,23 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
     task.run.clear();
     double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, w_min = HUGE_VAL;
     for (std::uint32_t i = b; i < e; ++i) {
-      const TriangleExtent& t = s.triangle_extents[i];
-      if (t.row1 < strip.first_row || t.row0 > strip.last_row) continue;
-      task.run.emplace_back(i, s.by_patch[i].second);
-      task.member_stamp[s.by_patch[i].second] = task.member_value;
-      x0 = std::min(x0, t.x0);
-      y0 = std::min(y0, t.y0);
-      x1 = std::max(x1, t.x1);
-      y1 = std::max(y1, t.y1);
-      w_min = std::min(w_min, t.w_min);
+      const std::uint32_t t = s.by_patch[i].second;
+      double bx0, by0, bx1, by1, bw;
+      if (whole) {
+        const OccluderBox& box = occluder_box(s, t);
+        bx0 = box.xmin, by0 = box.ymin, bx1 = box.xmax, by1 = box.ymax, bw = box.wmin;
+      } else {
+        const TriangleExtent& x = s.triangle_extents[i];
+        if (x.row1 < strip.first_row || x.row0 > strip.last_row) continue;
+        bx0 = x.x0, by0 = x.y0, bx1 = x.x1, by1 = x.y1, bw = x.w_min;
+      }
+      task.run.emplace_back(i, t);
+      task.member_stamp[t] = task.member_value;
+      x0 = std::min(x0, bx0);
+      y0 = std::min(y0, by0);
+      x1 = std::max(x1, bx1);
+      y1 = std::max(y1, by1);
+      w_min = std::min(w_min, bw);
     }
     if (task.run.empty()) continue;
     task.patch_grid.reset(width, height);
@@ -162,7 +173,7 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
     for (const auto& member : task.run) {
       const std::uint32_t t = member.second;
       if (!members.has(t)) continue;  // dropped over covered cells
-      strip.inserted[member.first] = 1;
+      if (!whole) strip.inserted[member.first] = 1;
       task.done_stamp[t] = task.done_value;
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
@@ -175,6 +186,7 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
     }
     strip.covered += grid.end_band();
   }
+  strip.inserted_count = whole ? inserted : 0;
 }
 
 /// Inserts every gathered triangle into the frame's grid, patch by patch (a patch's nearest
@@ -200,20 +212,20 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
   std::size_t largest = 0;
   for (const auto& entry : s.patch_order)
     largest = std::max<std::size_t>(largest, s.patch_first[entry.second + 1] - s.patch_first[entry.second]);
-  s.triangle_extents.resize(n);
+  s.triangle_extents.resize(strips > 1 ? n : 0);
   if (s.strips.size() < static_cast<std::size_t>(strips)) s.strips.resize(static_cast<std::size_t>(strips));
   for (int k = 0; k < strips; ++k) {
     Strip& strip = s.strips[static_cast<std::size_t>(k)];
     strip.first_row = k * height / strips;
     strip.last_row = (k + 1) * height / strips - 1;
-    strip.inserted.assign(n, 0);
+    if (strips > 1) strip.inserted.assign(n, 0);
     strip.covered = 0;
   }
-  if (tasks <= 1) {
-    for (std::size_t i = 0; i < n; ++i) s.triangle_extents[i] = triangle_extent(s, i);
+  if (strips == 1) {
+    s.triangle_extents.clear();  // the whole grid takes every triangle (insert_strip)
     if (s.strip_tasks.empty()) s.strip_tasks.resize(1);
     begin_strip_task(index, s.strip_tasks[0], width, height, largest, false);
-    for (int k = 0; k < strips; ++k) insert_strip(index, params, s, s.strips[static_cast<std::size_t>(k)], s.strip_tasks[0], s.grid);
+    insert_strip(index, params, s, s.strips[0], s.strip_tasks[0], s.grid);
   } else {
     BatchCounter extents(n, extent_batch);
     run_each_task(params.task_runner, extents.tasks_for(tasks), [&](std::size_t) {
@@ -248,12 +260,14 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
   s.grid.set_rows(0, height - 1);
   std::size_t covered = 0, inserted = 0;
   for (int k = 0; k < strips; ++k) covered += s.strips[static_cast<std::size_t>(k)].covered;
-  for (std::size_t i = 0; i < n; ++i)
-    for (int k = 0; k < strips; ++k)
-      if (s.strips[static_cast<std::size_t>(k)].inserted[i]) {
-        ++inserted;
-        break;
-      }
+  if (strips == 1) inserted = s.strips[0].inserted_count;
+  else
+    for (std::size_t i = 0; i < n; ++i)
+      for (int k = 0; k < strips; ++k)
+        if (s.strips[static_cast<std::size_t>(k)].inserted[i]) {
+          ++inserted;
+          break;
+        }
   s.stats.occluder_triangles += inserted;
   return covered;
 }
