@@ -421,15 +421,15 @@ class CoverageGrid {
     return true;
   }
 
-  /// Covered cells (for statistics).
-  [[nodiscard]] std::size_t covered_cells() const {
+  /// Covered cells, from the covered bits: what the grid holds, whichever steps covered them (the
+  /// sums of newly covered cells that `end_band` and `absorb` return depend on the order of the
+  /// steps, which the strips of rows change).
+  [[nodiscard]] std::size_t covered_count() const {
     std::size_t n = 0;
-    if (dirty_.empty()) return 0;
-    for (int j = dirty_.y0; j <= dirty_.y1; ++j)
-      for (int i = dirty_.x0; i <= dirty_.x1; ++i)
-        n += depth_[static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(i)] > 0.0f;
+    for (const std::uint64_t w : frozen_bits_) n += static_cast<std::size_t>(detail::popcount(w));
     return n;
   }
+
 
   /// Cells touched by the rectangle [x0, x1] x [y0, y1] in grid coordinates, with a margin,
   /// clamped to the grid (empty when it misses the grid).

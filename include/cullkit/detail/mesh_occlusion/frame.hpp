@@ -67,7 +67,6 @@ struct Strip {
   int first_row = 0, last_row = -1;
   std::vector<std::uint8_t> inserted;  // per gathered triangle, inserted here (several strips)
   std::size_t inserted_count = 0;      // triangles inserted (the whole grid as one strip)
-  std::size_t covered = 0;
 };
 
 /// A gathered occluder triangle's screen box and nearest depth, and the rows its cells reach with

@@ -191,10 +191,9 @@ inline void gather_moving(MovingScratch& m, int grid_width, int grid_height, dou
 
 /// Inserts the moving occluders into the frame's grid `s.grid` (after the static occluders, before
 /// it is finished), each as a patch: its own grid seeded from the union, its triangles in depth
-/// bands, then added into the union. Returns the cells covered; counts the triangles inserted.
-inline std::size_t insert_moving(const MeshOcclusionParams& params, const MovingOccluder* moving,
-                                 std::size_t moving_count, Scratch& s, MovingScratch& m) {
-  std::size_t covered = 0;
+/// bands, then added into the union. Counts the triangles inserted.
+inline void insert_moving(const MeshOcclusionParams& params, const MovingOccluder* moving, std::size_t moving_count,
+                          Scratch& s, MovingScratch& m) {
   for (std::size_t i = 0; i < moving_count; ++i) {
     const MovingOccluder& occluder = moving[i];
     const StridedMesh mesh = checked_mesh(occluder.mesh);
@@ -220,12 +219,11 @@ inline std::size_t insert_moving(const MeshOcclusionParams& params, const Moving
     const auto* last = first + m.s.triangles.size();
     assign_depth_bands(params, first, last, m.s.triangle_band);
     insert_run(m.index, m.s, s.patch_grid, first, last, members, inserted);
-    covered += s.grid.absorb(s.patch_grid, params.patch_layers);
-    covered += s.grid.end_band();
+    s.grid.absorb(s.patch_grid, params.patch_layers);
+    s.grid.end_band();
     s.stats.occluder_triangles += inserted;
     s.stats.moving_triangles += inserted;
   }
-  return covered;
 }
 
 #endif  // CULLKIT_CORE_BODIES

@@ -85,10 +85,9 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
   if (tasks > 1) project_occluder_corners_on_tasks(index, params, s, tasks);
   gather_triangles(index, s);
   stats.occluders_used = s.occluders.size();
-  stats.cells_covered = insert_patches(index, params, s);
-  if (moving_count > 0) {
-    stats.cells_covered += insert_moving(params, moving, moving_count, s, *m);
-  }
+  insert_patches(index, params, s);
+  if (moving_count > 0) insert_moving(params, moving, moving_count, s, *m);
+  stats.cells_covered = s.grid.covered_count();
   s.grid.finish();
   s.view_eye = camera.eye;
   insert_box_occluders(index, params, camera, s);

@@ -169,7 +169,7 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
     const RunMembers members{task.member_stamp, task.member_value};
     const auto* first = task.run.data();
     insert_run(index, s, task.patch_grid, first, first + task.run.size(), members, inserted);
-    strip.covered += grid.absorb(task.patch_grid, params.patch_layers);
+    grid.absorb(task.patch_grid, params.patch_layers);
     for (const auto& member : task.run) {
       const std::uint32_t t = member.second;
       if (!members.has(t)) continue;  // dropped over covered cells
@@ -184,7 +184,7 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
         grid.touch_edge(ex0, ey0, ex1, ey1, orient, -1);  // this patch's
       }
     }
-    strip.covered += grid.end_band();
+    grid.end_band();
   }
   strip.inserted_count = whole ? inserted : 0;
 }
@@ -193,8 +193,7 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
 /// triangle first decides its turn), each patch alone into a grid of its own in depth bands, then
 /// added into the frame's grid; strip by strip of the grid's rows, the triangles' extents and the
 /// strips on up to MeshOcclusionParams::threads tasks (through its task_runner), however few
-/// objects the frame has. Returns the cells covered;
-/// counts the triangles inserted (into some strip) into the statistics.
+/// objects the frame has. Counts the triangles inserted (into some strip) into the statistics.
 ///
 /// The frame's grid holds the union of all occluders: an edge that a patch shares with a patch
 /// inserted before it is no outline there, so the earlier patch's mark of it and this patch's (its
@@ -202,8 +201,8 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
 /// which cells the patch covers by itself, at the patch's own depth bound: where that is nearer than
 /// the union's, the cell takes it (`patch_layers`). A wall standing on a floor that went in before
 /// it leaves its own depth, not the floor's, in front of what is behind it.
-inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
-  if (s.triangles.empty()) return 0;
+inline void insert_patches(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+  if (s.triangles.empty()) return;
   const int width = s.grid.width(), height = s.grid.height();
   const int strips = params.threads == 1 ? 1 : strip_count(height);  // the same answer either way
   const unsigned tasks = params.threads == 1 ? 1u : resolve_threads(params.threads, static_cast<std::size_t>(strips));
@@ -219,7 +218,6 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
     strip.first_row = k * height / strips;
     strip.last_row = (k + 1) * height / strips - 1;
     if (strips > 1) strip.inserted.assign(n, 0);
-    strip.covered = 0;
   }
   if (strips == 1) {
     s.triangle_extents.clear();  // the whole grid takes every triangle (insert_strip)
@@ -258,8 +256,7 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
     for (unsigned k = 1; k < used; ++k) s.grid.take_rows(s.strip_tasks[k].grid);
   }
   s.grid.set_rows(0, height - 1);
-  std::size_t covered = 0, inserted = 0;
-  for (int k = 0; k < strips; ++k) covered += s.strips[static_cast<std::size_t>(k)].covered;
+  std::size_t inserted = 0;
   if (strips == 1) inserted = s.strips[0].inserted_count;
   else
     for (std::size_t i = 0; i < n; ++i)
@@ -269,7 +266,6 @@ inline std::size_t insert_patches(const MeshIndex& index, const MeshOcclusionPar
           break;
         }
   s.stats.occluder_triangles += inserted;
-  return covered;
 }
 
 }  // namespace mesh_occlusion
