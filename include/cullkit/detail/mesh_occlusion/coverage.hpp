@@ -399,18 +399,6 @@ class CoverageGrid {
     return true;
   }
 
-  /// True when every cell the box of the n corners touches (with a margin) is covered already.
-  [[nodiscard]] bool all_frozen(const double* x, const double* y, int n = 3) const {
-    double xmin = x[0], xmax = x[0], ymin = y[0], ymax = y[0];
-    for (int k = 1; k < n; ++k) {
-      xmin = std::min(xmin, x[k]);
-      xmax = std::max(xmax, x[k]);
-      ymin = std::min(ymin, y[k]);
-      ymax = std::max(ymax, y[k]);
-    }
-    return all_frozen(xmin, ymin, xmax, ymax);
-  }
-
   /// True when every cell the box [xmin, xmax] x [ymin, ymax] touches (with a margin) is covered
   /// already.
   [[nodiscard]] bool all_frozen(double xmin, double ymin, double xmax, double ymax) const {
