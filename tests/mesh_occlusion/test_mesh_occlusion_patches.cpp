@@ -17,6 +17,10 @@
 //   triangles and the same answers as without it, also from an eye 2 mm beyond the near plane from
 //   the wall, where the dome's extent must not move the occluders' clipping level), and the cubes
 //   stay hidden.
+// - dense_wall: a wall of 10,000 small triangles with cubes behind it. From afar each of its
+//   patches covers fewer cells than it has triangles, so by default the wall is no occluder and
+//   hides nothing; with min_occluder_cells_per_triangle = 0 (the control) it hides the cubes. From
+//   near, its patches are big on screen and hide the cubes by default too.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -201,6 +205,28 @@ void far_backdrop() {
   }
 }
 
+void dense_wall() {
+  TestScene s;
+  s.begin_object();
+  grid_quads(s, glm::vec3(-6, 0, 0), glm::vec3(12, 0, 0), glm::vec3(0, 4, 0), 100, 50);
+  std::vector<std::uint32_t> cubes;
+  for (int i = -1; i <= 1; ++i)
+    for (int k = 1; k <= 3; ++k)
+      cubes.push_back(s.box(glm::vec3(1.5f * i - 0.3f, 0.8f, -2.0f * k - 0.3f), glm::vec3(1.5f * i + 0.3f, 1.6f, -2.0f * k + 0.3f)));
+  const std::vector<glm::vec3> far_eyes = {{0, 2, 20}, {-1, 2, 22}, {1, 1.5f, 21}};
+  const std::vector<glm::vec3> near_eyes = {{0, 2, 6}, {-0.5f, 1.7f, 5}};
+  const glm::vec3 look_at(0, 1.5f, 0);
+  cullkit::MeshOcclusionParams defaults;
+  cullkit::MeshOcclusionParams every;
+  every.min_occluder_cells_per_triangle = 0.0f;
+  const Tally far_default = run(s, cubes, far_eyes, look_at, 0.1f, defaults, "dense_wall far, default");
+  const Tally far_every = run(s, cubes, far_eyes, look_at, 0.1f, every, "dense_wall far, every patch");
+  const Tally near_default = run(s, cubes, near_eyes, look_at, 0.1f, defaults, "dense_wall near, default");
+  CHECK(far_default.hidden == 0);
+  CHECK(far_every.hidden * 10 >= far_every.targets * 9);  // the control: the wall can hide them
+  CHECK(near_default.hidden * 10 >= near_default.targets * 9);
+}
+
 }  // namespace
 
 int main() {
@@ -208,5 +234,6 @@ int main() {
   slanted_beam();
   touching_boxes();
   far_backdrop();
+  dense_wall();
   return cullkit_test::report("test_mesh_occlusion_patches");
 }

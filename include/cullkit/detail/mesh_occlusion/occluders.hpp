@@ -39,13 +39,17 @@ inline bool patch_farther_than(const MeshIndex& index, const glm::dvec3& eye, co
   return true;
 }
 
-/// Picks occluder patches by size on screen, biggest first, within the triangle budget; fills
+/// Picks occluder patches by size on screen, biggest first, within the triangle budget, leaving out
+/// those with fewer box cells per triangle than `min_occluder_cells_per_triangle`; fills
 /// `s.occluders`. A patch too big for what is left of the budget is skipped, smaller ones still fit.
 /// An object of one patch is measured by its own box (already projected).
 inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
   const double grid_cells = double(s.grid.width()) * double(s.grid.height());
   const double min_cells = std::max(1.0, params.min_occluder_screen_fraction * grid_cells);
+  const double cells_per_triangle = params.min_occluder_cells_per_triangle;
   const PatchSet& ps = index.patches;
+  // Triangles that average under a cell each cost as much to insert as big ones and fill few cells.
+  const auto dense = [&](double cells, const Patch& patch) { return cells < cells_per_triangle * double(patch.count); };
   // An occluder can only hide what lies beyond it along some ray from the eye, and both depth and
   // distance from the eye grow along every such ray: a patch whose nearest point is farther, by
   // either measure, than every point of every other object in the frustum hides none of them (a sky
@@ -92,7 +96,7 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
     const double object_cells = screen_cells(s.boxes[i], s.grid);
     if (object_cells < min_cells) continue;
     if (p1 - p0 == 1) {
-      if (!beyond_the_rest(s.boxes[i], ps.patches[p0], i)) s.candidates.emplace_back(static_cast<float>(object_cells), p0);
+      if (!dense(object_cells, ps.patches[p0]) && !beyond_the_rest(s.boxes[i], ps.patches[p0], i)) s.candidates.emplace_back(static_cast<float>(object_cells), p0);
       continue;
     }
     for (std::uint32_t p = p0; p < p1; ++p) {
@@ -101,7 +105,7 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
       if (s.frustum.classify(ps.patches[p].box) == Containment::outside) continue;
       const BoxView& b = patch_box(index, s, p);
       const double cells = screen_cells(b, s.grid);
-      if (cells >= min_cells && !beyond_the_rest(b, ps.patches[p], i)) s.candidates.emplace_back(static_cast<float>(cells), p);
+      if (cells >= min_cells && !dense(cells, ps.patches[p]) && !beyond_the_rest(b, ps.patches[p], i)) s.candidates.emplace_back(static_cast<float>(cells), p);
     }
   }
   // Biggest first. A full sort of the candidates only (they are the patches above the size floor).
