@@ -58,6 +58,11 @@ struct TaskScratch {
   std::vector<std::uint32_t> vertex_stamp, patch_stamp;
   std::vector<Projected> projected;
   std::vector<BoxView> patch_boxes;
+  // Gathering occluder triangles (parallel_frame.hpp): the polygons of the triangles this task
+  // clipped and those triangles, and room to sort a patch's triangles.
+  std::vector<ClippedPolygon> clipped;
+  std::vector<std::uint32_t> clipped_triangles;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> sort_buffer;
 };
 
 /// A strip of the grid's rows [first_row, last_row] in the occluder insertion (row_strips.hpp):
@@ -97,15 +102,18 @@ struct Scratch {
   std::vector<BoxView> boxes;             // parallel to in_frustum
   std::vector<std::pair<float, std::uint32_t>> candidates;  // (screen cells, patch)
   std::vector<std::pair<double, std::uint32_t>> occluders;  // (depth key, patch)
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> triangles, sort_buffer;  // (depth bits, triangle)
+  // (depth bits, triangle) of the gathered occluder triangles: occluder q's from region_first[q] on,
+  // gathered_count[q] of them, nearest first (gather_patch); and room to sort a patch's.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> triangles, sort_buffer;
+  std::vector<std::uint32_t> region_first, gathered_count;
   // Per-frame caches, valid where the stamp equals `frame`.
   const void* owner = nullptr;
   std::uint32_t frame = 0;
   std::vector<std::uint32_t> vertex_stamp, vertex_slot, triangle_stamp, triangle_band, patch_stamp;
   std::vector<std::uint32_t> clip_stamp, clip_slot;  // per triangle: its polygon in `clipped`
   std::vector<ClippedPolygon> clipped;                // this frame's clipped occluder triangles
-  // This frame's gathered occluder triangles' boxes, in the order gathered (patch by patch), and per
-  // triangle its box's position there (valid for the gathered ones).
+  // This frame's gathered occluder triangles' boxes, in the order gathered (at their occluder's
+  // region, as `triangles`), and per triangle its box's position there (valid for the gathered ones).
   std::vector<OccluderBox> occluder_boxes;
   std::vector<std::uint32_t> box_slot;
   std::vector<BoxView> patch_boxes;       // per patch, valid where patch_stamp equals `frame`
@@ -133,7 +141,8 @@ struct Scratch {
   std::vector<std::uint8_t> hidden;
   std::vector<std::uint32_t> corner_list;  // occluder corners given a slot in `projected`, in slot order
   // The occluder insertion strip by strip: the strips, each task's memory, the gathered triangles'
-  // extents (by place in by_patch), and the order the strips are handed out in (biggest first).
+  // extents (by place in by_patch, set when gathered), and the order the strips are handed out in
+  // (biggest first).
   std::vector<Strip> strips;
   std::vector<StripTask> strip_tasks;
   std::vector<TriangleExtent> triangle_extents;
@@ -187,7 +196,6 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
   }
   s.projected.clear();
   s.clipped.clear();
-  s.occluder_boxes.clear();
 }
 
 inline const Projected& project_vertex(const MeshIndex& index, Scratch& s, std::uint32_t v) {

@@ -158,97 +158,246 @@ inline bool clip_occluder(const MeshIndex& index, const Scratch& s, const std::u
   return true;
 }
 
-/// Projects the occluder patches' triangles and keeps those that can occlude: clearly front-facing,
-/// touching the grid, and with some corner beyond the clipping level (a triangle with a corner short
-/// of it is clipped to its part beyond). Fills `s.triangles` with (sort key as float bits, triangle),
-/// smallest key first, the key being the nearest corner's depth (the farthest corner's for a clipped
-/// polygon), and `s.clipped` with the clipped ones' polygons.
-inline void gather_triangles(const MeshIndex& index, Scratch& s) {
-  const int orient = s.view.orient;
-  const double gw = s.grid.width(), gh = s.grid.height();
-  s.triangles.clear();
-  const PatchSet& ps = index.patches;
-  for (std::size_t q = 0; q < s.occluders.size(); ++q) {
-    const Patch& patch = ps.patches[s.occluders[q].second];
-    for (std::uint32_t member = patch.first; member < patch.first + patch.count; ++member) {
-      const std::uint32_t t = ps.triangles[member];
-      const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
-      // Objects may overlap: a triangle goes in once.
-      if (c[0] == none || s.triangle_stamp[t] == s.frame) continue;
-      double x[4], y[4], w[4];
-      int n = 3;
-      unsigned inside = 0;
-      for (int k = 0; k < 3; ++k) {
-        const Projected& p = project_vertex(index, s, c[k]);
-        inside |= p.inside ? 1u << k : 0u;
-        x[k] = p.x;
-        y[k] = p.y;
-        w[k] = p.w;
-      }
-      if (inside != 7u) {
-        // Wholly short of the clipping level: nothing of it occludes.
-        if (inside == 0u) continue;
-        ClippedPolygon poly;
-        if (!clip_occluder(index, s, c, inside, poly)) continue;
-        n = poly.n;
-        std::copy(poly.x, poly.x + n, x);
-        std::copy(poly.y, poly.y + n, y);
-        std::copy(poly.w, poly.w + n, w);
-        s.clip_stamp[t] = s.frame;
-        s.clip_slot[t] = static_cast<std::uint32_t>(s.clipped.size());
-        s.clipped.push_back(poly);
-      }
-      double xmin = x[0], xmax = x[0], ymin = y[0], ymax = y[0], wmin = w[0];
-      for (int k = 1; k < n; ++k) {
-        xmin = std::min(xmin, x[k]);
-        xmax = std::max(xmax, x[k]);
-        ymin = std::min(ymin, y[k]);
-        ymax = std::max(ymax, y[k]);
-        wmin = std::min(wmin, w[k]);
-      }
-      if (xmax < 0.0 || xmin > gw || ymax < 0.0 || ymin > gh) continue;
-      // Clearly front-facing: back-facing and edge-on triangles are left out (their neighbours'
-      // edges then stay on the outline, which only covers less). A clipped polygon lies in its
-      // triangle's plane: it faces the eye as the triangle does.
-      double area2 = 0.0;
-      for (int k = 1; k + 1 < n; ++k) area2 += (x[k] - x[0]) * (y[k + 1] - y[0]) - (x[k + 1] - x[0]) * (y[k] - y[0]);
-      const double extent = std::max(xmax - xmin, ymax - ymin);
-      if (!(area2 * orient > 1e-9 * extent * extent)) continue;
-      // A clipped polygon's nearest point is on the clipping line, nearer than anything else, and
-      // mostly off screen (a floor under the eye): sorted by its nearest depth it would freeze every
-      // cell it shares with nearer occluders (a wall standing on the floor) at its own far depth
-      // there. It goes in by its farthest depth instead, after what stands on it.
-      double wmax = w[0];
-      for (int k = 1; k < n; ++k) wmax = std::max(wmax, w[k]);
-      double key_w = inside != 7u ? wmax : wmin;
-      // A part of a cut triangle sorts as the whole, so that the parts share a band and their inner
-      // edges cancel within it: by the whole's nearest corner, or, when the whole reaches the
-      // clipping level (then each part is clipped on its own, at the same points on shared edges),
-      // by the whole's farthest corner, as a clipped polygon goes in.
-      if (!index.parts.whole.empty() && index.parts.whole[t] != none) {
-        const std::uint32_t* whole = &index.parts.whole_corners[3 * std::size_t(index.parts.whole[t])];
-        bool whole_inside = true;
-        double whole_far = -HUGE_VAL;
-        for (int k = 0; k < 3; ++k) {
-          const Projected& p = project_vertex(index, s, whole[k]);
-          whole_inside = whole_inside && p.inside;
-          if (whole_inside) key_w = std::min(key_w, p.w);
-          const glm::vec3& at = index.positions[whole[k]];
-          whole_far = std::max(whole_far, s.view.depth(at.x, at.y, at.z));
-        }
-        if (!whole_inside) key_w = whole_far;
-      }
-      const float key = static_cast<float>(key_w);
-      std::uint32_t bits;
-      std::memcpy(&bits, &key, sizeof bits);  // positive floats order as their bits
-      s.triangles.emplace_back(bits, t);
-      s.triangle_stamp[t] = s.frame;
-      s.triangle_owner[t] = static_cast<std::uint32_t>(q);
-      s.box_slot[t] = static_cast<std::uint32_t>(s.occluder_boxes.size());
-      s.occluder_boxes.push_back(OccluderBox{xmin, ymin, xmax, ymax, wmin});
+/// A gathered occluder triangle's screen box and nearest depth (set up once when it was gathered).
+inline const OccluderBox& occluder_box(const Scratch& s, std::uint32_t t) { return s.occluder_boxes[s.box_slot[t]]; }
+
+/// Numbers the depth bands of the sorted triangles [first, last) of one patch into `triangle_band`
+/// (1, 2, ...): runs whose nearest depth is within `depth_band_ratio` of the run's first.
+inline void assign_depth_bands(const MeshOcclusionParams& params, const std::pair<std::uint32_t, std::uint32_t>* first,
+                               const std::pair<std::uint32_t, std::uint32_t>* last,
+                               std::vector<std::uint32_t>& triangle_band) {
+  const float ratio = 1.0f + std::max(0.0f, params.depth_band_ratio);
+  std::uint32_t band = 0;
+  float band_start = 0.0f;
+  for (const auto* it = first; it != last; ++it) {
+    float key;
+    std::memcpy(&key, &it->first, sizeof key);
+    if (it == first || !(key <= band_start * ratio)) {
+      band_start = key;
+      ++band;
+    }
+    triangle_band[it->second] = band;
+  }
+}
+
+/// Sorts the (key, value) pairs [first, last) by key, stable: runs of 16 by insertion, then merged
+/// pairwise through `buffer` (room for last - first pairs).
+inline void sort_by_key(std::pair<std::uint32_t, std::uint32_t>* first, std::pair<std::uint32_t, std::uint32_t>* last,
+                        std::pair<std::uint32_t, std::uint32_t>* buffer) {
+  const std::size_t n = static_cast<std::size_t>(last - first);
+  constexpr std::size_t run = 16;
+  for (std::size_t b = 0; b < n; b += run) {
+    const std::size_t e = std::min(n, b + run);
+    for (std::size_t i = b + 1; i < e; ++i) {
+      const std::pair<std::uint32_t, std::uint32_t> v = first[i];
+      std::size_t j = i;
+      for (; j > b && first[j - 1].first > v.first; --j) first[j] = first[j - 1];
+      first[j] = v;
     }
   }
-  radix_sort(s.triangles, s.sort_buffer);
+  std::pair<std::uint32_t, std::uint32_t>*from = first, *to = buffer;
+  for (std::size_t width = run; width < n; width *= 2) {
+    for (std::size_t b = 0; b < n; b += 2 * width) {
+      const std::size_t m = std::min(n, b + width), e = std::min(n, b + 2 * width);
+      std::size_t i = b, j = m, k = b;
+      while (i < m && j < e) to[k++] = from[j].first < from[i].first ? from[j++] : from[i++];
+      while (i < m) to[k++] = from[i++];
+      while (j < e) to[k++] = from[j++];
+    }
+    std::swap(from, to);
+  }
+  if (from != first) std::copy(from, from + n, first);
+}
+
+/// A gathered occluder triangle's screen box and nearest depth, and the rows its cells reach with
+/// the margin (row_strips.hpp): its depth, its crossings, its edges' marks and the covered test stay
+/// within them (each takes its margin from coordinates no larger).
+inline TriangleExtent triangle_extent(const CoverageGrid& grid, const OccluderBox& box) {
+  TriangleExtent e{box.xmin, box.ymin, box.xmax, box.ymax, box.wmin, 0, -1};
+  const CellRect r = grid.cells_of(e.x0, e.y0, e.x1, e.y1);
+  if (!r.empty()) {
+    e.row0 = r.y0;
+    e.row1 = r.y1;
+  }
+  return e;
+}
+
+/// Makes room for the chosen occluders' triangles: occluder q's go in at `s.region_first[q]` (as
+/// many places as its patch has triangles), so that each occluder can be gathered on its own, by any
+/// task; `extents`: each kept triangle's extent is wanted too (strips of rows, row_strips.hpp).
+inline void begin_gather(const MeshIndex& index, Scratch& s, bool extents) {
+  const PatchSet& ps = index.patches;
+  const std::size_t n = s.occluders.size();
+  s.region_first.resize(n + 1);
+  s.gathered_count.assign(n, 0);
+  std::uint32_t total = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    s.region_first[q] = total;
+    total += ps.patches[s.occluders[q].second].count;
+  }
+  s.region_first[n] = total;
+  // Only grown: what lies past this frame's regions is never read.
+  if (s.triangles.size() < total) s.triangles.resize(total);
+  if (s.occluder_boxes.size() < total) s.occluder_boxes.resize(total);
+  if (!extents) s.triangle_extents.clear();
+  else if (s.triangle_extents.size() < total) s.triangle_extents.resize(total);
+  if (s.sort_buffer.size() < ps.largest) s.sort_buffer.resize(ps.largest);
+  s.clipped.clear();
+}
+
+/// Gathers the triangles of occluder q (s.occluders[q]) that can occlude: clearly front-facing,
+/// touching the grid, and with some corner beyond the clipping level (a triangle with a corner short
+/// of it is clipped to its part beyond, into `clipped`, its place there in `s.clip_slot` and the
+/// triangle appended to `clipped_triangles` when given). Writes them at the occluder's region of
+/// `s.triangles` as (sort key as float bits, triangle), sorted by key (ties in the patch's order),
+/// the key being the nearest corner's depth (the farthest corner's for a clipped polygon); their
+/// boxes at the same places of `s.occluder_boxes` (in the order gathered); their extents, in sorted
+/// order, when `s.triangle_extents` is sized; their owner and depth bands. A triangle of a patch that
+/// shares triangles with another goes in once, with the first occluder that keeps it: such patches
+/// must be gathered one after another, in order.
+/// Writes only the slots of the patch's own triangles and region, so occluders whose patches share
+/// no triangle can be gathered on several tasks at once, when the corners are projected first
+/// (project_occluder_corners_on_tasks); `Project`: project each corner here when it is not yet
+/// (project_vertex, the calling thread only). Returns the number kept.
+template <bool Project>
+std::uint32_t gather_patch(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, std::size_t q,
+                           std::vector<ClippedPolygon>& clipped, std::vector<std::uint32_t>* clipped_triangles,
+                           std::pair<std::uint32_t, std::uint32_t>* sort_buffer) {
+  const auto corner = [&](std::uint32_t v) -> const Projected& {
+    if (Project) return project_vertex(index, s, v);
+    return s.projected[s.vertex_slot[v]];
+  };
+  const int orient = s.view.orient;
+  const double gw = s.grid.width(), gh = s.grid.height();
+  const PatchSet& ps = index.patches;
+  const std::uint32_t patch_id = s.occluders[q].second;
+  const Patch& patch = ps.patches[patch_id];
+  const bool once = ps.shares_triangles[patch_id] != 0;  // objects may overlap: a triangle goes in once
+  const bool any_parts = !index.parts.whole.empty();
+  const std::uint32_t region = s.region_first[q];
+  std::pair<std::uint32_t, std::uint32_t>* out = s.triangles.data() + region;
+  OccluderBox* boxes = s.occluder_boxes.data() + region;
+  const std::uint32_t owner = static_cast<std::uint32_t>(q);
+  std::uint32_t kept = 0;
+  for (std::uint32_t member = patch.first; member < patch.first + patch.count; ++member) {
+    const std::uint32_t t = ps.triangles[member];
+    const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
+    if (c[0] == none || (once && s.triangle_stamp[t] == s.frame)) continue;
+    double x[4], y[4], w[4];
+    int n = 3;
+    unsigned inside = 0;
+    for (int k = 0; k < 3; ++k) {
+      const Projected& p = corner(c[k]);
+      inside |= p.inside ? 1u << k : 0u;
+      x[k] = p.x;
+      y[k] = p.y;
+      w[k] = p.w;
+    }
+    if (inside != 7u) {
+      // Wholly short of the clipping level: nothing of it occludes.
+      if (inside == 0u) continue;
+      ClippedPolygon poly;
+      if (!clip_occluder(index, s, c, inside, poly)) continue;
+      n = poly.n;
+      std::copy(poly.x, poly.x + n, x);
+      std::copy(poly.y, poly.y + n, y);
+      std::copy(poly.w, poly.w + n, w);
+      s.clip_stamp[t] = s.frame;
+      s.clip_slot[t] = static_cast<std::uint32_t>(clipped.size());
+      clipped.push_back(poly);
+      if (clipped_triangles) clipped_triangles->push_back(t);
+    }
+    double xmin = x[0], xmax = x[0], ymin = y[0], ymax = y[0], wmin = w[0];
+    for (int k = 1; k < n; ++k) {
+      xmin = std::min(xmin, x[k]);
+      xmax = std::max(xmax, x[k]);
+      ymin = std::min(ymin, y[k]);
+      ymax = std::max(ymax, y[k]);
+      wmin = std::min(wmin, w[k]);
+    }
+    if (xmax < 0.0 || xmin > gw || ymax < 0.0 || ymin > gh) continue;
+    // Clearly front-facing: back-facing and edge-on triangles are left out (their neighbours'
+    // edges then stay on the outline, which only covers less). A clipped polygon lies in its
+    // triangle's plane: it faces the eye as the triangle does.
+    double area2 = 0.0;
+    for (int k = 1; k + 1 < n; ++k) area2 += (x[k] - x[0]) * (y[k + 1] - y[0]) - (x[k + 1] - x[0]) * (y[k] - y[0]);
+    const double extent = std::max(xmax - xmin, ymax - ymin);
+    if (!(area2 * orient > 1e-9 * extent * extent)) continue;
+    // A clipped polygon's nearest point is on the clipping line, nearer than anything else, and
+    // mostly off screen (a floor under the eye): sorted by its nearest depth it would freeze every
+    // cell it shares with nearer occluders (a wall standing on the floor) at its own far depth
+    // there. It goes in by its farthest depth instead, after what stands on it.
+    double key_w = wmin;
+    if (inside != 7u) {
+      key_w = w[0];
+      for (int k = 1; k < n; ++k) key_w = std::max(key_w, w[k]);
+    }
+    // A part of a cut triangle sorts as the whole, so that the parts share a band and their inner
+    // edges cancel within it: by the whole's nearest corner, or, when the whole reaches the
+    // clipping level (then each part is clipped on its own, at the same points on shared edges),
+    // by the whole's farthest corner, as a clipped polygon goes in.
+    if (any_parts && index.parts.whole[t] != none) {
+      const std::uint32_t* whole = &index.parts.whole_corners[3 * std::size_t(index.parts.whole[t])];
+      bool whole_inside = true;
+      double whole_far = -HUGE_VAL;
+      for (int k = 0; k < 3; ++k) {
+        const Projected& p = corner(whole[k]);
+        whole_inside = whole_inside && p.inside;
+        if (whole_inside) key_w = std::min(key_w, p.w);
+        const glm::vec3& at = index.positions[whole[k]];
+        whole_far = std::max(whole_far, s.view.depth(at.x, at.y, at.z));
+      }
+      if (!whole_inside) key_w = whole_far;
+    }
+    const float key = static_cast<float>(key_w);
+    std::uint32_t bits;
+    std::memcpy(&bits, &key, sizeof bits);  // positive floats order as their bits
+    out[kept] = {bits, t};
+    boxes[kept] = OccluderBox{xmin, ymin, xmax, ymax, wmin};
+    if (once) s.triangle_stamp[t] = s.frame;
+    s.triangle_owner[t] = owner;
+    s.box_slot[t] = region + kept;
+    ++kept;
+  }
+  sort_by_key(out, out + kept, sort_buffer);
+  assign_depth_bands(params, out, out + kept, s.triangle_band);
+  if (!s.triangle_extents.empty()) {
+    TriangleExtent* extents = s.triangle_extents.data() + region;
+    for (std::uint32_t i = 0; i < kept; ++i) extents[i] = triangle_extent(s.grid, occluder_box(s, out[i].second));
+  }
+  return kept;
+}
+
+/// Joins the occluders' gathered triangles into `s.by_patch` (group q from `s.patch_first[q]`, each
+/// nearest first) with their extents when wanted, and orders the groups by their nearest triangle
+/// (`s.patch_order`).
+inline void finish_gather(Scratch& s) {
+  const std::size_t n = s.occluders.size();
+  s.patch_first.resize(n + 1);
+  s.patch_first[0] = 0;
+  for (std::size_t q = 0; q < n; ++q) s.patch_first[q + 1] = s.patch_first[q] + s.gathered_count[q];
+  s.by_patch.resize(s.patch_first[n]);
+  const bool extents = !s.triangle_extents.empty();
+  s.patch_order.clear();
+  for (std::size_t q = 0; q < n; ++q) {
+    const std::uint32_t from = s.region_first[q], to = s.patch_first[q], count = s.gathered_count[q];
+    if (count == 0) continue;
+    std::copy(s.triangles.data() + from, s.triangles.data() + from + count, s.by_patch.data() + to);
+    // Places only move down (to <= from): forward copying in place is safe.
+    if (extents && to != from)
+      for (std::uint32_t i = 0; i < count; ++i) s.triangle_extents[to + i] = s.triangle_extents[from + i];
+    s.patch_order.emplace_back(s.by_patch[to].first, static_cast<std::uint32_t>(q));
+  }
+  radix_sort(s.patch_order, s.patch_sort_buffer);
+}
+
+/// Gathers every chosen occluder's triangles on the calling thread (gather_patch), in order,
+/// projecting their corners as it meets them.
+inline void gather_triangles(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, bool extents) {
+  begin_gather(index, s, extents);
+  for (std::size_t q = 0; q < s.occluders.size(); ++q)
+    s.gathered_count[q] = gather_patch<true>(index, params, s, q, s.clipped, nullptr, s.sort_buffer.data());
+  finish_gather(s);
 }
 
 /// Inserts a clipped occluder polygon as insert_run does a triangle: its depth and counts as a
@@ -287,9 +436,6 @@ inline void insert_clipped(CoverageGrid& grid, const ClippedPolygon& poly, int o
   }
 }
 
-/// A gathered occluder triangle's screen box and nearest depth (set up once when it was gathered).
-inline const OccluderBox& occluder_box(const Scratch& s, std::uint32_t t) { return s.occluder_boxes[s.box_slot[t]]; }
-
 /// A gathered occluder triangle's projected corners, or its clipped polygon's (up to 4); returns
 /// their number.
 inline int occluder_corners(const MeshIndex& index, const Scratch& s, std::uint32_t t, double* x, double* y, double* w) {
@@ -318,25 +464,6 @@ struct RunMembers {
   std::uint32_t value;
   [[nodiscard]] bool has(std::uint32_t t) const { return stamp[t] == value; }
 };
-
-/// Numbers the depth bands of the sorted triangles [first, last) of one patch into `triangle_band`
-/// (1, 2, ...): runs whose nearest depth is within `depth_band_ratio` of the run's first.
-inline void assign_depth_bands(const MeshOcclusionParams& params, const std::pair<std::uint32_t, std::uint32_t>* first,
-                               const std::pair<std::uint32_t, std::uint32_t>* last,
-                               std::vector<std::uint32_t>& triangle_band) {
-  const float ratio = 1.0f + std::max(0.0f, params.depth_band_ratio);
-  std::uint32_t band = 0;
-  float band_start = 0.0f;
-  for (const auto* it = first; it != last; ++it) {
-    float key;
-    std::memcpy(&key, &it->first, sizeof key);
-    if (it == first || !(key <= band_start * ratio)) {
-      band_start = key;
-      ++band;
-    }
-    triangle_band[it->second] = band;
-  }
-}
 
 /// Inserts the sorted triangles [first, last) (each a member of `members`, depth bands numbered by
 /// assign_depth_bands) into `grid` nearest first, in bands of similar depth, so a cell freezes at

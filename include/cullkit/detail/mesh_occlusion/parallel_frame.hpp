@@ -24,6 +24,7 @@
 #include "frame.hpp"
 #include "index.hpp"
 #include "object_tests.hpp"
+#include "occluders.hpp"
 
 namespace cullkit {
 namespace detail {
@@ -160,27 +161,34 @@ inline void project_boxes_on_tasks(const MeshIndex& index, const MeshOcclusionPa
   });
 }
 
-/// The corners of the chosen occluders' triangles projected on `tasks` tasks into the frame's
-/// cache, so that gather_triangles (on the calling thread) finds them there: the slots are given
-/// out here, in the order the occluders list them, and each is filled by one task with what
-/// project_vertex would put there (the same view, its final clipping level included). Call after
-/// choose_occluders.
+/// The corners of the chosen occluders' triangles (and of the whole triangles their cut parts come
+/// from) projected on `tasks` tasks into the frame's cache, so that gathering finds them there: the
+/// slots are given out here, in the order the occluders list them, and each is filled by one task
+/// with what project_vertex would put there (the same view, its final clipping level included).
+/// Call after choose_occluders.
 inline void project_occluder_corners_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
                                               unsigned tasks) {
   const PatchSet& ps = index.patches;
   const std::size_t first_slot = s.projected.size();
+  const bool any_parts = !index.parts.whole.empty();
   s.corner_list.clear();
+  const auto add_corners = [&](const std::uint32_t* c) {
+    for (int k = 0; k < 3; ++k) {
+      if (s.vertex_stamp[c[k]] == s.frame) continue;
+      s.vertex_stamp[c[k]] = s.frame;
+      s.vertex_slot[c[k]] = static_cast<std::uint32_t>(first_slot + s.corner_list.size());
+      s.corner_list.push_back(c[k]);
+    }
+  };
   for (const auto& occluder : s.occluders) {
     const Patch& patch = ps.patches[occluder.second];
     for (std::uint32_t member = patch.first; member < patch.first + patch.count; ++member) {
-      const std::uint32_t* c = &index.corners[3 * std::size_t(ps.triangles[member])];
+      const std::uint32_t t = ps.triangles[member];
+      const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
       if (c[0] == none) continue;
-      for (int k = 0; k < 3; ++k) {
-        if (s.vertex_stamp[c[k]] == s.frame) continue;
-        s.vertex_stamp[c[k]] = s.frame;
-        s.vertex_slot[c[k]] = static_cast<std::uint32_t>(first_slot + s.corner_list.size());
-        s.corner_list.push_back(c[k]);
-      }
+      add_corners(c);
+      if (any_parts && index.parts.whole[t] != none)
+        add_corners(&index.parts.whole_corners[3 * std::size_t(index.parts.whole[t])]);
     }
   }
   s.projected.resize(first_slot + s.corner_list.size());
@@ -193,6 +201,56 @@ inline void project_occluder_corners_on_tasks(const MeshIndex& index, const Mesh
         s.projected[first_slot + j] = s.view.project(p.x, p.y, p.z);
       }
   });
+}
+
+/// Occluders per batch that a task gathers at a time (patches of up to a few hundred triangles).
+inline constexpr std::size_t gather_batch = 4;
+
+/// gather_triangles on `tasks` tasks, with the same result: the occluders whose patches share no
+/// triangle with another patch are gathered on the tasks, each into its own region of the frame's
+/// arrays (gather_patch writes nothing else of the frame but the slots of its own triangles), the
+/// polygons of the triangles a task clips into the task's list; then those lists join the frame's,
+/// and the occluders whose patches share triangles (objects that overlap) are gathered on the
+/// calling thread in order, so a triangle goes in with the first occluder that keeps it, as on one
+/// thread. Call after the corners are projected.
+inline void gather_triangles_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
+                                      unsigned tasks, bool extents) {
+  const PatchSet& ps = index.patches;
+  begin_gather(index, s, extents);
+  const std::size_t n = s.occluders.size();
+  BatchCounter batches(n, gather_batch);
+  const unsigned used = batches.tasks_for(tasks);
+  if (s.tasks.size() < used) s.tasks.resize(used);
+  for (unsigned k = 0; k < used; ++k) {
+    TaskScratch& own = s.tasks[k];
+    own.clipped.clear();
+    own.clipped_triangles.clear();
+    if (own.sort_buffer.size() < ps.largest) own.sort_buffer.resize(ps.largest);
+  }
+  run_each_task(params.task_runner, used, [&](std::size_t task) {
+    TaskScratch& own = s.tasks[task];
+    std::size_t first, last;
+    while (batches.claim(first, last))
+      for (std::size_t q = first; q < last; ++q)
+        if (!ps.shares_triangles[s.occluders[q].second])
+          s.gathered_count[q] = gather_patch<false>(index, params, s, q, own.clipped, &own.clipped_triangles, own.sort_buffer.data());
+  });
+  for (unsigned k = 0; k < used; ++k) {
+    const TaskScratch& own = s.tasks[k];
+    for (std::size_t j = 0; j < own.clipped.size(); ++j) {
+      s.clip_slot[own.clipped_triangles[j]] = static_cast<std::uint32_t>(s.clipped.size());
+      s.clipped.push_back(own.clipped[j]);
+    }
+  }
+  for (std::size_t q = 0; q < n; ++q)
+    if (ps.shares_triangles[s.occluders[q].second])
+      s.gathered_count[q] = gather_patch<false>(index, params, s, q, s.clipped, nullptr, s.sort_buffer.data());
+  // However the occluders fall to the tasks next time, no task's list outgrows what the frame held.
+  for (unsigned k = 0; k < used; ++k) {
+    s.tasks[k].clipped.reserve(s.clipped.size());
+    s.tasks[k].clipped_triangles.reserve(s.clipped.size());
+  }
+  finish_gather(s);
 }
 
 /// The object tests against the finished frame on `tasks` tasks: appends the objects not hidden

@@ -10,6 +10,7 @@
 // two inserted triangles, whichever patch they came from.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -41,6 +42,10 @@ struct PatchSet {
   std::vector<Patch> patches;
   std::vector<std::uint32_t> triangles;     // grouped by patch
   std::vector<std::uint32_t> object_first;  // object_count + 1 entries
+  // Per patch, 1 when one of its triangles is also in another patch (objects that overlap): only
+  // such patches need a frame's check that a triangle goes in once.
+  std::vector<std::uint8_t> shares_triangles;
+  std::uint32_t largest = 0;  // the most triangles of any patch
 };
 
 /// Cuts the objects into patches. `corners` (3 per triangle, none for triangles that cannot occlude)
@@ -110,6 +115,18 @@ inline void build_patches(PatchSet& set, const std::vector<glm::vec3>& positions
     }
   }
   set.object_first[objects.size()] = static_cast<std::uint32_t>(set.patches.size());
+  // Triangles in several patches, and the patches holding one.
+  std::vector<std::uint8_t> patch_count(corners.size() / 3, 0);
+  for (const std::uint32_t t : set.triangles)
+    if (patch_count[t] < 2) ++patch_count[t];
+  set.shares_triangles.assign(set.patches.size(), 0);
+  set.largest = 0;
+  for (std::size_t p = 0; p < set.patches.size(); ++p) {
+    const Patch& patch = set.patches[p];
+    set.largest = std::max(set.largest, patch.count);
+    for (std::uint32_t k = patch.first; k < patch.first + patch.count && !set.shares_triangles[p]; ++k)
+      if (patch_count[set.triangles[k]] > 1) set.shares_triangles[p] = 1;
+  }
 }
 
 /// True when object o's usable triangles are exactly a closed, outward-wound surface on the faces of
