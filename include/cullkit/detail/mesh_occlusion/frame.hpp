@@ -59,10 +59,10 @@ struct TaskScratch {
   std::vector<Projected> projected;
   std::vector<BoxView> patch_boxes;
   // Gathering occluder triangles (parallel_frame.hpp): the polygons of the triangles this task
-  // clipped and those triangles, and room to sort a patch's triangles.
+  // clipped and those triangles, the occluders it gathered, and room to sort their triangles.
   std::vector<ClippedPolygon> clipped;
-  std::vector<std::uint32_t> clipped_triangles;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> sort_buffer;
+  std::vector<std::uint32_t> clipped_triangles, gathered;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> items, sort_buffer;
 };
 
 /// A strip of the grid's rows [first_row, last_row] in the occluder insertion (row_strips.hpp):
@@ -103,9 +103,9 @@ struct Scratch {
   std::vector<std::pair<float, std::uint32_t>> candidates;  // (screen cells, patch)
   std::vector<std::pair<double, std::uint32_t>> occluders;  // (depth key, patch)
   // (depth bits, triangle) of the gathered occluder triangles: occluder q's from region_first[q] on,
-  // gathered_count[q] of them, nearest first (gather_patch); and room to sort a patch's.
+  // gathered_count[q] of them (gather_patch); and room to sort them.
   std::vector<std::pair<std::uint32_t, std::uint32_t>> triangles, sort_buffer;
-  std::vector<std::uint32_t> region_first, gathered_count;
+  std::vector<std::uint32_t> region_first, gathered_count, region_cursor;
   // Per-frame caches, valid where the stamp equals `frame`.
   const void* owner = nullptr;
   std::uint32_t frame = 0;
@@ -149,6 +149,27 @@ struct Scratch {
   std::vector<std::uint32_t> strip_order, strip_work;
 };
 
+
+/// Sorts the (key, value) pairs items[0, n) by key, stable: three passes of 11 bits, between
+/// `items` and `buffer` (room for n). Returns where the sorted pairs are (`buffer`).
+inline const std::pair<std::uint32_t, std::uint32_t>* radix_sort(std::pair<std::uint32_t, std::uint32_t>* items, std::size_t n,
+                                                                 std::pair<std::uint32_t, std::uint32_t>* buffer) {
+  std::pair<std::uint32_t, std::uint32_t>*from = items, *to = buffer;
+  for (int pass = 0; pass < 3; ++pass) {
+    const int shift = 11 * pass;
+    std::uint32_t offsets[2048] = {};
+    for (std::size_t i = 0; i < n; ++i) ++offsets[(from[i].first >> shift) & 2047u];
+    std::uint32_t sum = 0;
+    for (std::uint32_t& o : offsets) {
+      const std::uint32_t count = o;
+      o = sum;
+      sum += count;
+    }
+    for (std::size_t i = 0; i < n; ++i) to[offsets[(from[i].first >> shift) & 2047u]++] = from[i];
+    std::swap(from, to);
+  }
+  return from;
+}
 
 /// Sorts (key, value) pairs by key, stable: three passes of 11 bits.
 inline void radix_sort(std::vector<std::pair<std::uint32_t, std::uint32_t>>& items,

@@ -79,9 +79,19 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
   const auto beyond_the_rest = [&](const BoxView& b, const Patch& patch, std::size_t i) {
     if (b.usable && b.w_min > depth.without(i)) return true;
     // A curved patch's box may reach far nearer than its surface, up to the eye (a piece of a sky
-    // dome around the scene): its triangles' planes are the tighter bound.
+    // dome around the scene): its triangles' planes are the tighter bound. But a plane through a
+    // point of the box is no farther from the eye than the box's farthest point: a box within the
+    // limit (rounding far inside the margins) needs no look at its triangles.
     const double limit = distance.without(i);
-    return std::isfinite(limit) && patch_farther_than(index, eye, patch, limit);
+    if (!std::isfinite(limit)) return false;
+    double d2 = 0.0;
+    for (int a = 0; a < 3; ++a) {
+      const double reach =
+          std::max(std::fabs(double(patch.box.min[a]) - eye[a]), std::fabs(double(patch.box.max[a]) - eye[a]));
+      d2 += reach * reach;
+    }
+    if (std::sqrt(d2) * (1.0 + 0x1p-40) <= limit) return false;
+    return patch_farther_than(index, eye, patch, limit);
   };
   s.candidates.clear();
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
@@ -180,35 +190,6 @@ inline void assign_depth_bands(const MeshOcclusionParams& params, const std::pai
   }
 }
 
-/// Sorts the (key, value) pairs [first, last) by key, stable: runs of 16 by insertion, then merged
-/// pairwise through `buffer` (room for last - first pairs).
-inline void sort_by_key(std::pair<std::uint32_t, std::uint32_t>* first, std::pair<std::uint32_t, std::uint32_t>* last,
-                        std::pair<std::uint32_t, std::uint32_t>* buffer) {
-  const std::size_t n = static_cast<std::size_t>(last - first);
-  constexpr std::size_t run = 16;
-  for (std::size_t b = 0; b < n; b += run) {
-    const std::size_t e = std::min(n, b + run);
-    for (std::size_t i = b + 1; i < e; ++i) {
-      const std::pair<std::uint32_t, std::uint32_t> v = first[i];
-      std::size_t j = i;
-      for (; j > b && first[j - 1].first > v.first; --j) first[j] = first[j - 1];
-      first[j] = v;
-    }
-  }
-  std::pair<std::uint32_t, std::uint32_t>*from = first, *to = buffer;
-  for (std::size_t width = run; width < n; width *= 2) {
-    for (std::size_t b = 0; b < n; b += 2 * width) {
-      const std::size_t m = std::min(n, b + width), e = std::min(n, b + 2 * width);
-      std::size_t i = b, j = m, k = b;
-      while (i < m && j < e) to[k++] = from[j].first < from[i].first ? from[j++] : from[i++];
-      while (i < m) to[k++] = from[i++];
-      while (j < e) to[k++] = from[j++];
-    }
-    std::swap(from, to);
-  }
-  if (from != first) std::copy(from, from + n, first);
-}
-
 /// A gathered occluder triangle's screen box and nearest depth, and the rows its cells reach with
 /// the margin (row_strips.hpp): its depth, its crossings, its edges' marks and the covered test stay
 /// within them (each takes its margin from coordinates no larger).
@@ -229,6 +210,7 @@ inline void begin_gather(const MeshIndex& index, Scratch& s, bool extents) {
   const PatchSet& ps = index.patches;
   const std::size_t n = s.occluders.size();
   s.region_first.resize(n + 1);
+  s.region_cursor.resize(n);
   s.gathered_count.assign(n, 0);
   std::uint32_t total = 0;
   for (std::size_t q = 0; q < n; ++q) {
@@ -238,31 +220,29 @@ inline void begin_gather(const MeshIndex& index, Scratch& s, bool extents) {
   s.region_first[n] = total;
   // Only grown: what lies past this frame's regions is never read.
   if (s.triangles.size() < total) s.triangles.resize(total);
+  if (s.sort_buffer.size() < total) s.sort_buffer.resize(total);
   if (s.occluder_boxes.size() < total) s.occluder_boxes.resize(total);
   if (!extents) s.triangle_extents.clear();
   else if (s.triangle_extents.size() < total) s.triangle_extents.resize(total);
-  if (s.sort_buffer.size() < ps.largest) s.sort_buffer.resize(ps.largest);
   s.clipped.clear();
 }
 
 /// Gathers the triangles of occluder q (s.occluders[q]) that can occlude: clearly front-facing,
 /// touching the grid, and with some corner beyond the clipping level (a triangle with a corner short
 /// of it is clipped to its part beyond, into `clipped`, its place there in `s.clip_slot` and the
-/// triangle appended to `clipped_triangles` when given). Writes them at the occluder's region of
-/// `s.triangles` as (sort key as float bits, triangle), sorted by key (ties in the patch's order),
-/// the key being the nearest corner's depth (the farthest corner's for a clipped polygon); their
-/// boxes at the same places of `s.occluder_boxes` (in the order gathered); their extents, in sorted
-/// order, when `s.triangle_extents` is sized; their owner and depth bands. A triangle of a patch that
-/// shares triangles with another goes in once, with the first occluder that keeps it: such patches
-/// must be gathered one after another, in order.
+/// triangle appended to `clipped_triangles` when given). Writes them in the patch's order at the
+/// occluder's region of `s.triangles` as (sort key as float bits, triangle), the key being the
+/// nearest corner's depth (the farthest corner's for a clipped polygon), and their boxes at the same
+/// places of `s.occluder_boxes`; sets their owner. A triangle of a patch that shares triangles with
+/// another goes in once, with the first occluder that keeps it: such patches must be gathered one
+/// after another, in order.
 /// Writes only the slots of the patch's own triangles and region, so occluders whose patches share
 /// no triangle can be gathered on several tasks at once, when the corners are projected first
 /// (project_occluder_corners_on_tasks); `Project`: project each corner here when it is not yet
 /// (project_vertex, the calling thread only). Returns the number kept.
 template <bool Project>
-std::uint32_t gather_patch(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, std::size_t q,
-                           std::vector<ClippedPolygon>& clipped, std::vector<std::uint32_t>* clipped_triangles,
-                           std::pair<std::uint32_t, std::uint32_t>* sort_buffer) {
+std::uint32_t gather_patch(const MeshIndex& index, Scratch& s, std::size_t q, std::vector<ClippedPolygon>& clipped,
+                           std::vector<std::uint32_t>* clipped_triangles) {
   const auto corner = [&](std::uint32_t v) -> const Projected& {
     if (Project) return project_vertex(index, s, v);
     return s.projected[s.vertex_slot[v]];
@@ -359,45 +339,95 @@ std::uint32_t gather_patch(const MeshIndex& index, const MeshOcclusionParams& pa
     s.box_slot[t] = region + kept;
     ++kept;
   }
-  sort_by_key(out, out + kept, sort_buffer);
-  assign_depth_bands(params, out, out + kept, s.triangle_band);
-  if (!s.triangle_extents.empty()) {
-    TriangleExtent* extents = s.triangle_extents.data() + region;
-    for (std::uint32_t i = 0; i < kept; ++i) extents[i] = triangle_extent(s.grid, occluder_box(s, out[i].second));
-  }
   return kept;
 }
 
-/// Joins the occluders' gathered triangles into `s.by_patch` (group q from `s.patch_first[q]`, each
-/// nearest first) with their extents when wanted, and orders the groups by their nearest triangle
-/// (`s.patch_order`).
-inline void finish_gather(Scratch& s) {
+/// Sorts the gathered triangles of the occluders qs[0, count) by key within each occluder, ties in
+/// the order gathered: one stable radix sort over all of them (through `items` and `buffer`), then
+/// each back to its occluder's region in sorted order. Then numbers each occluder's depth bands and
+/// sets its triangles' extents when wanted. Touches only those occluders' regions and triangles.
+inline void order_gathered(const MeshOcclusionParams& params, Scratch& s, const std::uint32_t* qs, std::size_t count,
+                           std::vector<std::pair<std::uint32_t, std::uint32_t>>& items,
+                           std::vector<std::pair<std::uint32_t, std::uint32_t>>& buffer) {
+  items.clear();
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::uint32_t q = qs[i];
+    const auto* region = s.triangles.data() + s.region_first[q];
+    items.insert(items.end(), region, region + s.gathered_count[q]);
+    s.region_cursor[q] = s.region_first[q];
+  }
+  if (buffer.size() < items.size()) buffer.resize(items.size());
+  const auto* sorted = radix_sort(items.data(), items.size(), buffer.data());
+  for (std::size_t i = 0; i < items.size(); ++i) s.triangles[s.region_cursor[s.triangle_owner[sorted[i].second]]++] = sorted[i];
+  const bool extents = !s.triangle_extents.empty();
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::uint32_t q = qs[i], first = s.region_first[q], kept = s.gathered_count[q];
+    const auto* region = s.triangles.data() + first;
+    assign_depth_bands(params, region, region + kept, s.triangle_band);
+    if (extents)
+      for (std::uint32_t k = 0; k < kept; ++k)
+        s.triangle_extents[first + k] = triangle_extent(s.grid, occluder_box(s, region[k].second));
+  }
+}
+
+/// Sets `s.patch_first` from the occluders' gathered counts (group q of `s.by_patch` from
+/// patch_first[q]).
+inline void count_groups(Scratch& s) {
   const std::size_t n = s.occluders.size();
   s.patch_first.resize(n + 1);
   s.patch_first[0] = 0;
   for (std::size_t q = 0; q < n; ++q) s.patch_first[q + 1] = s.patch_first[q] + s.gathered_count[q];
   s.by_patch.resize(s.patch_first[n]);
-  const bool extents = !s.triangle_extents.empty();
+}
+
+/// Orders the groups of `s.by_patch` by their nearest triangle (`s.patch_order`).
+inline void order_groups(Scratch& s) {
   s.patch_order.clear();
-  for (std::size_t q = 0; q < n; ++q) {
+  for (std::size_t q = 0; q < s.occluders.size(); ++q)
+    if (s.gathered_count[q] > 0) s.patch_order.emplace_back(s.by_patch[s.patch_first[q]].first, static_cast<std::uint32_t>(q));
+  radix_sort(s.patch_order, s.patch_sort_buffer);
+}
+
+/// Joins the occluders' gathered and ordered triangles (order_gathered) into `s.by_patch` (group q
+/// from `s.patch_first[q]`, each nearest first) with their extents when wanted, and orders the
+/// groups (`s.patch_order`).
+inline void finish_gather(Scratch& s) {
+  count_groups(s);
+  const bool extents = !s.triangle_extents.empty();
+  for (std::size_t q = 0; q < s.occluders.size(); ++q) {
     const std::uint32_t from = s.region_first[q], to = s.patch_first[q], count = s.gathered_count[q];
-    if (count == 0) continue;
     std::copy(s.triangles.data() + from, s.triangles.data() + from + count, s.by_patch.data() + to);
     // Places only move down (to <= from): forward copying in place is safe.
     if (extents && to != from)
       for (std::uint32_t i = 0; i < count; ++i) s.triangle_extents[to + i] = s.triangle_extents[from + i];
-    s.patch_order.emplace_back(s.by_patch[to].first, static_cast<std::uint32_t>(q));
   }
-  radix_sort(s.patch_order, s.patch_sort_buffer);
+  order_groups(s);
 }
 
 /// Gathers every chosen occluder's triangles on the calling thread (gather_patch), in order,
-/// projecting their corners as it meets them.
+/// projecting their corners as it meets them, each occluder's right after the previous one's; then
+/// sorts them all at once by key (stable) and groups them by occluder into `s.by_patch`, each
+/// group nearest first with its depth bands (and extents when wanted), and orders the groups.
 inline void gather_triangles(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, bool extents) {
   begin_gather(index, s, extents);
-  for (std::size_t q = 0; q < s.occluders.size(); ++q)
-    s.gathered_count[q] = gather_patch<true>(index, params, s, q, s.clipped, nullptr, s.sort_buffer.data());
-  finish_gather(s);
+  const std::size_t n = s.occluders.size();
+  std::uint32_t total = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    s.region_first[q] = total;
+    s.gathered_count[q] = gather_patch<true>(index, s, q, s.clipped, nullptr);
+    total += s.gathered_count[q];
+  }
+  const auto* sorted = radix_sort(s.triangles.data(), total, s.sort_buffer.data());
+  count_groups(s);
+  for (std::size_t q = 0; q < n; ++q) s.region_cursor[q] = s.patch_first[q];
+  for (std::uint32_t i = 0; i < total; ++i) s.by_patch[s.region_cursor[s.triangle_owner[sorted[i].second]]++] = sorted[i];
+  for (std::size_t q = 0; q < n; ++q) {
+    const auto* group = s.by_patch.data() + s.patch_first[q];
+    assign_depth_bands(params, group, group + s.gathered_count[q], s.triangle_band);
+  }
+  if (extents)
+    for (std::uint32_t i = 0; i < total; ++i) s.triangle_extents[i] = triangle_extent(s.grid, occluder_box(s, s.by_patch[i].second));
+  order_groups(s);
 }
 
 /// Inserts a clipped occluder polygon as insert_run does a triangle: its depth and counts as a

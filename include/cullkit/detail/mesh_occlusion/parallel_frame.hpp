@@ -209,31 +209,40 @@ inline constexpr std::size_t gather_batch = 4;
 /// gather_triangles on `tasks` tasks, with the same result: the occluders whose patches share no
 /// triangle with another patch are gathered on the tasks, each into its own region of the frame's
 /// arrays (gather_patch writes nothing else of the frame but the slots of its own triangles), the
-/// polygons of the triangles a task clips into the task's list; then those lists join the frame's,
-/// and the occluders whose patches share triangles (objects that overlap) are gathered on the
-/// calling thread in order, so a triangle goes in with the first occluder that keeps it, as on one
-/// thread. Call after the corners are projected.
+/// polygons of the triangles a task clips into the task's list, and each task then sorts the
+/// occluders it took (order_gathered); those lists join the frame's, and the occluders whose patches
+/// share triangles (objects that overlap) are gathered and sorted on the calling thread in order, so
+/// a triangle goes in with the first occluder that keeps it, as on one thread. Each occluder's
+/// triangles end sorted by key with ties in the patch's order, as one sort of them all leaves them.
+/// Call after the corners are projected.
 inline void gather_triangles_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
                                       unsigned tasks, bool extents) {
   const PatchSet& ps = index.patches;
   begin_gather(index, s, extents);
   const std::size_t n = s.occluders.size();
+  const std::size_t total = s.region_first[n];
   BatchCounter batches(n, gather_batch);
   const unsigned used = batches.tasks_for(tasks);
   if (s.tasks.size() < used) s.tasks.resize(used);
   for (unsigned k = 0; k < used; ++k) {
+    // Room for any share of the frame, however the occluders fall to the tasks.
     TaskScratch& own = s.tasks[k];
     own.clipped.clear();
     own.clipped_triangles.clear();
-    if (own.sort_buffer.size() < ps.largest) own.sort_buffer.resize(ps.largest);
+    own.gathered.clear();
+    own.gathered.reserve(n);
+    own.items.reserve(total);
   }
   run_each_task(params.task_runner, used, [&](std::size_t task) {
     TaskScratch& own = s.tasks[task];
     std::size_t first, last;
     while (batches.claim(first, last))
       for (std::size_t q = first; q < last; ++q)
-        if (!ps.shares_triangles[s.occluders[q].second])
-          s.gathered_count[q] = gather_patch<false>(index, params, s, q, own.clipped, &own.clipped_triangles, own.sort_buffer.data());
+        if (!ps.shares_triangles[s.occluders[q].second]) {
+          s.gathered_count[q] = gather_patch<false>(index, s, q, own.clipped, &own.clipped_triangles);
+          own.gathered.push_back(static_cast<std::uint32_t>(q));
+        }
+    order_gathered(params, s, own.gathered.data(), own.gathered.size(), own.items, own.sort_buffer);
   });
   for (unsigned k = 0; k < used; ++k) {
     const TaskScratch& own = s.tasks[k];
@@ -242,13 +251,20 @@ inline void gather_triangles_on_tasks(const MeshIndex& index, const MeshOcclusio
       s.clipped.push_back(own.clipped[j]);
     }
   }
+  TaskScratch& serial = s.tasks[0];  // the tasks are done: its lists are free
+  serial.gathered.clear();
   for (std::size_t q = 0; q < n; ++q)
-    if (ps.shares_triangles[s.occluders[q].second])
-      s.gathered_count[q] = gather_patch<false>(index, params, s, q, s.clipped, nullptr, s.sort_buffer.data());
+    if (ps.shares_triangles[s.occluders[q].second]) {
+      s.gathered_count[q] = gather_patch<false>(index, s, q, s.clipped, nullptr);
+      serial.gathered.push_back(static_cast<std::uint32_t>(q));
+    }
+  if (!serial.gathered.empty())
+    order_gathered(params, s, serial.gathered.data(), serial.gathered.size(), serial.items, serial.sort_buffer);
   // However the occluders fall to the tasks next time, no task's list outgrows what the frame held.
   for (unsigned k = 0; k < used; ++k) {
     s.tasks[k].clipped.reserve(s.clipped.size());
     s.tasks[k].clipped_triangles.reserve(s.clipped.size());
+    s.tasks[k].sort_buffer.reserve(total);
   }
   finish_gather(s);
 }
