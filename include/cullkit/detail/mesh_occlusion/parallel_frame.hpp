@@ -170,27 +170,15 @@ inline void project_occluder_corners_on_tasks(const MeshIndex& index, const Mesh
                                               unsigned tasks) {
   const PatchSet& ps = index.patches;
   const std::size_t first_slot = s.projected.size();
-  const bool any_parts = !index.parts.whole.empty();
   s.corner_list.clear();
-  const auto add_corners = [&](const std::uint32_t* c) {
-    for (int k = 0; k < 3; ++k) {
-      if (s.vertex_stamp[c[k]] == s.frame) continue;
-      s.vertex_stamp[c[k]] = s.frame;
-      s.vertex_slot[c[k]] = static_cast<std::uint32_t>(first_slot + s.corner_list.size());
-      s.corner_list.push_back(c[k]);
+  for (const auto& occluder : s.occluders)
+    for (std::uint32_t i = ps.vertex_first[occluder.second]; i < ps.vertex_first[occluder.second + 1]; ++i) {
+      const std::uint32_t v = ps.vertices[i];
+      if (s.vertex_stamp[v] == s.frame) continue;
+      s.vertex_stamp[v] = s.frame;
+      s.vertex_slot[v] = static_cast<std::uint32_t>(first_slot + s.corner_list.size());
+      s.corner_list.push_back(v);
     }
-  };
-  for (const auto& occluder : s.occluders) {
-    const Patch& patch = ps.patches[occluder.second];
-    for (std::uint32_t member = patch.first; member < patch.first + patch.count; ++member) {
-      const std::uint32_t t = ps.triangles[member];
-      const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
-      if (c[0] == none) continue;
-      add_corners(c);
-      if (any_parts && index.parts.whole[t] != none)
-        add_corners(&index.parts.whole_corners[3 * std::size_t(index.parts.whole[t])]);
-    }
-  }
   s.projected.resize(first_slot + s.corner_list.size());
   BatchCounter batches(s.corner_list.size(), corner_batch);
   run_each_task(params.task_runner, batches.tasks_for(tasks), [&](std::size_t) {
