@@ -237,16 +237,11 @@ inline void begin_gather(const MeshIndex& index, Scratch& s, bool extents) {
 /// another goes in once, with the first occluder that keeps it: such patches must be gathered one
 /// after another, in order.
 /// Writes only the slots of the patch's own triangles and region, so occluders whose patches share
-/// no triangle can be gathered on several tasks at once, when the corners are projected first
-/// (project_occluder_corners_on_tasks); `Project`: project each corner here when it is not yet
-/// (project_vertex, the calling thread only). Returns the number kept.
-template <bool Project>
-std::uint32_t gather_patch(const MeshIndex& index, Scratch& s, std::size_t q, std::vector<ClippedPolygon>& clipped,
-                           std::vector<std::uint32_t>* clipped_triangles) {
-  const auto corner = [&](std::uint32_t v) -> const Projected& {
-    if (Project) return project_vertex(index, s, v);
-    return s.projected[s.vertex_slot[v]];
-  };
+/// no triangle can be gathered on several tasks at once. The corners must be projected
+/// (project_occluder_corners_on_tasks). Returns the number kept.
+inline std::uint32_t gather_patch(const MeshIndex& index, Scratch& s, std::size_t q, std::vector<ClippedPolygon>& clipped,
+                                  std::vector<std::uint32_t>* clipped_triangles) {
+  const auto corner = [&](std::uint32_t v) -> const Projected& { return s.projected[s.vertex_slot[v]]; };
   const int orient = s.view.orient;
   const double gw = s.grid.width(), gh = s.grid.height();
   const PatchSet& ps = index.patches;
@@ -404,8 +399,8 @@ inline void finish_gather(Scratch& s) {
   order_groups(s);
 }
 
-/// Gathers every chosen occluder's triangles on the calling thread (gather_patch), in order,
-/// projecting their corners as it meets them, each occluder's right after the previous one's; then
+/// Gathers every chosen occluder's triangles on the calling thread (gather_patch), in order, each
+/// occluder's right after the previous one's (the corners projected first); then
 /// sorts them all at once by key (stable) and groups them by occluder into `s.by_patch`, each
 /// group nearest first with its depth bands (and extents when wanted), and orders the groups.
 inline void gather_triangles(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, bool extents) {
@@ -414,7 +409,7 @@ inline void gather_triangles(const MeshIndex& index, const MeshOcclusionParams& 
   std::uint32_t total = 0;
   for (std::size_t q = 0; q < n; ++q) {
     s.region_first[q] = total;
-    s.gathered_count[q] = gather_patch<true>(index, s, q, s.clipped, nullptr);
+    s.gathered_count[q] = gather_patch(index, s, q, s.clipped, nullptr);
     total += s.gathered_count[q];
   }
   const auto* sorted = radix_sort(s.triangles.data(), total, s.sort_buffer.data());

@@ -162,9 +162,11 @@ inline void project_boxes_on_tasks(const MeshIndex& index, const MeshOcclusionPa
 }
 
 /// The corners of the chosen occluders' triangles (and of the whole triangles their cut parts come
-/// from) projected on `tasks` tasks into the frame's cache, so that gathering finds them there: the
-/// slots are given out here, in the order the occluders list them, and each is filled by one task
-/// with what project_vertex would put there (the same view, its final clipping level included).
+/// from, PatchSet::vertices) projected on `tasks` tasks (one: on the calling thread) into the
+/// frame's cache, so that gathering finds them there: the slots are given out here, in the order the
+/// occluders list them, and each is filled by one task with what project_vertex would put there
+/// (the same view, its final clipping level included). Projecting them in one pass, from each
+/// patch's list of its corners, costs less than looking each triangle's three up as it is gathered.
 /// Call after choose_occluders.
 inline void project_occluder_corners_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
                                               unsigned tasks) {
@@ -227,7 +229,7 @@ inline void gather_triangles_on_tasks(const MeshIndex& index, const MeshOcclusio
     while (batches.claim(first, last))
       for (std::size_t q = first; q < last; ++q)
         if (!ps.shares_triangles[s.occluders[q].second]) {
-          s.gathered_count[q] = gather_patch<false>(index, s, q, own.clipped, &own.clipped_triangles);
+          s.gathered_count[q] = gather_patch(index, s, q, own.clipped, &own.clipped_triangles);
           own.gathered.push_back(static_cast<std::uint32_t>(q));
         }
     order_gathered(params, s, own.gathered.data(), own.gathered.size(), own.items, own.sort_buffer);
@@ -243,7 +245,7 @@ inline void gather_triangles_on_tasks(const MeshIndex& index, const MeshOcclusio
   serial.gathered.clear();
   for (std::size_t q = 0; q < n; ++q)
     if (ps.shares_triangles[s.occluders[q].second]) {
-      s.gathered_count[q] = gather_patch<false>(index, s, q, s.clipped, nullptr);
+      s.gathered_count[q] = gather_patch(index, s, q, s.clipped, nullptr);
       serial.gathered.push_back(static_cast<std::uint32_t>(q));
     }
   if (!serial.gathered.empty())

@@ -84,12 +84,9 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
     for (std::size_t i = 0; i < s.in_frustum.size(); ++i) s.boxes[i] = project_box(s.view, index.bounds[s.in_frustum[i]]);
   choose_occluders(index, params, s);
   const bool extents = insertion_strips(params, s.grid.height()) > 1;
-  if (tasks > 1) {
-    project_occluder_corners_on_tasks(index, params, s, tasks);
-    gather_triangles_on_tasks(index, params, s, tasks, extents);
-  } else {
-    gather_triangles(index, params, s, extents);
-  }
+  project_occluder_corners_on_tasks(index, params, s, tasks);
+  if (tasks > 1) gather_triangles_on_tasks(index, params, s, tasks, extents);
+  else gather_triangles(index, params, s, extents);
   stats.occluders_used = s.occluders.size();
   insert_patches(index, params, s);
   if (moving_count > 0) insert_moving(params, moving, moving_count, s, *m);
