@@ -58,6 +58,11 @@ struct TaskScratch {
   std::vector<std::uint32_t> vertex_stamp, patch_stamp;
   std::vector<Projected> projected;
   std::vector<BoxView> patch_boxes;
+  // Gathering occluder triangles (parallel_frame.hpp): the polygons of the triangles this task
+  // clipped and those triangles, the occluders it gathered, and room to sort their triangles.
+  std::vector<ClippedPolygon> clipped;
+  std::vector<std::uint32_t> clipped_triangles, gathered;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> items, sort_buffer;
 };
 
 /// A strip of the grid's rows [first_row, last_row] in the occluder insertion (row_strips.hpp):
@@ -97,15 +102,18 @@ struct Scratch {
   std::vector<BoxView> boxes;             // parallel to in_frustum
   std::vector<std::pair<float, std::uint32_t>> candidates;  // (screen cells, patch)
   std::vector<std::pair<double, std::uint32_t>> occluders;  // (depth key, patch)
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> triangles, sort_buffer;  // (depth bits, triangle)
+  // (depth bits, triangle) of the gathered occluder triangles: occluder q's from region_first[q] on,
+  // gathered_count[q] of them (gather_patch); and room to sort them.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> triangles, sort_buffer;
+  std::vector<std::uint32_t> region_first, gathered_count, region_cursor;
   // Per-frame caches, valid where the stamp equals `frame`.
   const void* owner = nullptr;
   std::uint32_t frame = 0;
   std::vector<std::uint32_t> vertex_stamp, vertex_slot, triangle_stamp, triangle_band, patch_stamp;
   std::vector<std::uint32_t> clip_stamp, clip_slot;  // per triangle: its polygon in `clipped`
   std::vector<ClippedPolygon> clipped;                // this frame's clipped occluder triangles
-  // This frame's gathered occluder triangles' boxes, in the order gathered (patch by patch), and per
-  // triangle its box's position there (valid for the gathered ones).
+  // This frame's gathered occluder triangles' boxes, in the order gathered (at their occluder's
+  // region, as `triangles`), and per triangle its box's position there (valid for the gathered ones).
   std::vector<OccluderBox> occluder_boxes;
   std::vector<std::uint32_t> box_slot;
   std::vector<BoxView> patch_boxes;       // per patch, valid where patch_stamp equals `frame`
@@ -133,13 +141,35 @@ struct Scratch {
   std::vector<std::uint8_t> hidden;
   std::vector<std::uint32_t> corner_list;  // occluder corners given a slot in `projected`, in slot order
   // The occluder insertion strip by strip: the strips, each task's memory, the gathered triangles'
-  // extents (by place in by_patch), and the order the strips are handed out in (biggest first).
+  // extents (by place in by_patch, set when gathered), and the order the strips are handed out in
+  // (biggest first).
   std::vector<Strip> strips;
   std::vector<StripTask> strip_tasks;
   std::vector<TriangleExtent> triangle_extents;
   std::vector<std::uint32_t> strip_order, strip_work;
 };
 
+
+/// Sorts the (key, value) pairs items[0, n) by key, stable: three passes of 11 bits, between
+/// `items` and `buffer` (room for n). Returns where the sorted pairs are (`buffer`).
+inline const std::pair<std::uint32_t, std::uint32_t>* radix_sort(std::pair<std::uint32_t, std::uint32_t>* items, std::size_t n,
+                                                                 std::pair<std::uint32_t, std::uint32_t>* buffer) {
+  std::pair<std::uint32_t, std::uint32_t>*from = items, *to = buffer;
+  for (int pass = 0; pass < 3; ++pass) {
+    const int shift = 11 * pass;
+    std::uint32_t offsets[2048] = {};
+    for (std::size_t i = 0; i < n; ++i) ++offsets[(from[i].first >> shift) & 2047u];
+    std::uint32_t sum = 0;
+    for (std::uint32_t& o : offsets) {
+      const std::uint32_t count = o;
+      o = sum;
+      sum += count;
+    }
+    for (std::size_t i = 0; i < n; ++i) to[offsets[(from[i].first >> shift) & 2047u]++] = from[i];
+    std::swap(from, to);
+  }
+  return from;
+}
 
 /// Sorts (key, value) pairs by key, stable: three passes of 11 bits.
 inline void radix_sort(std::vector<std::pair<std::uint32_t, std::uint32_t>>& items,
@@ -187,7 +217,6 @@ inline void begin_frame(const MeshIndex& index, Scratch& s) {
   }
   s.projected.clear();
   s.clipped.clear();
-  s.occluder_boxes.clear();
 }
 
 inline const Projected& project_vertex(const MeshIndex& index, Scratch& s, std::uint32_t v) {

@@ -83,9 +83,19 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
   const auto beyond_the_rest = [&](const BoxView& b, const Patch& patch, std::size_t i) {
     if (b.usable && b.w_min > depth.without(i)) return true;
     // A curved patch's box may reach far nearer than its surface, up to the eye (a piece of a sky
-    // dome around the scene): its triangles' planes are the tighter bound.
+    // dome around the scene): its triangles' planes are the tighter bound. But a plane through a
+    // point of the box is no farther from the eye than the box's farthest point: a box within the
+    // limit (rounding far inside the margins) needs no look at its triangles.
     const double limit = distance.without(i);
-    return std::isfinite(limit) && patch_farther_than(index, eye, patch, limit);
+    if (!std::isfinite(limit)) return false;
+    double d2 = 0.0;
+    for (int a = 0; a < 3; ++a) {
+      const double reach =
+          std::max(std::fabs(double(patch.box.min[a]) - eye[a]), std::fabs(double(patch.box.max[a]) - eye[a]));
+      d2 += reach * reach;
+    }
+    if (std::sqrt(d2) * (1.0 + 0x1p-40) <= limit) return false;
+    return patch_farther_than(index, eye, patch, limit);
   };
   s.candidates.clear();
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
@@ -162,97 +172,261 @@ inline bool clip_occluder(const MeshIndex& index, const Scratch& s, const std::u
   return true;
 }
 
-/// Projects the occluder patches' triangles and keeps those that can occlude: clearly front-facing,
+/// A gathered occluder triangle's screen box and nearest depth (set up once when it was gathered).
+inline const OccluderBox& occluder_box(const Scratch& s, std::uint32_t t) { return s.occluder_boxes[s.box_slot[t]]; }
+
+/// Numbers the depth bands of the sorted triangles [first, last) of one patch into `triangle_band`
+/// (1, 2, ...): runs whose nearest depth is within `depth_band_ratio` of the run's first.
+inline void assign_depth_bands(const MeshOcclusionParams& params, const std::pair<std::uint32_t, std::uint32_t>* first,
+                               const std::pair<std::uint32_t, std::uint32_t>* last,
+                               std::vector<std::uint32_t>& triangle_band) {
+  const float ratio = 1.0f + std::max(0.0f, params.depth_band_ratio);
+  std::uint32_t band = 0;
+  float band_start = 0.0f;
+  for (const auto* it = first; it != last; ++it) {
+    float key;
+    std::memcpy(&key, &it->first, sizeof key);
+    if (it == first || !(key <= band_start * ratio)) {
+      band_start = key;
+      ++band;
+    }
+    triangle_band[it->second] = band;
+  }
+}
+
+/// A gathered occluder triangle's screen box and nearest depth, and the rows its cells reach with
+/// the margin (row_strips.hpp): its depth, its crossings, its edges' marks and the covered test stay
+/// within them (each takes its margin from coordinates no larger).
+inline TriangleExtent triangle_extent(const CoverageGrid& grid, const OccluderBox& box) {
+  TriangleExtent e{box.xmin, box.ymin, box.xmax, box.ymax, box.wmin, 0, -1};
+  const CellRect r = grid.cells_of(e.x0, e.y0, e.x1, e.y1);
+  if (!r.empty()) {
+    e.row0 = r.y0;
+    e.row1 = r.y1;
+  }
+  return e;
+}
+
+/// Makes room for the chosen occluders' triangles: occluder q's go in at `s.region_first[q]` (as
+/// many places as its patch has triangles), so that each occluder can be gathered on its own, by any
+/// task; `extents`: each kept triangle's extent is wanted too (strips of rows, row_strips.hpp).
+inline void begin_gather(const MeshIndex& index, Scratch& s, bool extents) {
+  const PatchSet& ps = index.patches;
+  const std::size_t n = s.occluders.size();
+  s.region_first.resize(n + 1);
+  s.region_cursor.resize(n);
+  s.gathered_count.assign(n, 0);
+  std::uint32_t total = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    s.region_first[q] = total;
+    total += ps.patches[s.occluders[q].second].count;
+  }
+  s.region_first[n] = total;
+  // Only grown: what lies past this frame's regions is never read.
+  if (s.triangles.size() < total) s.triangles.resize(total);
+  if (s.sort_buffer.size() < total) s.sort_buffer.resize(total);
+  if (s.occluder_boxes.size() < total) s.occluder_boxes.resize(total);
+  if (!extents) s.triangle_extents.clear();
+  else if (s.triangle_extents.size() < total) s.triangle_extents.resize(total);
+  s.clipped.clear();
+}
+
+/// Gathers the triangles of occluder q (s.occluders[q]) that can occlude: clearly front-facing,
 /// touching the grid, and with some corner beyond the clipping level (a triangle with a corner short
-/// of it is clipped to its part beyond). Fills `s.triangles` with (sort key as float bits, triangle),
-/// smallest key first, the key being the nearest corner's depth (the farthest corner's for a clipped
-/// polygon), and `s.clipped` with the clipped ones' polygons.
-inline void gather_triangles(const MeshIndex& index, Scratch& s) {
+/// of it is clipped to its part beyond, into `clipped`, its place there in `s.clip_slot` and the
+/// triangle appended to `clipped_triangles` when given). Writes them in the patch's order at the
+/// occluder's region of `s.triangles` as (sort key as float bits, triangle), the key being the
+/// nearest corner's depth (the farthest corner's for a clipped polygon), and their boxes at the same
+/// places of `s.occluder_boxes`; sets their owner. A triangle of a patch that shares triangles with
+/// another goes in once, with the first occluder that keeps it: such patches must be gathered one
+/// after another, in order.
+/// Writes only the slots of the patch's own triangles and region, so occluders whose patches share
+/// no triangle can be gathered on several tasks at once. The corners must be projected
+/// (project_occluder_corners_on_tasks). Returns the number kept.
+inline std::uint32_t gather_patch(const MeshIndex& index, Scratch& s, std::size_t q, std::vector<ClippedPolygon>& clipped,
+                                  std::vector<std::uint32_t>* clipped_triangles) {
+  const auto corner = [&](std::uint32_t v) -> const Projected& { return s.projected[s.vertex_slot[v]]; };
   const int orient = s.view.orient;
   const double gw = s.grid.width(), gh = s.grid.height();
-  s.triangles.clear();
   const PatchSet& ps = index.patches;
-  for (std::size_t q = 0; q < s.occluders.size(); ++q) {
-    const Patch& patch = ps.patches[s.occluders[q].second];
-    for (std::uint32_t member = patch.first; member < patch.first + patch.count; ++member) {
-      const std::uint32_t t = ps.triangles[member];
-      const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
-      // Objects may overlap: a triangle goes in once.
-      if (c[0] == none || s.triangle_stamp[t] == s.frame) continue;
-      double x[4], y[4], w[4];
-      int n = 3;
-      unsigned inside = 0;
-      for (int k = 0; k < 3; ++k) {
-        const Projected& p = project_vertex(index, s, c[k]);
-        inside |= p.inside ? 1u << k : 0u;
-        x[k] = p.x;
-        y[k] = p.y;
-        w[k] = p.w;
-      }
-      if (inside != 7u) {
-        // Wholly short of the clipping level: nothing of it occludes.
-        if (inside == 0u) continue;
-        ClippedPolygon poly;
-        if (!clip_occluder(index, s, c, inside, poly)) continue;
-        n = poly.n;
-        std::copy(poly.x, poly.x + n, x);
-        std::copy(poly.y, poly.y + n, y);
-        std::copy(poly.w, poly.w + n, w);
-        s.clip_stamp[t] = s.frame;
-        s.clip_slot[t] = static_cast<std::uint32_t>(s.clipped.size());
-        s.clipped.push_back(poly);
-      }
-      double xmin = x[0], xmax = x[0], ymin = y[0], ymax = y[0], wmin = w[0];
-      for (int k = 1; k < n; ++k) {
-        xmin = std::min(xmin, x[k]);
-        xmax = std::max(xmax, x[k]);
-        ymin = std::min(ymin, y[k]);
-        ymax = std::max(ymax, y[k]);
-        wmin = std::min(wmin, w[k]);
-      }
-      if (xmax < 0.0 || xmin > gw || ymax < 0.0 || ymin > gh) continue;
-      // Clearly front-facing: back-facing and edge-on triangles are left out (their neighbours'
-      // edges then stay on the outline, which only covers less). A clipped polygon lies in its
-      // triangle's plane: it faces the eye as the triangle does.
-      double area2 = 0.0;
-      for (int k = 1; k + 1 < n; ++k) area2 += (x[k] - x[0]) * (y[k + 1] - y[0]) - (x[k + 1] - x[0]) * (y[k] - y[0]);
-      const double extent = std::max(xmax - xmin, ymax - ymin);
-      if (!(area2 * orient > 1e-9 * extent * extent)) continue;
-      // A clipped polygon's nearest point is on the clipping line, nearer than anything else, and
-      // mostly off screen (a floor under the eye): sorted by its nearest depth it would freeze every
-      // cell it shares with nearer occluders (a wall standing on the floor) at its own far depth
-      // there. It goes in by its farthest depth instead, after what stands on it.
-      double wmax = w[0];
-      for (int k = 1; k < n; ++k) wmax = std::max(wmax, w[k]);
-      double key_w = inside != 7u ? wmax : wmin;
-      // A part of a cut triangle sorts as the whole, so that the parts share a band and their inner
-      // edges cancel within it: by the whole's nearest corner, or, when the whole reaches the
-      // clipping level (then each part is clipped on its own, at the same points on shared edges),
-      // by the whole's farthest corner, as a clipped polygon goes in.
-      if (!index.parts.whole.empty() && index.parts.whole[t] != none) {
-        const std::uint32_t* whole = &index.parts.whole_corners[3 * std::size_t(index.parts.whole[t])];
-        bool whole_inside = true;
-        double whole_far = -HUGE_VAL;
-        for (int k = 0; k < 3; ++k) {
-          const Projected& p = project_vertex(index, s, whole[k]);
-          whole_inside = whole_inside && p.inside;
-          if (whole_inside) key_w = std::min(key_w, p.w);
-          const glm::vec3& at = index.positions[whole[k]];
-          whole_far = std::max(whole_far, s.view.depth(at.x, at.y, at.z));
-        }
-        if (!whole_inside) key_w = whole_far;
-      }
-      const float key = static_cast<float>(key_w);
-      std::uint32_t bits;
-      std::memcpy(&bits, &key, sizeof bits);  // positive floats order as their bits
-      s.triangles.emplace_back(bits, t);
-      s.triangle_stamp[t] = s.frame;
-      s.triangle_owner[t] = static_cast<std::uint32_t>(q);
-      s.box_slot[t] = static_cast<std::uint32_t>(s.occluder_boxes.size());
-      s.occluder_boxes.push_back(OccluderBox{xmin, ymin, xmax, ymax, wmin});
+  const std::uint32_t patch_id = s.occluders[q].second;
+  const Patch& patch = ps.patches[patch_id];
+  const bool once = ps.shares_triangles[patch_id] != 0;  // objects may overlap: a triangle goes in once
+  const bool any_parts = !index.parts.whole.empty();
+  const std::uint32_t region = s.region_first[q];
+  std::pair<std::uint32_t, std::uint32_t>* out = s.triangles.data() + region;
+  OccluderBox* boxes = s.occluder_boxes.data() + region;
+  const std::uint32_t owner = static_cast<std::uint32_t>(q);
+  std::uint32_t kept = 0;
+  for (std::uint32_t member = patch.first; member < patch.first + patch.count; ++member) {
+    const std::uint32_t t = ps.triangles[member];
+    const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
+    if (c[0] == none || (once && s.triangle_stamp[t] == s.frame)) continue;
+    double x[4], y[4], w[4];
+    int n = 3;
+    unsigned inside = 0;
+    for (int k = 0; k < 3; ++k) {
+      const Projected& p = corner(c[k]);
+      inside |= p.inside ? 1u << k : 0u;
+      x[k] = p.x;
+      y[k] = p.y;
+      w[k] = p.w;
     }
+    if (inside != 7u) {
+      // Wholly short of the clipping level: nothing of it occludes.
+      if (inside == 0u) continue;
+      ClippedPolygon poly;
+      if (!clip_occluder(index, s, c, inside, poly)) continue;
+      n = poly.n;
+      std::copy(poly.x, poly.x + n, x);
+      std::copy(poly.y, poly.y + n, y);
+      std::copy(poly.w, poly.w + n, w);
+      s.clip_stamp[t] = s.frame;
+      s.clip_slot[t] = static_cast<std::uint32_t>(clipped.size());
+      clipped.push_back(poly);
+      if (clipped_triangles) clipped_triangles->push_back(t);
+    }
+    double xmin = x[0], xmax = x[0], ymin = y[0], ymax = y[0], wmin = w[0];
+    for (int k = 1; k < n; ++k) {
+      xmin = std::min(xmin, x[k]);
+      xmax = std::max(xmax, x[k]);
+      ymin = std::min(ymin, y[k]);
+      ymax = std::max(ymax, y[k]);
+      wmin = std::min(wmin, w[k]);
+    }
+    if (xmax < 0.0 || xmin > gw || ymax < 0.0 || ymin > gh) continue;
+    // Clearly front-facing: back-facing and edge-on triangles are left out (their neighbours'
+    // edges then stay on the outline, which only covers less). A clipped polygon lies in its
+    // triangle's plane: it faces the eye as the triangle does.
+    double area2 = 0.0;
+    for (int k = 1; k + 1 < n; ++k) area2 += (x[k] - x[0]) * (y[k + 1] - y[0]) - (x[k + 1] - x[0]) * (y[k] - y[0]);
+    const double extent = std::max(xmax - xmin, ymax - ymin);
+    if (!(area2 * orient > 1e-9 * extent * extent)) continue;
+    // A clipped polygon's nearest point is on the clipping line, nearer than anything else, and
+    // mostly off screen (a floor under the eye): sorted by its nearest depth it would freeze every
+    // cell it shares with nearer occluders (a wall standing on the floor) at its own far depth
+    // there. It goes in by its farthest depth instead, after what stands on it.
+    double key_w = wmin;
+    if (inside != 7u) {
+      key_w = w[0];
+      for (int k = 1; k < n; ++k) key_w = std::max(key_w, w[k]);
+    }
+    // A part of a cut triangle sorts as the whole, so that the parts share a band and their inner
+    // edges cancel within it: by the whole's nearest corner, or, when the whole reaches the
+    // clipping level (then each part is clipped on its own, at the same points on shared edges),
+    // by the whole's farthest corner, as a clipped polygon goes in.
+    if (any_parts && index.parts.whole[t] != none) {
+      const std::uint32_t* whole = &index.parts.whole_corners[3 * std::size_t(index.parts.whole[t])];
+      bool whole_inside = true;
+      double whole_far = -HUGE_VAL;
+      for (int k = 0; k < 3; ++k) {
+        const Projected& p = corner(whole[k]);
+        whole_inside = whole_inside && p.inside;
+        if (whole_inside) key_w = std::min(key_w, p.w);
+        const glm::vec3& at = index.positions[whole[k]];
+        whole_far = std::max(whole_far, s.view.depth(at.x, at.y, at.z));
+      }
+      if (!whole_inside) key_w = whole_far;
+    }
+    const float key = static_cast<float>(key_w);
+    std::uint32_t bits;
+    std::memcpy(&bits, &key, sizeof bits);  // positive floats order as their bits
+    out[kept] = {bits, t};
+    boxes[kept] = OccluderBox{xmin, ymin, xmax, ymax, wmin};
+    if (once) s.triangle_stamp[t] = s.frame;
+    s.triangle_owner[t] = owner;
+    s.box_slot[t] = region + kept;
+    ++kept;
   }
-  radix_sort(s.triangles, s.sort_buffer);
+  return kept;
+}
+
+/// Sorts the gathered triangles of the occluders qs[0, count) by key within each occluder, ties in
+/// the order gathered: one stable radix sort over all of them (through `items` and `buffer`), then
+/// each back to its occluder's region in sorted order. Then numbers each occluder's depth bands and
+/// sets its triangles' extents when wanted. Touches only those occluders' regions and triangles.
+inline void order_gathered(const MeshOcclusionParams& params, Scratch& s, const std::uint32_t* qs, std::size_t count,
+                           std::vector<std::pair<std::uint32_t, std::uint32_t>>& items,
+                           std::vector<std::pair<std::uint32_t, std::uint32_t>>& buffer) {
+  items.clear();
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::uint32_t q = qs[i];
+    const auto* region = s.triangles.data() + s.region_first[q];
+    items.insert(items.end(), region, region + s.gathered_count[q]);
+    s.region_cursor[q] = s.region_first[q];
+  }
+  if (buffer.size() < items.size()) buffer.resize(items.size());
+  const auto* sorted = radix_sort(items.data(), items.size(), buffer.data());
+  for (std::size_t i = 0; i < items.size(); ++i) s.triangles[s.region_cursor[s.triangle_owner[sorted[i].second]]++] = sorted[i];
+  const bool extents = !s.triangle_extents.empty();
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::uint32_t q = qs[i], first = s.region_first[q], kept = s.gathered_count[q];
+    const auto* region = s.triangles.data() + first;
+    assign_depth_bands(params, region, region + kept, s.triangle_band);
+    if (extents)
+      for (std::uint32_t k = 0; k < kept; ++k)
+        s.triangle_extents[first + k] = triangle_extent(s.grid, occluder_box(s, region[k].second));
+  }
+}
+
+/// Sets `s.patch_first` from the occluders' gathered counts (group q of `s.by_patch` from
+/// patch_first[q]).
+inline void count_groups(Scratch& s) {
+  const std::size_t n = s.occluders.size();
+  s.patch_first.resize(n + 1);
+  s.patch_first[0] = 0;
+  for (std::size_t q = 0; q < n; ++q) s.patch_first[q + 1] = s.patch_first[q] + s.gathered_count[q];
+  s.by_patch.resize(s.patch_first[n]);
+}
+
+/// Orders the groups of `s.by_patch` by their nearest triangle (`s.patch_order`).
+inline void order_groups(Scratch& s) {
+  s.patch_order.clear();
+  for (std::size_t q = 0; q < s.occluders.size(); ++q)
+    if (s.gathered_count[q] > 0) s.patch_order.emplace_back(s.by_patch[s.patch_first[q]].first, static_cast<std::uint32_t>(q));
+  radix_sort(s.patch_order, s.patch_sort_buffer);
+}
+
+/// Joins the occluders' gathered and ordered triangles (order_gathered) into `s.by_patch` (group q
+/// from `s.patch_first[q]`, each nearest first) with their extents when wanted, and orders the
+/// groups (`s.patch_order`).
+inline void finish_gather(Scratch& s) {
+  count_groups(s);
+  const bool extents = !s.triangle_extents.empty();
+  for (std::size_t q = 0; q < s.occluders.size(); ++q) {
+    const std::uint32_t from = s.region_first[q], to = s.patch_first[q], count = s.gathered_count[q];
+    std::copy(s.triangles.data() + from, s.triangles.data() + from + count, s.by_patch.data() + to);
+    // Places only move down (to <= from): forward copying in place is safe.
+    if (extents && to != from)
+      for (std::uint32_t i = 0; i < count; ++i) s.triangle_extents[to + i] = s.triangle_extents[from + i];
+  }
+  order_groups(s);
+}
+
+/// Gathers every chosen occluder's triangles on the calling thread (gather_patch), in order, each
+/// occluder's right after the previous one's (the corners projected first); then
+/// sorts them all at once by key (stable) and groups them by occluder into `s.by_patch`, each
+/// group nearest first with its depth bands (and extents when wanted), and orders the groups.
+inline void gather_triangles(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, bool extents) {
+  begin_gather(index, s, extents);
+  const std::size_t n = s.occluders.size();
+  std::uint32_t total = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    s.region_first[q] = total;
+    s.gathered_count[q] = gather_patch(index, s, q, s.clipped, nullptr);
+    total += s.gathered_count[q];
+  }
+  const auto* sorted = radix_sort(s.triangles.data(), total, s.sort_buffer.data());
+  count_groups(s);
+  for (std::size_t q = 0; q < n; ++q) s.region_cursor[q] = s.patch_first[q];
+  for (std::uint32_t i = 0; i < total; ++i) s.by_patch[s.region_cursor[s.triangle_owner[sorted[i].second]]++] = sorted[i];
+  for (std::size_t q = 0; q < n; ++q) {
+    const auto* group = s.by_patch.data() + s.patch_first[q];
+    assign_depth_bands(params, group, group + s.gathered_count[q], s.triangle_band);
+  }
+  if (extents)
+    for (std::uint32_t i = 0; i < total; ++i) s.triangle_extents[i] = triangle_extent(s.grid, occluder_box(s, s.by_patch[i].second));
+  order_groups(s);
 }
 
 /// Inserts a clipped occluder polygon as insert_run does a triangle: its depth and counts as a
@@ -291,9 +465,6 @@ inline void insert_clipped(CoverageGrid& grid, const ClippedPolygon& poly, int o
   }
 }
 
-/// A gathered occluder triangle's screen box and nearest depth (set up once when it was gathered).
-inline const OccluderBox& occluder_box(const Scratch& s, std::uint32_t t) { return s.occluder_boxes[s.box_slot[t]]; }
-
 /// A gathered occluder triangle's projected corners, or its clipped polygon's (up to 4); returns
 /// their number.
 inline int occluder_corners(const MeshIndex& index, const Scratch& s, std::uint32_t t, double* x, double* y, double* w) {
@@ -322,25 +493,6 @@ struct RunMembers {
   std::uint32_t value;
   [[nodiscard]] bool has(std::uint32_t t) const { return stamp[t] == value; }
 };
-
-/// Numbers the depth bands of the sorted triangles [first, last) of one patch into `triangle_band`
-/// (1, 2, ...): runs whose nearest depth is within `depth_band_ratio` of the run's first.
-inline void assign_depth_bands(const MeshOcclusionParams& params, const std::pair<std::uint32_t, std::uint32_t>* first,
-                               const std::pair<std::uint32_t, std::uint32_t>* last,
-                               std::vector<std::uint32_t>& triangle_band) {
-  const float ratio = 1.0f + std::max(0.0f, params.depth_band_ratio);
-  std::uint32_t band = 0;
-  float band_start = 0.0f;
-  for (const auto* it = first; it != last; ++it) {
-    float key;
-    std::memcpy(&key, &it->first, sizeof key);
-    if (it == first || !(key <= band_start * ratio)) {
-      band_start = key;
-      ++band;
-    }
-    triangle_band[it->second] = band;
-  }
-}
 
 /// Inserts the sorted triangles [first, last) (each a member of `members`, depth bands numbered by
 /// assign_depth_bands) into `grid` nearest first, in bands of similar depth, so a cell freezes at

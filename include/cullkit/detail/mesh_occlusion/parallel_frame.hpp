@@ -24,6 +24,7 @@
 #include "frame.hpp"
 #include "index.hpp"
 #include "object_tests.hpp"
+#include "occluders.hpp"
 
 namespace cullkit {
 namespace detail {
@@ -160,29 +161,26 @@ inline void project_boxes_on_tasks(const MeshIndex& index, const MeshOcclusionPa
   });
 }
 
-/// The corners of the chosen occluders' triangles projected on `tasks` tasks into the frame's
-/// cache, so that gather_triangles (on the calling thread) finds them there: the slots are given
-/// out here, in the order the occluders list them, and each is filled by one task with what
-/// project_vertex would put there (the same view, its final clipping level included). Call after
-/// choose_occluders.
+/// The corners of the chosen occluders' triangles (and of the whole triangles their cut parts come
+/// from, PatchSet::vertices) projected on `tasks` tasks (one: on the calling thread) into the
+/// frame's cache, so that gathering finds them there: the slots are given out here, in the order the
+/// occluders list them, and each is filled by one task with what project_vertex would put there
+/// (the same view, its final clipping level included). Projecting them in one pass, from each
+/// patch's list of its corners, costs less than looking each triangle's three up as it is gathered.
+/// Call after choose_occluders.
 inline void project_occluder_corners_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
                                               unsigned tasks) {
   const PatchSet& ps = index.patches;
   const std::size_t first_slot = s.projected.size();
   s.corner_list.clear();
-  for (const auto& occluder : s.occluders) {
-    const Patch& patch = ps.patches[occluder.second];
-    for (std::uint32_t member = patch.first; member < patch.first + patch.count; ++member) {
-      const std::uint32_t* c = &index.corners[3 * std::size_t(ps.triangles[member])];
-      if (c[0] == none) continue;
-      for (int k = 0; k < 3; ++k) {
-        if (s.vertex_stamp[c[k]] == s.frame) continue;
-        s.vertex_stamp[c[k]] = s.frame;
-        s.vertex_slot[c[k]] = static_cast<std::uint32_t>(first_slot + s.corner_list.size());
-        s.corner_list.push_back(c[k]);
-      }
+  for (const auto& occluder : s.occluders)
+    for (std::uint32_t i = ps.vertex_first[occluder.second]; i < ps.vertex_first[occluder.second + 1]; ++i) {
+      const std::uint32_t v = ps.vertices[i];
+      if (s.vertex_stamp[v] == s.frame) continue;
+      s.vertex_stamp[v] = s.frame;
+      s.vertex_slot[v] = static_cast<std::uint32_t>(first_slot + s.corner_list.size());
+      s.corner_list.push_back(v);
     }
-  }
   s.projected.resize(first_slot + s.corner_list.size());
   BatchCounter batches(s.corner_list.size(), corner_batch);
   run_each_task(params.task_runner, batches.tasks_for(tasks), [&](std::size_t) {
@@ -193,6 +191,72 @@ inline void project_occluder_corners_on_tasks(const MeshIndex& index, const Mesh
         s.projected[first_slot + j] = s.view.project(p.x, p.y, p.z);
       }
   });
+}
+
+/// Occluders per batch that a task gathers at a time (patches of up to a few hundred triangles).
+inline constexpr std::size_t gather_batch = 4;
+
+/// gather_triangles on `tasks` tasks, with the same result: the occluders whose patches share no
+/// triangle with another patch are gathered on the tasks, each into its own region of the frame's
+/// arrays (gather_patch writes nothing else of the frame but the slots of its own triangles), the
+/// polygons of the triangles a task clips into the task's list, and each task then sorts the
+/// occluders it took (order_gathered); those lists join the frame's, and the occluders whose patches
+/// share triangles (objects that overlap) are gathered and sorted on the calling thread in order, so
+/// a triangle goes in with the first occluder that keeps it, as on one thread. Each occluder's
+/// triangles end sorted by key with ties in the patch's order, as one sort of them all leaves them.
+/// Call after the corners are projected.
+inline void gather_triangles_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
+                                      unsigned tasks, bool extents) {
+  const PatchSet& ps = index.patches;
+  begin_gather(index, s, extents);
+  const std::size_t n = s.occluders.size();
+  const std::size_t total = s.region_first[n];
+  BatchCounter batches(n, gather_batch);
+  const unsigned used = batches.tasks_for(tasks);
+  if (s.tasks.size() < used) s.tasks.resize(used);
+  for (unsigned k = 0; k < used; ++k) {
+    // Room for any share of the frame, however the occluders fall to the tasks.
+    TaskScratch& own = s.tasks[k];
+    own.clipped.clear();
+    own.clipped_triangles.clear();
+    own.gathered.clear();
+    own.gathered.reserve(n);
+    own.items.reserve(total);
+  }
+  run_each_task(params.task_runner, used, [&](std::size_t task) {
+    TaskScratch& own = s.tasks[task];
+    std::size_t first, last;
+    while (batches.claim(first, last))
+      for (std::size_t q = first; q < last; ++q)
+        if (!ps.shares_triangles[s.occluders[q].second]) {
+          s.gathered_count[q] = gather_patch(index, s, q, own.clipped, &own.clipped_triangles);
+          own.gathered.push_back(static_cast<std::uint32_t>(q));
+        }
+    order_gathered(params, s, own.gathered.data(), own.gathered.size(), own.items, own.sort_buffer);
+  });
+  for (unsigned k = 0; k < used; ++k) {
+    const TaskScratch& own = s.tasks[k];
+    for (std::size_t j = 0; j < own.clipped.size(); ++j) {
+      s.clip_slot[own.clipped_triangles[j]] = static_cast<std::uint32_t>(s.clipped.size());
+      s.clipped.push_back(own.clipped[j]);
+    }
+  }
+  TaskScratch& serial = s.tasks[0];  // the tasks are done: its lists are free
+  serial.gathered.clear();
+  for (std::size_t q = 0; q < n; ++q)
+    if (ps.shares_triangles[s.occluders[q].second]) {
+      s.gathered_count[q] = gather_patch(index, s, q, s.clipped, nullptr);
+      serial.gathered.push_back(static_cast<std::uint32_t>(q));
+    }
+  if (!serial.gathered.empty())
+    order_gathered(params, s, serial.gathered.data(), serial.gathered.size(), serial.items, serial.sort_buffer);
+  // However the occluders fall to the tasks next time, no task's list outgrows what the frame held.
+  for (unsigned k = 0; k < used; ++k) {
+    s.tasks[k].clipped.reserve(s.clipped.size());
+    s.tasks[k].clipped_triangles.reserve(s.clipped.size());
+    s.tasks[k].sort_buffer.reserve(total);
+  }
+  finish_gather(s);
 }
 
 /// The object tests against the finished frame on `tasks` tasks: appends the objects not hidden

@@ -10,6 +10,7 @@
 // two inserted triangles, whichever patch they came from.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -41,6 +42,14 @@ struct PatchSet {
   std::vector<Patch> patches;
   std::vector<std::uint32_t> triangles;     // grouped by patch
   std::vector<std::uint32_t> object_first;  // object_count + 1 entries
+  // Per patch, 1 when one of its triangles is also in another patch (objects that overlap): only
+  // such patches need a frame's check that a triangle goes in once.
+  std::vector<std::uint8_t> shares_triangles;
+  std::uint32_t largest = 0;  // the most triangles of any patch
+  // The welded corners of patch p's triangles, and of the whole triangles its cut parts come from,
+  // each once: vertices[vertex_first[p], vertex_first[p + 1]). A frame projects its occluders' corners
+  // from these lists.
+  std::vector<std::uint32_t> vertex_first, vertices;
 };
 
 /// Cuts the objects into patches. `corners` (3 per triangle, none for triangles that cannot occlude)
@@ -110,6 +119,35 @@ inline void build_patches(PatchSet& set, const std::vector<glm::vec3>& positions
     }
   }
   set.object_first[objects.size()] = static_cast<std::uint32_t>(set.patches.size());
+  // Triangles in several patches, and the patches holding one.
+  std::vector<std::uint8_t> patch_count(corners.size() / 3, 0);
+  for (const std::uint32_t t : set.triangles)
+    if (patch_count[t] < 2) ++patch_count[t];
+  set.shares_triangles.assign(set.patches.size(), 0);
+  set.largest = 0;
+  set.vertex_first.assign(set.patches.size() + 1, 0);
+  set.vertices.clear();
+  std::vector<std::uint32_t> vertex_patch(positions.size(), none);
+  const auto add_corners = [&](const std::uint32_t* c, std::uint32_t p) {
+    for (int k = 0; k < 3; ++k)
+      if (vertex_patch[c[k]] != p) {
+        vertex_patch[c[k]] = p;
+        set.vertices.push_back(c[k]);
+      }
+  };
+  for (std::size_t p = 0; p < set.patches.size(); ++p) {
+    const Patch& patch = set.patches[p];
+    set.largest = std::max(set.largest, patch.count);
+    const auto id = static_cast<std::uint32_t>(p);
+    for (std::uint32_t k = patch.first; k < patch.first + patch.count; ++k) {
+      const std::uint32_t t = set.triangles[k];
+      if (patch_count[t] > 1) set.shares_triangles[p] = 1;
+      add_corners(&corners[3 * std::size_t(t)], id);
+      if (!parts.whole.empty() && parts.whole[t] != none)
+        add_corners(&parts.whole_corners[3 * std::size_t(parts.whole[t])], id);
+    }
+    set.vertex_first[p + 1] = static_cast<std::uint32_t>(set.vertices.size());
+  }
 }
 
 /// True when object o's usable triangles are exactly a closed, outward-wound surface on the faces of

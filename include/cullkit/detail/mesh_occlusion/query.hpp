@@ -1,8 +1,9 @@
 // cullkit/detail/mesh_occlusion/query.hpp: one frame of MeshOcclusionCuller::cull, as named steps:
 // frustum walk, object boxes on screen, occluder choice (occluders.hpp), the occluder patches into
 // the coverage grid strip by strip of its rows (row_strips.hpp), moving occluders into the same grid
-// (moving.hpp), object tests (object_tests.hpp). The boxes, the corners, the strips and the object
-// tests run on several tasks when the parameters ask for threads (parallel_frame.hpp). The steps are compiled only where the frame's definition is
+// (moving.hpp), object tests (object_tests.hpp). The boxes, the corners, the gathering of the
+// occluder triangles, the strips and the object tests run on several tasks when the parameters ask
+// for threads (parallel_frame.hpp). The steps are compiled only where the frame's definition is
 // (CULLKIT_SEPARATE_CORE, config.hpp).
 #pragma once
 
@@ -82,8 +83,10 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
   else
     for (std::size_t i = 0; i < s.in_frustum.size(); ++i) s.boxes[i] = project_box(s.view, index.bounds[s.in_frustum[i]]);
   choose_occluders(index, params, s);
-  if (tasks > 1) project_occluder_corners_on_tasks(index, params, s, tasks);
-  gather_triangles(index, s);
+  const bool extents = insertion_strips(params, s.grid.height()) > 1;
+  project_occluder_corners_on_tasks(index, params, s, tasks);
+  if (tasks > 1) gather_triangles_on_tasks(index, params, s, tasks, extents);
+  else gather_triangles(index, params, s, extents);
   stats.occluders_used = s.occluders.size();
   insert_patches(index, params, s);
   if (moving_count > 0) insert_moving(params, moving, moving_count, s, *m);

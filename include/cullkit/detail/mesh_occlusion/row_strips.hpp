@@ -47,43 +47,10 @@ inline int strip_of_row(int j, int height, int strips) {
   return static_cast<int>((static_cast<long long>(j + 1) * strips - 1) / height);
 }
 
-/// Gathered triangles per batch of the extents' pass.
-inline constexpr std::size_t extent_batch = 512;
-
-/// Groups the gathered triangles by patch (`s.by_patch`, each group nearest first, group q from
-/// `s.patch_first[q]`), orders the groups by their nearest triangle (`s.patch_order`) and numbers
-/// each group's depth bands.
-inline void group_by_patch(const MeshOcclusionParams& params, Scratch& s) {
-  const std::size_t n = s.occluders.size();
-  s.patch_first.assign(n + 1, 0);
-  for (const auto& tr : s.triangles) ++s.patch_first[s.triangle_owner[tr.second] + 1];
-  for (std::size_t q = 0; q < n; ++q) s.patch_first[q + 1] += s.patch_first[q];
-  s.by_patch.resize(s.triangles.size());
-  for (const auto& tr : s.triangles) s.by_patch[s.patch_first[s.triangle_owner[tr.second]]++] = tr;
-  for (std::size_t q = n; q > 0; --q) s.patch_first[q] = s.patch_first[q - 1];
-  s.patch_first[0] = 0;
-  s.patch_order.clear();
-  for (std::size_t q = 0; q < n; ++q) {
-    const std::uint32_t b = s.patch_first[q], e = s.patch_first[q + 1];
-    if (b == e) continue;
-    s.patch_order.emplace_back(s.by_patch[b].first, static_cast<std::uint32_t>(q));
-    assign_depth_bands(params, s.by_patch.data() + b, s.by_patch.data() + e, s.triangle_band);
-  }
-  radix_sort(s.patch_order, s.patch_sort_buffer);
-}
-
-/// The extent of the gathered triangle at place i of `s.by_patch`.
-inline TriangleExtent triangle_extent(const Scratch& s, std::size_t i) {
-  const OccluderBox& box = occluder_box(s, s.by_patch[i].second);
-  TriangleExtent e{box.xmin, box.ymin, box.xmax, box.ymax, box.wmin, 0, -1};
-  // The rows of the triangle's cells, with the margin: its depth, its crossings, its edges' marks
-  // and the covered test stay within them (each takes its margin from coordinates no larger).
-  const CellRect r = s.grid.cells_of(e.x0, e.y0, e.x1, e.y1);
-  if (!r.empty()) {
-    e.row0 = r.y0;
-    e.row1 = r.y1;
-  }
-  return e;
+/// Strips of rows the occluder insertion cuts the grid into: one on one thread (the same answer
+/// either way).
+inline int insertion_strips(const MeshOcclusionParams& params, int height) {
+  return params.threads == 1 ? 1 : strip_count(height);
 }
 
 /// Makes a task's memory fit `index`, a grid of width x height and patches of up to `largest`
@@ -202,16 +169,14 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
 /// the union's, the cell takes it (`patch_layers`). A wall standing on a floor that went in before
 /// it leaves its own depth, not the floor's, in front of what is behind it.
 inline void insert_patches(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
-  if (s.triangles.empty()) return;
+  if (s.by_patch.empty()) return;
   const int width = s.grid.width(), height = s.grid.height();
-  const int strips = params.threads == 1 ? 1 : strip_count(height);  // the same answer either way
+  const int strips = insertion_strips(params, height);
   const unsigned tasks = params.threads == 1 ? 1u : resolve_threads(params.threads, static_cast<std::size_t>(strips));
-  group_by_patch(params, s);
   const std::size_t n = s.by_patch.size();
   std::size_t largest = 0;
   for (const auto& entry : s.patch_order)
     largest = std::max<std::size_t>(largest, s.patch_first[entry.second + 1] - s.patch_first[entry.second]);
-  s.triangle_extents.resize(strips > 1 ? n : 0);
   if (s.strips.size() < static_cast<std::size_t>(strips)) s.strips.resize(static_cast<std::size_t>(strips));
   for (int k = 0; k < strips; ++k) {
     Strip& strip = s.strips[static_cast<std::size_t>(k)];
@@ -220,22 +185,15 @@ inline void insert_patches(const MeshIndex& index, const MeshOcclusionParams& pa
     if (strips > 1) strip.inserted.assign(n, 0);
   }
   if (strips == 1) {
-    s.triangle_extents.clear();  // the whole grid takes every triangle (insert_strip)
     if (s.strip_tasks.empty()) s.strip_tasks.resize(1);
     begin_strip_task(index, s.strip_tasks[0], width, height, largest, false);
     insert_strip(index, params, s, s.strips[0], s.strip_tasks[0], s.grid);
   } else {
-    BatchCounter extents(n, extent_batch);
-    run_each_task(params.task_runner, extents.tasks_for(tasks), [&](std::size_t) {
-      std::size_t first, last;
-      while (extents.claim(first, last))
-        for (std::size_t i = first; i < last; ++i) s.triangle_extents[i] = triangle_extent(s, i);
-    });
     // The strips that most triangles reach are handed out first, so the last ones are short: the
     // order only decides which task takes a strip, never what the strip becomes.
     s.strip_work.assign(static_cast<std::size_t>(strips), 0);
-    for (const TriangleExtent& e : s.triangle_extents)
-      if (e.row0 <= e.row1)
+    for (std::size_t i = 0; i < n; ++i)
+      if (const TriangleExtent& e = s.triangle_extents[i]; e.row0 <= e.row1)
         for (int k = strip_of_row(e.row0, height, strips); k <= strip_of_row(e.row1, height, strips); ++k)
           ++s.strip_work[static_cast<std::size_t>(k)];
     s.strip_order.resize(static_cast<std::size_t>(strips));
