@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <array>
 #include <atomic>
 #include <vector>
@@ -361,7 +362,9 @@ inline std::vector<std::uint32_t> canonical_vertices(const IndexData& data, cons
     p = sum;
     sum += c;
   }
-  std::vector<BucketVertex> list(count);
+  // Every entry is written below: left uninitialized (zeroing it first took a tenth of the merge
+  // on a 3.3M-vertex forest).
+  const std::unique_ptr<BucketVertex[]> list(new BucketVertex[count]);
   for_blocks(data, count, block, [&](std::size_t b, std::size_t e) {
     std::vector<std::size_t> at(buckets);
     for (std::size_t k = 0; k < buckets; ++k) at[k] = place[k * blocks + b / block];
@@ -376,7 +379,7 @@ inline std::vector<std::uint32_t> canonical_vertices(const IndexData& data, cons
     std::vector<std::uint64_t> table;
     for (std::size_t k = b; k < e; ++k) {
       const std::size_t first = place[k * blocks], last = place[(k + 1) * blocks];
-      own += merge_bucket(list.data() + first, last - first, table, canon.data());
+      own += merge_bucket(list.get() + first, last - first, table, canon.data());
     }
   });
   distinct = own.load();
@@ -433,8 +436,15 @@ inline void renumber(IndexData& data, const std::vector<std::uint16_t>& class_of
       // Each triangle's own corners: independent, so on the build's threads (a vertex and its
       // canonical one hold bitwise the same position).
       vertices.resize(3 * n);
+      // The reads are scattered over the mesh: each triangle's ids are fetched 16 triangles
+      // ahead, its corners and mesh number 8 ahead, so the misses overlap.
       for_blocks(data, n, std::size_t{1} << 16, [&](std::size_t b, std::size_t e) {
         for (std::size_t k = b; k < e; ++k) {
+          if (k + 16 < e) detail::prefetch(&data.tri_vertices[3 * std::size_t{order[k + 16]}]);
+          if (k + 8 < e) {
+            detail::prefetch(&data.vertices[data.tri_vertices[3 * std::size_t{order[k + 8]}]]);
+            detail::prefetch(&data.tri_original[order[k + 8]]);
+          }
           const std::uint32_t old = order[k];
           tri_original[k] = data.tri_original[old];
           for (std::size_t j = 0; j < 3; ++j) vertices[3 * k + j] = data.vertices[data.tri_vertices[3 * old + j]];
@@ -598,6 +608,10 @@ inline void make_frame_hierarchy(IndexData& data) {
     data.tri_slot.assign(n, 0u);
     for_blocks(data, n, std::size_t{1} << 16, [&](std::size_t b, std::size_t e) {
       for (std::size_t p = b; p < e; ++p) {
+        if (p + 8 < e) {  // scattered reads and writes: fetched ahead so the misses overlap
+          detail::prefetch(&data.vertices[3 * std::size_t{data.bvh.tris[p + 8]}]);
+          detail::prefetch(&data.tri_slot[data.bvh.tris[p + 8]]);
+        }
         const std::uint32_t tri = data.bvh.tris[p];
         data.tri_slot[tri] = static_cast<std::uint32_t>(p);
         for (std::size_t k = 0; k < 3; ++k) vertices[3 * p + k] = data.vertices[3 * std::size_t{tri} + k];
