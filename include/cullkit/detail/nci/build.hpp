@@ -91,7 +91,9 @@ inline void build_class(const IndexData& data, const std::uint32_t* tris, const 
   // Pairs in (cell, place, triangle) order. When the grid has not many more cells than there are
   // pairs, by cell through a count per cell, then each cell's run by place and triangle: the same
   // order as one comparison sort of every pair, at a fraction of its cost on large classes.
-  const auto by_place = [](const Pair& a, const Pair& b) { return a.place != b.place ? a.place < b.place : a.tri < b.tri; };
+  const auto by_place = [](const Pair& a, const Pair& b) {
+    return a.place != b.place ? a.place < b.place : a.tri < b.tri;
+  };
   const std::uint64_t grid_cells = static_cast<std::uint64_t>(data.dims[0]) * ny * nz;
   if (grid_cells <= 4 * std::uint64_t{pairs.size()} + 1024) {
     std::vector<std::uint32_t> first(static_cast<std::size_t>(grid_cells) + 1, 0u);
@@ -102,10 +104,12 @@ inline void build_class(const IndexData& data, const std::uint32_t* tris, const 
     pairs.swap(by_cell);
     for (std::size_t b = 0, e = 0; b < pairs.size(); b = e) {
       for (e = b + 1; e < pairs.size() && pairs[e].key == pairs[b].key;) ++e;
-      if (e - b > 1) std::sort(pairs.begin() + static_cast<std::ptrdiff_t>(b), pairs.begin() + static_cast<std::ptrdiff_t>(e), by_place);
+      if (e - b > 1)
+        std::sort(pairs.begin() + static_cast<std::ptrdiff_t>(b), pairs.begin() + static_cast<std::ptrdiff_t>(e), by_place);
     }
   } else {
-    std::sort(pairs.begin(), pairs.end(), [&](const Pair& a, const Pair& b) { return a.key != b.key ? a.key < b.key : by_place(a, b); });
+    std::sort(pairs.begin(), pairs.end(),
+              [&](const Pair& a, const Pair& b) { return a.key != b.key ? a.key < b.key : by_place(a, b); });
   }
   // Cells in (x, y, z) order.
   std::vector<std::uint64_t> cell_key;

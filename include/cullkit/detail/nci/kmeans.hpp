@@ -181,7 +181,8 @@ inline void cluster_normals(const std::vector<glm::vec3>& normals, int k, std::u
   std::vector<glm::dvec3> sum(static_cast<std::size_t>(k));
   std::vector<std::uint32_t> count(static_cast<std::size_t>(k));
   std::vector<std::uint32_t> sample_bin(sample.size());  // a normal's bin does not depend on the centres
-  for (std::size_t i = 0; i < sample.size(); ++i) sample_bin[i] = static_cast<std::uint32_t>(NormalLookup::bin_of(sample[i]));
+  for (std::size_t i = 0; i < sample.size(); ++i)
+    sample_bin[i] = static_cast<std::uint32_t>(NormalLookup::bin_of(sample[i]));
   for (int iter = 0; iter < 12; ++iter) {
     lookup.build(centers);
     std::fill(sum.begin(), sum.end(), glm::dvec3(0.0));

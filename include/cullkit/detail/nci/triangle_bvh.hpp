@@ -456,8 +456,8 @@ class TriangleBvhBuilder {
     const float c0 = r.cl[a];
 #if CULLKIT_HAS_SSE2
     const __m128 keep3 = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
-    const __m128 inf4 = _mm_set1_ps(std::numeric_limits<float>::infinity()), minus_inf4 = _mm_set1_ps(-std::numeric_limits<float>::infinity());
-    __m128 lcl4 = inf4, rcl4 = inf4, lch4 = minus_inf4, rch4 = minus_inf4;
+    __m128 lcl4 = _mm_set1_ps(std::numeric_limits<float>::infinity()), rcl4 = lcl4;
+    __m128 lch4 = _mm_set1_ps(-std::numeric_limits<float>::infinity()), rch4 = lch4;
     // The bin of lane a as fill_bins computes it (the other lanes' scale is 0); a bin below
     // `plane` is a clamped bin below it, as plane lies in [1, bins - 1].
     alignas(16) float c0_lanes[4] = {0, 0, 0, 0}, scale_lanes[4] = {0, 0, 0, 0};
