@@ -32,7 +32,9 @@
 // (the 10.1M-triangle forest; "foliageN": N trees per side) or a real scene's file name); prints the
 // tested count, the call's NciSelectStats (triangles met and those with no pixel centre) and the mean
 // wall and processor time per frame (the first frame included; on a loaded machine the processor
-// time moves far less between runs) and the index's build time (wall); env CULLKIT_NCI_GRID /
+// time moves far less between runs) and the index's build time (wall, and processor time over all
+// build threads; with env CULLKIT_NCI_EMBREE_BUILD=1 also Embree's build of the mesh, medium quality,
+// on the same threads, wall); env CULLKIT_NCI_GRID /
 // CULLKIT_NCI_TILE / CULLKIT_NCI_BUILD_THREADS set NciParams::grid / tile_size / build_threads
 // (default 1).
 // Env CULLKIT_NCI_PATH = walk | rays | auto sets NciParams::crowded_path for --profile, and for --hash
@@ -474,8 +476,15 @@ int profile(const std::string& name, int view, int frames) {
   if (const char* b = std::getenv("CULLKIT_NCI_BUILD_THREADS")) p.build_threads = static_cast<unsigned>(std::atoi(b));
   path_from_env(p);
   const auto b0 = std::chrono::steady_clock::now();
+  const std::clock_t bc0 = std::clock();
   const NormalClassIndex<glm::vec3> index(s->mesh(), p);
   const double build_ms = seconds_since(b0) * 1e3;
+  const double build_cpu_ms = double(std::clock() - bc0) * 1e3 / CLOCKS_PER_SEC;  // all build threads'
+  double embree_ms = 0;
+  if (std::getenv("CULLKIT_NCI_EMBREE_BUILD")) {  // Embree's build of the same mesh on the same threads, after it
+    const Embree embree(*s, std::max(1u, p.build_threads));
+    embree_ms = embree.build_seconds * 1e3;
+  }
   const auto cams = views(*s, 640, 480, name.rfind("foliage", 0) == 0);
   NciContext ctx;
   VisibleSet out;
@@ -488,10 +497,12 @@ int profile(const std::string& name, int view, int frames) {
   const double cpu_ms = frames > 0 ? double(std::clock() - c0) * 1e3 / CLOCKS_PER_SEC / frames : 0.0;
   const NciSelectStats& st = ctx.stats;
   std::printf("profile,%s,view%d,grid=%d,frames=%d,ms_per_frame=%.2f,cpu_ms_per_frame=%.2f,selected=%zu,tested=%zu,ray_tests=%zu,cells=%zu,"
-              "triangles_met=%zu,triangles_no_pixel=%zu,cells_walked=%zu,tiles_ray_cast=%zu,bytes_per_triangle=%.1f,build_ms=%.0f\n",
+              "triangles_met=%zu,triangles_no_pixel=%zu,cells_walked=%zu,tiles_ray_cast=%zu,bytes_per_triangle=%.1f,build_ms=%.1f,"
+              "build_cpu_ms=%.1f,embree_build_ms=%.1f\n",
               name.c_str(), view, index.params().grid, frames, ms, cpu_ms, out.triangles.size(), out.triangles_tested,
               st.ray_tests, st.cells_visited, st.triangles_met, st.triangles_no_pixel, st.cells_walked, st.tiles_ray_cast,
-              double(index.memory_bytes()) / double(std::max<std::size_t>(1, s->triangle_count())), build_ms);
+              double(index.memory_bytes()) / double(std::max<std::size_t>(1, s->triangle_count())), build_ms, build_cpu_ms,
+              embree_ms);
   return 0;
 }
 

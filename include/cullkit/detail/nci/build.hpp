@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <array>
 #include <atomic>
 #include <vector>
@@ -87,11 +88,29 @@ inline void build_class(const IndexData& data, const std::uint32_t* tris, const 
       }
     }
   }
-  std::sort(pairs.begin(), pairs.end(),
-            [](const Pair& a, const Pair& b) {
-              if (a.key != b.key) return a.key < b.key;
-              return a.place != b.place ? a.place < b.place : a.tri < b.tri;
-            });
+  // Pairs in (cell, place, triangle) order. When the grid has not many more cells than there are
+  // pairs, by cell through a count per cell, then each cell's run by place and triangle: the same
+  // order as one comparison sort of every pair, at a fraction of its cost on large classes.
+  const auto by_place = [](const Pair& a, const Pair& b) {
+    return a.place != b.place ? a.place < b.place : a.tri < b.tri;
+  };
+  const std::uint64_t grid_cells = static_cast<std::uint64_t>(data.dims[0]) * ny * nz;
+  if (grid_cells <= 4 * std::uint64_t{pairs.size()} + 1024) {
+    std::vector<std::uint32_t> first(static_cast<std::size_t>(grid_cells) + 1, 0u);
+    for (const Pair& q : pairs) ++first[static_cast<std::size_t>(q.key) + 1];
+    for (std::size_t k = 1; k < first.size(); ++k) first[k] += first[k - 1];
+    std::vector<Pair> by_cell(pairs.size());
+    for (const Pair& q : pairs) by_cell[first[static_cast<std::size_t>(q.key)]++] = q;
+    pairs.swap(by_cell);
+    for (std::size_t b = 0, e = 0; b < pairs.size(); b = e) {
+      for (e = b + 1; e < pairs.size() && pairs[e].key == pairs[b].key;) ++e;
+      if (e - b > 1)
+        std::sort(pairs.begin() + static_cast<std::ptrdiff_t>(b), pairs.begin() + static_cast<std::ptrdiff_t>(e), by_place);
+    }
+  } else {
+    std::sort(pairs.begin(), pairs.end(),
+              [&](const Pair& a, const Pair& b) { return a.key != b.key ? a.key < b.key : by_place(a, b); });
+  }
   // Cells in (x, y, z) order.
   std::vector<std::uint64_t> cell_key;
   for (std::size_t i = 0; i < pairs.size(); ++i) {
@@ -347,7 +366,9 @@ inline std::vector<std::uint32_t> canonical_vertices(const IndexData& data, cons
     p = sum;
     sum += c;
   }
-  std::vector<BucketVertex> list(count);
+  // Every entry is written below: left uninitialized (zeroing it first took a tenth of the merge
+  // on a 3.3M-vertex forest).
+  const std::unique_ptr<BucketVertex[]> list(new BucketVertex[count]);
   for_blocks(data, count, block, [&](std::size_t b, std::size_t e) {
     std::vector<std::size_t> at(buckets);
     for (std::size_t k = 0; k < buckets; ++k) at[k] = place[k * blocks + b / block];
@@ -362,7 +383,7 @@ inline std::vector<std::uint32_t> canonical_vertices(const IndexData& data, cons
     std::vector<std::uint64_t> table;
     for (std::size_t k = b; k < e; ++k) {
       const std::size_t first = place[k * blocks], last = place[(k + 1) * blocks];
-      own += merge_bucket(list.data() + first, last - first, table, canon.data());
+      own += merge_bucket(list.get() + first, last - first, table, canon.data());
     }
   });
   distinct = own.load();
@@ -419,8 +440,15 @@ inline void renumber(IndexData& data, const std::vector<std::uint16_t>& class_of
       // Each triangle's own corners: independent, so on the build's threads (a vertex and its
       // canonical one hold bitwise the same position).
       vertices.resize(3 * n);
+      // The reads are scattered over the mesh: each triangle's ids are fetched 16 triangles
+      // ahead, its corners and mesh number 8 ahead, so the misses overlap.
       for_blocks(data, n, std::size_t{1} << 16, [&](std::size_t b, std::size_t e) {
         for (std::size_t k = b; k < e; ++k) {
+          if (k + 16 < e) detail::prefetch(&data.tri_vertices[3 * std::size_t{order[k + 16]}]);
+          if (k + 8 < e) {
+            detail::prefetch(&data.vertices[data.tri_vertices[3 * std::size_t{order[k + 8]}]]);
+            detail::prefetch(&data.tri_original[order[k + 8]]);
+          }
           const std::uint32_t old = order[k];
           tri_original[k] = data.tri_original[old];
           for (std::size_t j = 0; j < 3; ++j) vertices[3 * k + j] = data.vertices[data.tri_vertices[3 * old + j]];
@@ -584,6 +612,10 @@ inline void make_frame_hierarchy(IndexData& data) {
     data.tri_slot.assign(n, 0u);
     for_blocks(data, n, std::size_t{1} << 16, [&](std::size_t b, std::size_t e) {
       for (std::size_t p = b; p < e; ++p) {
+        if (p + 8 < e) {  // scattered reads and writes: fetched ahead so the misses overlap
+          detail::prefetch(&data.vertices[3 * std::size_t{data.bvh.tris[p + 8]}]);
+          detail::prefetch(&data.tri_slot[data.bvh.tris[p + 8]]);
+        }
         const std::uint32_t tri = data.bvh.tris[p];
         data.tri_slot[tri] = static_cast<std::uint32_t>(p);
         for (std::size_t k = 0; k < 3; ++k) vertices[3 * p + k] = data.vertices[3 * std::size_t{tri} + k];

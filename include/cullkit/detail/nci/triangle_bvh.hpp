@@ -76,6 +76,9 @@ struct alignas(64) TriangleBvhNode {
       }
       float o = static_cast<float>(ulo - margin);
       if (double(o) > ulo - margin) o = std::nextafter(o, -std::numeric_limits<float>::infinity());
+      // A flat axis at zero (margin 0): +0 whichever zero the children's bounds kept, since the
+      // binning takes its minima in an order that may keep either.
+      if (o == 0.0f) o = 0.0f;
       float sc = static_cast<float>((uhi + margin - double(o)) / 255.0);
       for (int guard = 0; guard < 64 && double(o) + 255.0 * double(sc) < uhi + margin; ++guard)
         sc = std::nextafter(sc, std::numeric_limits<float>::infinity());
@@ -212,6 +215,8 @@ class TriangleBvhBuilder {
   // While the top is cut (before the subtrees' tasks, which never dispatch tasks of their own),
   // ranges at least this long fill their bins on all threads (slices merged in slice order).
   static constexpr std::size_t parallel_bins = std::size_t{1} << 17;
+  // Ranges at least this long fill two sets of bins (fill_bins).
+  static constexpr std::size_t two_sets = 64;
   bool top_ = false;
   const std::vector<TriangleBvhItem>& items_;
   std::vector<Ref> refs_;  // the items in the tree's order as it is built
@@ -250,13 +255,16 @@ class TriangleBvhBuilder {
   // Adds refs_[b, e) to the bins, `scale` and `cl` mapping a centroid to its bin on each axis.
   // The same float operations as the scalar form (the SSE2 min and max equal std::min and
   // std::max on finite values but for the sign of a zero, which no bound or area reads).
+  // Consecutive refs mostly fall in the same bins (a range is spatially sorted by the splits
+  // above it), so each update would wait on the one before: long ranges fill two sets of bins,
+  // even and odd refs, merged at the end (min, max and counts do not depend on the order).
   void fill_bins(std::size_t b, std::size_t e, const float cl[3], const float scale[3], Bin (&bin)[3][bins]) const noexcept {
 #if CULLKIT_HAS_SSE2
     const __m128 keep3 = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
     const __m128 c0 = _mm_set_ps(0.0f, cl[2], cl[1], cl[0]), s = _mm_set_ps(0.0f, scale[2], scale[1], scale[0]);
     const __m128i last = _mm_set1_epi32(bins - 1), first = _mm_setzero_si128();
-    for (std::size_t i = b; i < e; ++i) {
-      const __m128 lo = _mm_and_ps(_mm_load_ps(refs_[i].lo), keep3), hi = _mm_load_ps(refs_[i].hi);
+    const auto add = [&](const Ref& ref, Bin (&to)[3][bins]) {
+      const __m128 lo = _mm_and_ps(_mm_load_ps(ref.lo), keep3), hi = _mm_load_ps(ref.hi);
       __m128i k = _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(_mm_add_ps(lo, hi), c0), s));
       // Clamped to [0, bins - 1] (SSE2 has no 32-bit integer min / max).
       const __m128i over = _mm_cmpgt_epi32(k, last);
@@ -265,26 +273,48 @@ class TriangleBvhBuilder {
       alignas(16) std::int32_t kk[4];
       _mm_store_si128(reinterpret_cast<__m128i*>(kk), k);
       for (int a = 0; a < 3; ++a) {
-        Bin& bb = bin[a][kk[a]];
+        Bin& bb = to[a][kk[a]];
         _mm_store_ps(bb.lo, _mm_min_ps(_mm_load_ps(bb.lo), lo));
         _mm_store_ps(bb.hi, _mm_max_ps(_mm_load_ps(bb.hi), hi));
         ++bb.n;
       }
-    }
+    };
 #else
-    for (std::size_t i = b; i < e; ++i) {
-      const Ref& it = refs_[i];
+    const auto add = [&](const Ref& it, Bin (&to)[3][bins]) {
       for (int a = 0; a < 3; ++a) {
         const int k = std::clamp(static_cast<int>((it.lo[a] + it.hi[a] - cl[a]) * scale[a]), 0, bins - 1);
-        Bin& bb = bin[a][k];
+        Bin& bb = to[a][k];
         for (int j = 0; j < 3; ++j) {
           bb.lo[j] = std::min(bb.lo[j], it.lo[j]);
           bb.hi[j] = std::max(bb.hi[j], it.hi[j]);
         }
         ++bb.n;
       }
-    }
+    };
 #endif
+    std::size_t i = b;
+    if (e - b >= two_sets) {
+      Bin odd[3][bins];
+      clear_bins(odd);
+      for (; i + 1 < e; i += 2) {
+        add(refs_[i], bin);
+        add(refs_[i + 1], odd);
+      }
+      merge_bins(bin, odd);
+    }
+    for (; i < e; ++i) add(refs_[i], bin);
+  }
+
+  // to: the union of to and from, bin by bin.
+  static void merge_bins(Bin (&to)[3][bins], const Bin (&from)[3][bins]) noexcept {
+    for (int a = 0; a < 3; ++a)
+      for (int k = 0; k < bins; ++k) {
+        for (int j = 0; j < 3; ++j) {
+          to[a][k].lo[j] = std::min(to[a][k].lo[j], from[a][k].lo[j]);
+          to[a][k].hi[j] = std::max(to[a][k].hi[j], from[a][k].hi[j]);
+        }
+        to[a][k].n += from[a][k].n;
+      }
   }
 
   // lo, hi: the union of the box and the bin's (in the first three lanes).
@@ -333,15 +363,7 @@ class TriangleBvhBuilder {
       const std::size_t len = jb.r->e - jb.r->b, count = jb.part->size();
       jb.self->fill_bins(jb.r->b + len * t / count, jb.r->b + len * (t + 1) / count, jb.r->cl, jb.scale, (*jb.part)[t].bin);
     }, &job);
-    for (const Slice& sl : part)
-      for (int a = 0; a < 3; ++a)
-        for (int k = 0; k < bins; ++k) {
-          for (int j = 0; j < 3; ++j) {
-            bin[a][k].lo[j] = std::min(bin[a][k].lo[j], sl.bin[a][k].lo[j]);
-            bin[a][k].hi[j] = std::max(bin[a][k].hi[j], sl.bin[a][k].hi[j]);
-          }
-          bin[a][k].n += sl.bin[a][k].n;
-        }
+    for (const Slice& sl : part) merge_bins(bin, sl.bin);
   }
 
   // Splits r in two by the binned heuristic (the median of the widest centroid axis when the
@@ -359,36 +381,39 @@ class TriangleBvhBuilder {
     for (int a = 0; a < 3; ++a) {
       if (scale[a] == 0.0f) continue;
       // Planes between two bins with no triangle between them cut the same sides at the same
-      // cost: only the first plane after each occupied bin is weighed (empty bins skipped).
+      // cost: only the first plane after each occupied bin is weighed, so the sweeps run over
+      // the occupied bins alone (listed first, without a branch per bin).
+      int used[bins];
+      int m = 0;
+      for (int k = 0; k < bins; ++k) {
+        used[m] = k;
+        m += bin[a][k].n != 0 ? 1 : 0;
+      }
       float rarea[bins];
       std::size_t rn[bins];
       alignas(16) float lo[4], hi[4];
       empty_box(lo, hi, 4);
       std::size_t cnt = 0;
-      for (int k = bins - 1; k > 0; --k) {
-        if (bin[a][k].n == 0) continue;
-        grow(lo, hi, bin[a][k]);
-        cnt += bin[a][k].n;
-        rarea[k] = area(lo, hi);
-        rn[k] = cnt;
+      for (int j = m - 1; j > 0; --j) {
+        grow(lo, hi, bin[a][used[j]]);
+        cnt += bin[a][used[j]].n;
+        rarea[j] = area(lo, hi);
+        rn[j] = cnt;
       }
+      if (m < 2) continue;
       empty_box(lo, hi, 4);
-      cnt = 0;
-      int prev = -1;  // the last occupied bin so far, the left side's box and area up to it
-      float prev_area = 0.0f;
-      for (int k = 0; k < bins; ++k) {
-        if (bin[a][k].n == 0) continue;
-        if (prev >= 0) {
-          const float cost = prev_area * float(cnt) + rarea[k] * float(rn[k]);
-          if (cost < best) {
-            best = cost;
-            best_axis = a;
-            best_plane = prev + 1;
-          }
+      grow(lo, hi, bin[a][used[0]]);
+      cnt = bin[a][used[0]].n;
+      float prev_area = area(lo, hi);  // the left side's, up to the occupied bin before j
+      for (int j = 1; j < m; ++j) {
+        const float cost = prev_area * float(cnt) + rarea[j] * float(rn[j]);
+        if (cost < best) {
+          best = cost;
+          best_axis = a;
+          best_plane = used[j - 1] + 1;
         }
-        grow(lo, hi, bin[a][k]);
-        cnt += bin[a][k].n;
-        prev = k;
+        grow(lo, hi, bin[a][used[j]]);
+        cnt += bin[a][used[j]].n;
         prev_area = area(lo, hi);
       }
     }
@@ -433,11 +458,17 @@ class TriangleBvhBuilder {
     const __m128 keep3 = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
     __m128 lcl4 = _mm_set1_ps(std::numeric_limits<float>::infinity()), rcl4 = lcl4;
     __m128 lch4 = _mm_set1_ps(-std::numeric_limits<float>::infinity()), rch4 = lch4;
+    // The bin of lane a as fill_bins computes it (the other lanes' scale is 0); a bin below
+    // `plane` is a clamped bin below it, as plane lies in [1, bins - 1].
+    alignas(16) float c0_lanes[4] = {0, 0, 0, 0}, scale_lanes[4] = {0, 0, 0, 0};
+    c0_lanes[a] = c0;
+    scale_lanes[a] = scale;
+    const __m128 c0v = _mm_load_ps(c0_lanes), sv = _mm_load_ps(scale_lanes);
+    const __m128i planev = _mm_set1_epi32(plane);
     const auto goes_left = [&](const Ref& it) {
       const __m128 c4 = _mm_add_ps(_mm_and_ps(_mm_load_ps(it.lo), keep3), _mm_load_ps(it.hi));
-      alignas(16) float c[4];
-      _mm_store_ps(c, c4);
-      const bool l = std::clamp(static_cast<int>((c[a] - c0) * scale), 0, bins - 1) < plane;
+      const __m128i below = _mm_cmplt_epi32(_mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(c4, c0v), sv)), planev);
+      const bool l = ((_mm_movemask_ps(_mm_castsi128_ps(below)) >> a) & 1) != 0;
       if (l) {
         lcl4 = _mm_min_ps(lcl4, c4);
         lch4 = _mm_max_ps(lch4, c4);
