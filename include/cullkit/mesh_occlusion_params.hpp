@@ -105,8 +105,8 @@ struct MeshOcclusionParams {
   /// object tests are split into batches that the tasks take from a shared counter; with N > 1 the
   /// occluder insertion into the grid is split into strips of the grid's rows (a number set by
   /// `grid_height` alone), each inserted on its own by whichever task takes it. Never changes the
-  /// answer: the same objects, in the same order, for every count and every task order (only
-  /// `MeshOcclusionStats::occluder_triangles`, the triangles worked on, may differ by a few). One thread is the default because a frame's cull is short (a few ms) and an
+  /// answer: the same objects, in the same order, and the same statistics, for every count and every
+  /// task order. One thread is the default because a frame's cull is short (a few ms) and an
   /// engine usually has other work for its other threads; the gain is measured in
   /// docs/mesh_occlusion.md. Does not apply to the frustum tree's build (`tree.threads`).
   unsigned threads = 1;

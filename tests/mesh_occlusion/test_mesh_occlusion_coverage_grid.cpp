@@ -17,21 +17,16 @@
 #include <cullkit_support/scene.hpp>
 
 #include "check.hpp"
+#include "coverage_grid_insert.hpp"
 
 namespace dmo = cullkit::detail::mesh_occlusion;
 using cullkit::support::Rng;
+using coverage_grid_test::Triangle;
+using coverage_grid_test::area2;
+using coverage_grid_test::insert_band;
+using coverage_grid_test::insert_patches;
 
 namespace {
-
-struct Triangle {
-  double x[3], y[3], w[3];
-  int twin[3];  // per edge (corner k to the next), the triangle of the set sharing it, or -1
-  int patch;
-};
-
-double area2(const Triangle& t) {
-  return (t.x[1] - t.x[0]) * (t.y[2] - t.y[0]) - (t.x[2] - t.x[0]) * (t.y[1] - t.y[0]);
-}
 
 // The largest 1/w of the triangles holding (px, py) (closed), 0 when none holds it.
 double nearest_inverse_depth(const std::vector<Triangle>& set, double px, double py) {
@@ -113,59 +108,6 @@ struct Tally {
   long covered = 0, points = 0, failures = 0;
 };
 
-// Inserts the triangles of `patch` (-1: all) into `grid` as one band: an edge shared with another
-// member leaves no crossings and no mark; every other edge is outline.
-void insert_band(dmo::CoverageGrid& grid, const std::vector<Triangle>& set, int patch) {
-  const auto member = [&](int t) { return t >= 0 && (patch < 0 || set[std::size_t(t)].patch == patch); };
-  for (const Triangle& t : set) {
-    if (patch >= 0 && t.patch != patch) continue;
-    unsigned inner = 0;
-    for (int k = 0; k < 3; ++k) inner |= member(t.twin[k]) ? 1u << k : 0u;
-    grid.add_depth(t.x, t.y, t.w);
-    grid.add_count(t.x, t.y, 1, inner);  // orient +1: front faces have positive area here
-    for (int k = 0; k < 3; ++k) {
-      if ((inner >> k) & 1u) continue;
-      const int l = k == 2 ? 0 : k + 1;
-      grid.touch_edge(t.x[k], t.y[k], t.x[l], t.y[l], 1, 1);
-    }
-  }
-  grid.end_band();
-}
-
-// Patch 0, then patch 1, each in a grid of its own added into the union, as the culler does.
-void insert_patches(dmo::CoverageGrid& grid, dmo::CoverageGrid& own, const std::vector<Triangle>& set) {
-  for (int patch = 0; patch < 2; ++patch) {
-    double xmin = HUGE_VAL, ymin = HUGE_VAL, xmax = -HUGE_VAL, ymax = -HUGE_VAL, wmin = HUGE_VAL;
-    for (const Triangle& t : set) {
-      if (t.patch != patch) continue;
-      for (int k = 0; k < 3; ++k) {
-        xmin = std::min(xmin, t.x[k]);
-        xmax = std::max(xmax, t.x[k]);
-        ymin = std::min(ymin, t.y[k]);
-        ymax = std::max(ymax, t.y[k]);
-        wmin = std::min(wmin, t.w[k]);
-      }
-    }
-    if (!(xmin <= xmax)) continue;
-    own.reset(grid.width(), grid.height());
-    if (!own.seed_frozen(grid, grid.cells_of(xmin, ymin, xmax, ymax), static_cast<float>(1.0 / wmin))) continue;
-    insert_band(own, set, patch);
-    grid.absorb(own, true);
-    if (patch == 1) {
-      for (const Triangle& t : set) {
-        if (t.patch != 1) continue;
-        for (int k = 0; k < 3; ++k) {
-          if (t.twin[k] < 0 || set[std::size_t(t.twin[k])].patch != 0) continue;
-          const int l = k == 2 ? 0 : k + 1;
-          grid.touch_edge(t.x[l], t.y[l], t.x[k], t.y[k], 1, -1);  // patch 0's edge, as its triangle runs
-          grid.touch_edge(t.x[k], t.y[k], t.x[l], t.y[l], 1, -1);
-        }
-      }
-    }
-    grid.end_band();
-  }
-}
-
 void one_case(Rng& rng, dmo::CoverageGrid& grid, dmo::CoverageGrid& own, Tally& tally, int index) {
   const int width = 24, height = 16;
   grid.reset(width, height);
@@ -187,9 +129,11 @@ void one_case(Rng& rng, dmo::CoverageGrid& grid, dmo::CoverageGrid& own, Tally& 
           ++tally.points;
           least = std::min(least, nearest_inverse_depth(set, i + a / 16.0, j + b / 16.0));
         }
-      // Covered at a bound no nearer than the nearest hit of every point (a little room for the
-      // float bound's own rounding, far below the margins that matter here).
-      const bool ok = least > 0.0 && !grid.all_nearer(cell, static_cast<float>(least * (1.0 + 0x1p-22)));
+      // Covered at a bound no nearer than the nearest hit of every point, to the last bit of the
+      // float bound (`below`: the largest float not above `least`).
+      float below = static_cast<float>(least);
+      if (static_cast<double>(below) > least) below = std::nextafter(below, 0.0f);
+      const bool ok = least > 0.0 && !grid.all_nearer(cell, below);
       if (!ok) {
         ++tally.failures;
         CHECK_MSG(ok, "case %d: cell (%d, %d) covered, but %s", index, i, j,

@@ -21,3 +21,6 @@ cullkit_add_test(test_mesh_occlusion_layers SOURCES ${CMAKE_CURRENT_LIST_DIR}/te
 cullkit_add_test(test_mesh_occlusion_slanted SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_slanted.cpp TIMEOUT 300)
 # The coverage grid alone against points: fans and loose triangles on a quarter-cell lattice.
 cullkit_add_test(test_mesh_occlusion_coverage_grid SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_coverage_grid.cpp)
+# The coverage grid's margins at rounding level: edges from corners far off the grid passing cell
+# corners by a hair, checked exactly at every covered cell's corners.
+cullkit_add_test(test_mesh_occlusion_margins SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_margins.cpp)

@@ -201,6 +201,9 @@ class CoverageGrid {
     if (xmax + m < 0.0 || xmin - m >= width_ || ymax + m < 0.0 || ymin - m >= height_) return r;
     r = CellRect{clamp_cell(xmin - m, width_), clamp_cell(ymin - m, height_), clamp_cell(xmax + m, width_),
                  clamp_cell(ymax + m, height_)};
+    // The plane's bound is set up on all the triangle's cells, whatever rows are worked on, so that a
+    // row's bounds are the same bits in a strip of rows as in the whole grid.
+    const CellRect all = r;
     if (!window_rows(r)) return r;
     // Depth bounds alone never make a cell covered (counts and outline marks do, and those mark
     // their rows for end_band), so rows are not marked here; the bounds only need clearing later.
@@ -213,14 +216,14 @@ class CoverageGrid {
     // that minimizes it. Worth it for big triangles seen at a slant (floors, long walls).
     const double area2 = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
     const double extent = std::max(xmax - xmin, ymax - ymin);
-    const int cells = (r.x1 - r.x0 + 1) * (r.y1 - r.y0 + 1);
+    const int cells = (all.x1 - all.x0 + 1) * (all.y1 - all.y0 + 1);
     if (cells > 4 && std::fabs(area2) > 1e-6 * extent * extent) {
       const double inv[3] = {1.0 / w[0], 1.0 / w[1], 1.0 / w[2]};
       const double a = ((inv[1] - inv[0]) * (y[2] - y[0]) - (inv[2] - inv[0]) * (y[1] - y[0])) / area2;
       const double b = ((x[1] - x[0]) * (inv[2] - inv[0]) - (x[2] - x[0]) * (inv[1] - inv[0])) / area2;
-      // Value at the minimizing corner of cell (r.x0, r.y0); then a per column, b per row.
-      const double v00 = inv[0] + a * (r.x0 + (a < 0.0 ? 1.0 : 0.0) - x[0]) + b * (r.y0 + (b < 0.0 ? 1.0 : 0.0) - y[0]);
-      const double span = std::fabs(a) * (r.x1 - r.x0 + 1) + std::fabs(b) * (r.y1 - r.y0 + 1);
+      // Value at the minimizing corner of cell (all.x0, all.y0); then a per column, b per row.
+      const double v00 = inv[0] + a * (all.x0 + (a < 0.0 ? 1.0 : 0.0) - x[0]) + b * (all.y0 + (b < 0.0 ? 1.0 : 0.0) - y[0]);
+      const double span = std::fabs(a) * (all.x1 - all.x0 + 1) + std::fabs(b) * (all.y1 - all.y0 + 1);
       // Rounding of the solve (relative to the values, amplified by a thin triangle) and of the
       // float loop below.
       const double inv_max = std::max(std::max(inv[0], inv[1]), inv[2]);
@@ -230,8 +233,8 @@ class CoverageGrid {
       const float v00f = static_cast<float>(v00 - err);
       for_each_row_span(edges, r, m, [&](int j, int i0, int i1) {
         float* row = bound_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-        const float start = v00f + bf * static_cast<float>(j - r.y0);
-        lower_row_sloped(row, i0, i1, i0 - r.x0, start, af, lowest);
+        const float start = v00f + bf * static_cast<float>(j - all.y0);
+        lower_row_sloped(row, i0, i1, i0 - all.x0, start, af, lowest);
       });
     } else {
       for_each_row_span(edges, r, m, [&](int j, int i0, int i1) {

@@ -118,6 +118,9 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
         bx0 = box.xmin, by0 = box.ymin, bx1 = box.xmax, by1 = box.ymax, bw = box.wmin;
       } else {
         const TriangleExtent& x = s.triangle_extents[i];
+        // The patch's nearest point over all its triangles, as the whole grid takes it: a strip
+        // then seeds the cells the whole grid seeds on its rows, and drops what it drops.
+        w_min = std::min(w_min, x.w_min);
         if (x.row1 < strip.first_row || x.row0 > strip.last_row) continue;
         bx0 = x.x0, by0 = x.y0, bx1 = x.x1, by1 = x.y1, bw = x.w_min;
       }
