@@ -12,9 +12,9 @@
 //   a task's caches not starting a new frame (the last camera's projections): 219 and 223 failed;
 //   every task on task 0's caches (a race between the threads' projections): a different answer
 //   on oacmpdm9 (pool, 3 threads), then a crash, in both runs;
-//   twice the strips when threads != 1 (row_strips.hpp): 6 of 16 frames differ on fzk_haus, 8 on
-//   oacmpdm9, 14 on the car, in every setup (the generated scenes' frames all agree: their strips
-//   skip the same occluders however many there are);
+//   twice the strips when threads != 1 (row_strips.hpp), before strips made the whole grid's
+//   decisions: 6 of 16 frames differ on fzk_haus, 8 on oacmpdm9, 14 on the car (since then any
+//   strip count gives the one-thread answer, so this is no longer a mutant);
 //   a gathering task skipping the last occluder of each batch it takes: 922 of 1,010 checks failed;
 //   the tasks' clipped polygons joined in reverse task order with their own list's places: 2 failed;
 //   the patches shared by overlapping objects never gathered on several tasks: 336 of 1,351 failed,
