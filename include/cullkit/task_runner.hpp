@@ -16,7 +16,9 @@ namespace cullkit {
 /// The tasks take their work from a shared counter, so a task that starts late finds little or
 /// nothing left: handing them to busy workers costs little. `run` does not throw and does not
 /// allocate once the query's context is warm. The default (`dispatch == nullptr`) uses cullkit's
-/// own persistent worker pool (detail::WorkerPool), whose threads are started once, on first use.
+/// own persistent worker pool (detail::WorkerPool), whose threads are started once, on first use;
+/// after each dispatch a pool thread spins for up to 200 us before it sleeps, so the next parallel
+/// step of the same query finds it awake (give your own job system to keep those cores free).
 struct TaskRunner {
   /// The job system's entry point, or nullptr for cullkit's worker pool.
   void (*dispatch)(void* context, std::size_t task_count, void (*run)(void* job, std::size_t task),

@@ -16,8 +16,13 @@
 #include <thread>
 #include <vector>
 
+#include "../config.hpp"
 #include "../task_runner.hpp"
 #include "parallel.hpp"
+
+#if CULLKIT_HAS_SSE2
+#include <emmintrin.h>
+#endif
 
 namespace cullkit::detail {
 
@@ -38,6 +43,7 @@ class WorkerPool {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       stop_ = true;
+      published_.fetch_add(1, std::memory_order_release);
     }
     wake_.notify_all();
     for (auto& t : threads_) t.join();
@@ -65,6 +71,7 @@ class WorkerPool {
       count_ = count;
       next_.store(1, std::memory_order_relaxed);
       ++generation_;
+      published_.store(generation_, std::memory_order_release);
     }
     wake_.notify_all();
     task(job, 0);
@@ -86,9 +93,28 @@ class WorkerPool {
       task(job, i);
   }
 
+  // Waits up to `spin_time` for a dispatch after `seen` without sleeping: a frame's parallel steps
+  // come a fraction of a millisecond apart, and a thread woken from its condition variable joins
+  // a step late or not at all. Returns early once one is published.
+  void spin_for_dispatch(std::uint64_t seen) const {
+    const auto until = std::chrono::steady_clock::now() + spin_time;
+    for (unsigned i = 1;; ++i) {
+      if (published_.load(std::memory_order_acquire) != seen) return;
+#if CULLKIT_HAS_SSE2
+      _mm_pause();
+#endif
+      if ((i & 63u) == 0 && std::chrono::steady_clock::now() >= until) return;
+    }
+  }
+
   void serve(std::uint64_t seen) {
     std::unique_lock<std::mutex> lock(mutex_);
     for (;;) {
+      if (!stop_ && generation_ == seen) {
+        lock.unlock();
+        spin_for_dispatch(seen);
+        lock.lock();
+      }
       wake_.wait(lock, [&] { return stop_ || generation_ != seen; });
       if (stop_) return;
       seen = generation_;
@@ -112,6 +138,8 @@ class WorkerPool {
   std::size_t count_ = 0;
   std::atomic<std::size_t> next_{0};
   std::uint64_t generation_ = 0;
+  std::atomic<std::uint64_t> published_{0};  // generation_, and a change at stop, readable unlocked
+  static constexpr std::chrono::microseconds spin_time{std::chrono::microseconds(200)};
   std::size_t active_ = 0;  // threads inside a claim loop
   bool stop_ = false;
 };
