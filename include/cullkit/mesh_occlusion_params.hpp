@@ -142,7 +142,7 @@ struct MeshOcclusionBuildStats {
 /// What one `cull` did (`MeshOcclusionContext::stats`).
 struct MeshOcclusionStats {
   std::size_t objects_in_frustum = 0;          ///< usable objects whose box may meet the frustum
-  std::size_t occluders_used = 0;              ///< occluder patches rasterized
+  std::size_t occluders_used = 0;              ///< occluder patches chosen (some may insert no triangle: all facing away, or narrower than min_occluder_width_cells)
   std::size_t occluder_triangles = 0;          ///< occluder triangles rasterized (front-facing, beyond the near plane; with threads > 1, in some strip of rows)
   std::size_t moving_triangles = 0;            ///< of which moving occluders' triangles
   std::size_t objects_hidden = 0;              ///< objects in the frustum left out as hidden
