@@ -47,9 +47,9 @@
 //                  until none is (a conforming subdivision: both triangles of an edge split it at the same
 //                  new vertex, so no crack or T-junction appears). The same surfaces in more, smaller
 //                  triangles: what an occluder's depth extent costs the culler.
-// The environment variables GW, GH, BUDGET, RATIO, MINFRAC, CELLS_PER_TRIANGLE, PATCH, OBJTRI and TJUNCTIONS override the
-// culler's parameters (grid size, occluder triangle budget, depth band ratio, occluder size floor,
-// occluder cells per triangle, patch size, triangle-test patch size, T-junction cuts 0/1) in every mode, for measuring alternatives without rebuilding;
+// The environment variables GW, GH, BUDGET, RATIO, MINFRAC, CELLS_PER_TRIANGLE, WIDTH_CELLS, PATCH, OBJTRI and TJUNCTIONS
+// override the culler's parameters (grid size, occluder triangle budget, depth band ratio, occluder size floor,
+// occluder cells per triangle, occluder width in cells, patch size, triangle-test patch size, T-junction cuts 0/1) in every mode, for measuring alternatives without rebuilding;
 // --grid, given too, wins over GW and GH.
 //   --engine       an engine frame's parts instead (see `engine_frame`): see-through objects (the
 //                  generated scenes with glass panes, fences and foliage cards added; oacmpdm9 with its
@@ -181,6 +181,7 @@ class ReasonProbe {
     supply_.max_occluder_objects = 0xffffffffu;
     supply_.min_occluder_screen_fraction = 0.0f;
     supply_.min_occluder_cells_per_triangle = 0.0f;
+    supply_.min_occluder_width_cells = 0.0f;
     depth_ = dmo::sanitize(base_);
     depth_.depth_band_ratio = 0.0f;
     fine_ = dmo::sanitize(base_);
@@ -424,7 +425,7 @@ void print(const std::vector<Row>& rows) {
 }
 
 /// Parameters from the environment (for measuring alternatives without rebuilding): GW, GH,
-/// BUDGET, RATIO, MINFRAC, CELLS_PER_TRIANGLE, PATCH (patch_triangles), OBJTRI (object_test_triangles), TJUNCTIONS
+/// BUDGET, RATIO, MINFRAC, CELLS_PER_TRIANGLE, WIDTH_CELLS (min_occluder_width_cells), PATCH (patch_triangles), OBJTRI (object_test_triangles), TJUNCTIONS
 /// (cut_tjunctions: 0 or 1).
 MeshOcclusionParams params_from_environment() {
   MeshOcclusionParams params;
@@ -434,6 +435,7 @@ MeshOcclusionParams params_from_environment() {
   if (const char* v = std::getenv("RATIO")) params.depth_band_ratio = static_cast<float>(std::atof(v));
   if (const char* v = std::getenv("MINFRAC")) params.min_occluder_screen_fraction = static_cast<float>(std::atof(v));
   if (const char* v = std::getenv("CELLS_PER_TRIANGLE")) params.min_occluder_cells_per_triangle = static_cast<float>(std::atof(v));
+  if (const char* v = std::getenv("WIDTH_CELLS")) params.min_occluder_width_cells = static_cast<float>(std::atof(v));
   if (const char* v = std::getenv("PATCH")) params.patch_triangles = static_cast<std::uint32_t>(std::atol(v));
   if (const char* v = std::getenv("OBJTRI")) params.object_test_triangles = static_cast<std::uint32_t>(std::atol(v));
   if (const char* v = std::getenv("TJUNCTIONS")) params.cut_tjunctions = std::atoi(v) != 0;

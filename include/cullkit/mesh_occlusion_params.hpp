@@ -55,6 +55,13 @@ struct MeshOcclusionParams {
   /// as much to insert as a big one (on fzk_haus, 0.9 of the frame's time at the same kept share).
   /// 0 keeps every patch above the size floor.
   float min_occluder_cells_per_triangle = 1.0f;
+  /// A patch narrower on screen than this many coverage cells is never an occluder. Its width is
+  /// the area of its front-facing triangles on screen over the diagonal of their screen box: a
+  /// straight strip's width, less for a curved one. Default 1.5: a window frame, a railing, a rod
+  /// or a trim seen from afar, or a wall seen edge-on, covers few cells by itself, or none, and
+  /// costs as much per triangle as a wall seen square-on. Decided after the occluders are chosen
+  /// (their triangles still count against `occluder_triangle_budget`). 0 keeps every patch.
+  float min_occluder_width_cells = 1.5f;
   /// Occluder patches go in one at a time, nearest first, and each patch's triangles nearest first,
   /// in bands: a band holds the triangles whose nearest corner is at most (1 + depth_band_ratio)
   /// times as far as the band's first. A cell is given its depth when a band ends, as the farthest
@@ -135,7 +142,7 @@ struct MeshOcclusionBuildStats {
 /// What one `cull` did (`MeshOcclusionContext::stats`).
 struct MeshOcclusionStats {
   std::size_t objects_in_frustum = 0;          ///< usable objects whose box may meet the frustum
-  std::size_t occluders_used = 0;              ///< occluder patches rasterized
+  std::size_t occluders_used = 0;              ///< occluder patches chosen (some may insert no triangle: all facing away, or narrower than min_occluder_width_cells)
   std::size_t occluder_triangles = 0;          ///< occluder triangles rasterized (front-facing, beyond the near plane; with threads > 1, in some strip of rows)
   std::size_t moving_triangles = 0;            ///< of which moving occluders' triangles
   std::size_t objects_hidden = 0;              ///< objects in the frustum left out as hidden

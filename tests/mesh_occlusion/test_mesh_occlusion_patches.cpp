@@ -21,6 +21,12 @@
 //   patches covers fewer cells than it has triangles, so by default the wall is no occluder and
 //   hides nothing; with min_occluder_cells_per_triangle = 0 (the control) it hides the cubes. From
 //   near, its patches are big on screen and hide the cubes by default too.
+// - thin_slats: a wall of 20 horizontal slats, each its own object of two triangles, their long
+//   edges shared with their neighbours', with cubes behind it. From afar each slat is narrower on
+//   screen than min_occluder_width_cells, so by default none occludes and the cubes stay; with the
+//   rule off (0, the control, and a NaN value, which is taken as 0) the slats fuse and hide them.
+//   From near, the slats are wide enough and hide the cubes by default; and one wall of the same
+//   size, two triangles, hides them from afar by default.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -227,6 +233,50 @@ void dense_wall() {
   CHECK(near_default.hidden * 10 >= near_default.targets * 9);
 }
 
+void thin_slats() {
+  // A wall x in [-6, 6], y in [0, 3] at z = 0, facing +z: one object, or 20 slats 0.15 high.
+  const auto wall = [](TestScene& s, int slats) {
+    std::vector<float> ys(static_cast<std::size_t>(slats) + 1);
+    for (int k = 0; k <= slats; ++k) ys[static_cast<std::size_t>(k)] = 3.0f * float(k) / float(slats);
+    for (std::size_t k = 0; k + 1 < ys.size(); ++k) {
+      s.begin_object();
+      const glm::vec3 a(-6, ys[k], 0), b(6, ys[k], 0), c(6, ys[k + 1], 0), d(-6, ys[k + 1], 0);
+      s.triangle(a, b, c);
+      s.triangle(a, c, d);
+    }
+  };
+  const auto cubes_behind = [](TestScene& s) {
+    std::vector<std::uint32_t> cubes;
+    for (int i = -1; i <= 1; ++i)
+      for (int k = 1; k <= 3; ++k)
+        cubes.push_back(s.box(glm::vec3(1.5f * i - 0.3f, 0.8f, -2.0f * k - 0.3f), glm::vec3(1.5f * i + 0.3f, 1.6f, -2.0f * k + 0.3f)));
+    return cubes;
+  };
+  TestScene slatted, solid;
+  wall(slatted, 20);
+  wall(solid, 1);
+  const std::vector<std::uint32_t> cubes = cubes_behind(slatted);
+  const std::vector<std::uint32_t> solid_cubes = cubes_behind(solid);
+  // From 20 m a slat is about 0.9 cells high on the default grid; from 5 to 6 m, 2.5 to 3.
+  const std::vector<glm::vec3> far_eyes = {{0, 2, 20}, {-1, 2, 22}, {1, 1.5f, 21}};
+  const std::vector<glm::vec3> near_eyes = {{0, 2, 6}, {-0.5f, 1.7f, 5}};
+  const glm::vec3 look_at(0, 1.5f, 0);
+  const cullkit::MeshOcclusionParams defaults;
+  cullkit::MeshOcclusionParams off, nan;
+  off.min_occluder_width_cells = 0.0f;
+  nan.min_occluder_width_cells = std::nanf("");
+  const Tally far_default = run(slatted, cubes, far_eyes, look_at, 0.1f, defaults, "thin_slats far, default");
+  const Tally far_off = run(slatted, cubes, far_eyes, look_at, 0.1f, off, "thin_slats far, rule off");
+  const Tally far_nan = run(slatted, cubes, far_eyes, look_at, 0.1f, nan, "thin_slats far, NaN width");
+  const Tally near_default = run(slatted, cubes, near_eyes, look_at, 0.1f, defaults, "thin_slats near, default");
+  const Tally far_solid = run(solid, solid_cubes, far_eyes, look_at, 0.1f, defaults, "thin_slats one wall far");
+  CHECK(far_default.hidden == 0);
+  CHECK(far_off.hidden == far_off.targets);  // the control: the slats fuse and hide the cubes
+  CHECK(far_nan.hidden == far_nan.targets);
+  CHECK(near_default.hidden == near_default.targets);
+  CHECK(far_solid.hidden == far_solid.targets);
+}
+
 }  // namespace
 
 int main() {
@@ -235,5 +285,6 @@ int main() {
   touching_boxes();
   far_backdrop();
   dense_wall();
+  thin_slats();
   return cullkit_test::report("test_mesh_occlusion_patches");
 }

@@ -50,6 +50,7 @@ inline MeshOcclusionParams sanitize(MeshOcclusionParams p) {
   p.grid_height = std::clamp(p.grid_height, 8, 4096);
   if (!(p.min_occluder_screen_fraction >= 0.0f)) p.min_occluder_screen_fraction = 0.0f;
   if (!(p.min_occluder_cells_per_triangle >= 0.0f)) p.min_occluder_cells_per_triangle = 0.0f;
+  if (!(p.min_occluder_width_cells >= 0.0f)) p.min_occluder_width_cells = 0.0f;
   p.patch_triangles = std::clamp<std::uint32_t>(p.patch_triangles, 1, 65536);
   return p;
 }

@@ -231,6 +231,22 @@ inline void begin_gather(const MeshIndex& index, Scratch& s, bool extents) {
   s.clipped.clear();
 }
 
+/// The smallest rectangle holding `r` and [x0, x1] x [y0, y1].
+inline OccluderBox merge_rect(const OccluderBox& r, double x0, double y0, double x1, double y1) {
+  return OccluderBox{std::min(r.xmin, x0), std::min(r.ymin, y0), std::max(r.xmax, x1), std::max(r.ymax, y1), r.wmin};
+}
+
+/// True when a patch whose front-facing triangles have `area2_sum` (twice their area, in cells) on
+/// screen within the rectangle `spread` is narrower than `min_width` cells: its area over the
+/// rectangle's diagonal (the width of a straight strip along it; a curved or branching one is
+/// narrower still) is less. A patch that thin covers few cells by itself, or none (a window
+/// frame, a railing, a rod, a trim seen from afar, a closed beam along its length), and costs as
+/// much per triangle as a wall. Seen edge-on, any patch is that thin.
+inline bool too_narrow(double area2_sum, const OccluderBox& spread, double min_width) {
+  const double dx = spread.xmax - spread.xmin, dy = spread.ymax - spread.ymin;
+  return 0.5 * area2_sum < min_width * std::sqrt(dx * dx + dy * dy);
+}
+
 /// Gathers the triangles of occluder q (s.occluders[q]) that can occlude: clearly front-facing,
 /// touching the grid, and with some corner beyond the clipping level (a triangle with a corner short
 /// of it is clipped to its part beyond, into `clipped`, its place there in `s.clip_slot` and the
@@ -239,12 +255,14 @@ inline void begin_gather(const MeshIndex& index, Scratch& s, bool extents) {
 /// nearest corner's depth (the farthest corner's for a clipped polygon), and their boxes at the same
 /// places of `s.occluder_boxes`; sets their owner. A triangle of a patch that shares triangles with
 /// another goes in once, with the first occluder that keeps it: such patches must be gathered one
-/// after another, in order.
+/// after another, in order. Keeps none when the kept ones are `too_narrow` on screen for
+/// `min_width_cells` (MeshOcclusionParams::min_occluder_width_cells): decided from the patch and the
+/// camera alone, like the choice of occluders, so the same on any task.
 /// Writes only the slots of the patch's own triangles and region, so occluders whose patches share
 /// no triangle can be gathered on several tasks at once. The corners must be projected
 /// (project_occluder_corners_on_tasks). Returns the number kept.
 inline std::uint32_t gather_patch(const MeshIndex& index, Scratch& s, std::size_t q, std::vector<ClippedPolygon>& clipped,
-                                  std::vector<std::uint32_t>* clipped_triangles) {
+                                  std::vector<std::uint32_t>* clipped_triangles, double min_width_cells) {
   const auto corner = [&](std::uint32_t v) -> const Projected& { return s.projected[s.vertex_slot[v]]; };
   const int orient = s.view.orient;
   const double gw = s.grid.width(), gh = s.grid.height();
@@ -258,6 +276,9 @@ inline std::uint32_t gather_patch(const MeshIndex& index, Scratch& s, std::size_
   OccluderBox* boxes = s.occluder_boxes.data() + region;
   const std::uint32_t owner = static_cast<std::uint32_t>(q);
   std::uint32_t kept = 0;
+  // What it covers on screen: twice the kept triangles' area, and the box of their boxes.
+  double area2_sum = 0.0;
+  OccluderBox spread{HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, HUGE_VAL};
   for (std::uint32_t member = patch.first; member < patch.first + patch.count; ++member) {
     const std::uint32_t t = ps.triangles[member];
     const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
@@ -328,6 +349,8 @@ inline std::uint32_t gather_patch(const MeshIndex& index, Scratch& s, std::size_
       }
       if (!whole_inside) key_w = whole_far;
     }
+    area2_sum += std::fabs(area2);
+    spread = merge_rect(spread, xmin, ymin, xmax, ymax);
     const float key = static_cast<float>(key_w);
     std::uint32_t bits;
     std::memcpy(&bits, &key, sizeof bits);  // positive floats order as their bits
@@ -338,6 +361,7 @@ inline std::uint32_t gather_patch(const MeshIndex& index, Scratch& s, std::size_
     s.box_slot[t] = region + kept;
     ++kept;
   }
+  if (kept > 0 && too_narrow(area2_sum, spread, min_width_cells)) return 0;
   return kept;
 }
 
@@ -413,7 +437,7 @@ inline void gather_triangles(const MeshIndex& index, const MeshOcclusionParams& 
   std::uint32_t total = 0;
   for (std::size_t q = 0; q < n; ++q) {
     s.region_first[q] = total;
-    s.gathered_count[q] = gather_patch(index, s, q, s.clipped, nullptr);
+    s.gathered_count[q] = gather_patch(index, s, q, s.clipped, nullptr, params.min_occluder_width_cells);
     total += s.gathered_count[q];
   }
   const auto* sorted = radix_sort(s.triangles.data(), total, s.sort_buffer.data());

@@ -229,7 +229,7 @@ inline void gather_triangles_on_tasks(const MeshIndex& index, const MeshOcclusio
     while (batches.claim(first, last))
       for (std::size_t q = first; q < last; ++q)
         if (!ps.shares_triangles[s.occluders[q].second]) {
-          s.gathered_count[q] = gather_patch(index, s, q, own.clipped, &own.clipped_triangles);
+          s.gathered_count[q] = gather_patch(index, s, q, own.clipped, &own.clipped_triangles, params.min_occluder_width_cells);
           own.gathered.push_back(static_cast<std::uint32_t>(q));
         }
     order_gathered(params, s, own.gathered.data(), own.gathered.size(), own.items, own.sort_buffer);
@@ -245,7 +245,7 @@ inline void gather_triangles_on_tasks(const MeshIndex& index, const MeshOcclusio
   serial.gathered.clear();
   for (std::size_t q = 0; q < n; ++q)
     if (ps.shares_triangles[s.occluders[q].second]) {
-      s.gathered_count[q] = gather_patch(index, s, q, s.clipped, nullptr);
+      s.gathered_count[q] = gather_patch(index, s, q, s.clipped, nullptr, params.min_occluder_width_cells);
       serial.gathered.push_back(static_cast<std::uint32_t>(q));
     }
   if (!serial.gathered.empty())
