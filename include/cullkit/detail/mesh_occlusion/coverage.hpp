@@ -552,6 +552,8 @@ class CoverageGrid {
   // absorb's pass over the cells [a, b] of the row, `run` the crossings' sum carried in and out:
   // returns the cells newly covered here by the counts.
   std::size_t absorb_span(const AbsorbPass& pass, int a, int b, std::int32_t& run);
+  // Cells absorb_span's vector loop takes at once.
+  static constexpr int absorb_group = CULLKIT_COVERAGE_AVX2 ? 8 : CULLKIT_HAS_SSE2 ? 4 : 1;
 
   // True when every cell of row j in [i0, i1] is covered (0 <= i0 <= i1 < width).
   [[nodiscard]] bool row_frozen(int j, int i0, int i1) const {
