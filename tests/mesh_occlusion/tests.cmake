@@ -24,3 +24,5 @@ cullkit_add_test(test_mesh_occlusion_coverage_grid SOURCES ${CMAKE_CURRENT_LIST_
 # The coverage grid's margins at rounding level: edges from corners far off the grid passing cell
 # corners by a hair, checked exactly at every covered cell's corners.
 cullkit_add_test(test_mesh_occlusion_margins SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_margins.cpp)
+# A patch straight into the union where it is untouched, against its own grid added into the union.
+cullkit_add_test(test_mesh_occlusion_direct SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_mesh_occlusion_direct.cpp)

@@ -310,6 +310,30 @@ class CoverageGrid {
     return open;
   }
 
+  /// True when `r` (on the rows worked on) reaches some row and no cell of it, nor the cell after it
+  /// in its row, has been used since the grid was last cleared: those cells then hold no count,
+  /// outline mark, bound, depth or covered bit (every operation that changes one uses the cell).
+  /// Operations of triangles whose boxes (with the margin) lie in `r` reach no other cell: their
+  /// bounds, outline marks and covered tests stay in `r`, a crossing falls at most one cell right
+  /// of it, and a row's sum runs on to the row's end only past a crossing dropped beyond the last
+  /// column, which `r` then reaches.
+  [[nodiscard]] bool untouched(CellRect r) const {
+    if (r.empty() || !window_rows(r)) return false;
+    const int right = std::min(r.x1 + 1, width_ - 1);
+    for (int j = r.y0; j <= r.y1; ++j) {
+      const auto k = static_cast<std::size_t>(j);
+      if (used_hi_[k] >= r.x0 && used_lo_[k] <= right) return false;
+    }
+    return true;
+  }
+
+  /// True when `other` (a grid of the same size) holds the same cells: counts, pending crossings,
+  /// running bounds, frozen depths and covered bits.
+  [[nodiscard]] bool same_cells(const CoverageGrid& other) const {
+    return width_ == other.width_ && height_ == other.height_ && net_ == other.net_ && diff_ == other.diff_ &&
+           bound_ == other.bound_ && depth_ == other.depth_ && frozen_bits_ == other.frozen_bits_;
+  }
+
   /// Adds `patch` (a grid of the same size) into this one, in one pass over every cell it changed:
   /// first the patch's band still open ends there (as its `end_band` would: the band's crossings
   /// summed into its counts, and the cells it covers frozen in the patch's grid, so a patch needs
@@ -528,6 +552,8 @@ class CoverageGrid {
   // absorb's pass over the cells [a, b] of the row, `run` the crossings' sum carried in and out:
   // returns the cells newly covered here by the counts.
   std::size_t absorb_span(const AbsorbPass& pass, int a, int b, std::int32_t& run);
+  // Cells absorb_span's vector loop takes at once.
+  static constexpr int absorb_group = CULLKIT_COVERAGE_AVX2 ? 8 : CULLKIT_HAS_SSE2 ? 4 : 1;
 
   // True when every cell of row j in [i0, i1] is covered (0 <= i0 <= i1 < width).
   [[nodiscard]] bool row_frozen(int j, int i0, int i1) const {

@@ -115,11 +115,15 @@ inline std::size_t CoverageGrid::absorb(CoverageGrid& patch, bool layers) {
     patch.band_hi_[j] = -1;
     AbsorbPass pass{patch, static_cast<int>(j), band_row, band_row && crossings, layers};
     std::int32_t run = 0;
-    covered += absorb_span(pass, i0, i1, run);
+    // The span widened to whole groups of the vector loop (within the row): the patch's cells
+    // outside its used ones are empty (no count, crossing, bound or depth), and adding an empty cell
+    // changes nothing here (see absorb_span), so the loop needs no cell-by-cell head or tail.
+    const int a = i0 & ~(absorb_group - 1), b = std::min(i1 | (absorb_group - 1), width_ - 1);
+    covered += absorb_span(pass, a, b, run);
     int last = i1;
     if (run != 0) {
       // A crossing beyond the last column was dropped: the band's sum is constant on to the row's end.
-      covered += absorb_span(pass, i1 + 1, width_ - 1, run);
+      covered += absorb_span(pass, b + 1, width_ - 1, run);
       last = width_ - 1;
     }
     grow(dirty_, CellRect{i0, pass.j, last, pass.j});
@@ -148,6 +152,11 @@ inline std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int 
   const bool accumulate = pass.accumulate, band = pass.band_row, layers = pass.layers;
   constexpr float empty_bound = std::numeric_limits<float>::infinity();
   std::size_t covered = 0;
+  // An empty cell of the patch (no count, crossing, bound or depth) changes nothing in either grid:
+  // a cell of this grid counting at least one is covered already (only an open band changes counts,
+  // and every band's end and every absorb freezes such cells), its bound stays, a depth of 0 is
+  // never nearer, and the patch's cell stays empty. The vector loops skip whole groups of them.
+  //
   // Per cell, in this order: the patch's open band ends (its crossings summed into its count, and
   // the cell freezing in the patch's grid at the patch's bound), then the patch's cell is added
   // into this grid, the cell freezes here at the running bound, takes the patch's bound where that
@@ -191,7 +200,8 @@ inline std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int 
     __m256i carry8 = _mm256_set1_epi32(run);
     for (; i + 7 <= b; i += 8) {
       const auto load_i = [i](const std::int32_t* p) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + i)); };
-      __m256i own_count = load_i(from_net);
+      const __m256i own_net = load_i(from_net);
+      __m256i own_count = own_net;
       if (accumulate) {
         // A prefix sum within each half, the low half's total added to the high half, plus the
         // carry so far (exact integer sums, as the scalar loop's).
@@ -206,6 +216,11 @@ inline std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int 
       }
       const __m256 own_bound = _mm256_loadu_ps(from_bound + i);
       __m256 own = _mm256_loadu_ps(from_depth + i);
+      // Eight empty cells of the patch: nothing to add, nothing to clear.
+      const __m256i counts = _mm256_or_si256(own_net, own_count);
+      if (_mm256_testz_si256(counts, counts) &&
+          _mm256_movemask_ps(_mm256_and_ps(_mm256_cmp_ps(own_bound, empty8, _CMP_EQ_OQ), _mm256_cmp_ps(own, zero8_f, _CMP_EQ_OQ))) == 0xff)
+        continue;
       if (band) {
         const int positive = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(own_count, zero8)));
         const int mask = positive & ~static_cast<int>((from_frozen[i >> 6] >> (i & 63)) & 0xffu);
@@ -256,7 +271,8 @@ inline std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int 
     __m128i carry = _mm_set1_epi32(run);
     for (; i + 3 <= b; i += 4) {
       const auto load_i = [i](const std::int32_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + i)); };
-      __m128i own_count = load_i(from_net);
+      const __m128i own_net = load_i(from_net);
+      __m128i own_count = own_net;
       if (accumulate) {
         // An in-register prefix sum (two shifted adds) plus the carry so far.
         __m128i d = load_i(from_diff);
@@ -269,6 +285,10 @@ inline std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int 
       }
       const __m128 own_bound = _mm_loadu_ps(from_bound + i);
       __m128 own = _mm_loadu_ps(from_depth + i);
+      // Four empty cells of the patch: nothing to add, nothing to clear.
+      if (_mm_movemask_epi8(_mm_cmpeq_epi32(_mm_or_si128(own_net, own_count), zero)) == 0xffff &&
+          _mm_movemask_ps(_mm_and_ps(_mm_cmpeq_ps(own_bound, empty4), _mm_cmpeq_ps(own, zero_f))) == 0xf)
+        continue;
       if (band) {
         const int positive = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(own_count, zero)));
         const int mask = positive & ~static_cast<int>((from_frozen[i >> 6] >> (i & 63)) & 0xfu);

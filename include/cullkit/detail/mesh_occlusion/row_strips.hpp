@@ -71,6 +71,16 @@ inline void begin_strip_task(const MeshIndex& index, StripTask& task, int width,
   if (own_grid) task.grid.reset(width, height);
 }
 
+/// True when every depth bound the frame's occluder triangles give is positive: add_depth bounds a
+/// triangle's cells from below by the inverse of its largest corner depth, rounded to float, and
+/// every corner lies in the level's box (the frustum tree's root), whose largest depth gives a
+/// positive float here. Then so is every running bound and frozen depth of the grid.
+inline bool depth_bounds_positive(const MeshIndex& index, const View& view) {
+  if (index.tree.nodes().empty()) return false;
+  const double w_max = project_box(view, index.tree.nodes().front().bounds).w_max;
+  return static_cast<float>((1.0 / w_max) * (1.0 - 0x1p-20)) > 0.0f;
+}
+
 /// Inserts every patch into the rows of `strip`, in the order of `s.patch_order`, with the memory
 /// of `task`, into `grid` (the union: the frame's grid or the task's own). Per patch, its
 /// triangles whose cells reach the strip's rows are its run there; its own grid is seeded from the
@@ -88,8 +98,25 @@ inline void begin_strip_task(const MeshIndex& index, StripTask& task, int width,
 /// cells are covered in the union already and never change again; a cell the patch covers alone is
 /// covered by the union too, and its bound holds (the triangles that covered it gave their bounds
 /// there before it was left out). So no cell that the union does not cover counts as covered.
+///
+/// With `direct`, a run whose cells the union has not used yet (`CoverageGrid::untouched` over the
+/// run's box: no count, bound, depth or covered bit there, nor in the next cell of each row) goes
+/// straight into the union, its bands ending there, and leaves what its own grid added into the
+/// union would leave:
+/// - seeding its grid would mark no cell (the union covers none there), and each operation of the
+///   run stays within those cells, so the run meets the same empty cells in either grid and leaves
+///   there the same counts, running bounds, frozen depths and covered bits;
+/// - adding its grid into those empty cells gives the union its counts and bounds. A cell the run
+///   covered froze at its running bound then, d, at least its last bound b (bounds only fall):
+///   where its count is still at least one, the union freezes it at b and takes the nearer d
+///   (`patch_layers`); where a later band's crossings lowered its count (crossings do not skip
+///   covered cells) the union takes d alone, as d > 0 (`direct` asks for positive bounds). So the
+///   union holds d and the covered bit, as the run left them; any other cell has a count below one
+///   and no depth both ways;
+/// - the edges shared with earlier patches are then taken out of the same union, as before.
+/// Without `patch_layers` the union drops the covered cells whose count fell, so `direct` needs them.
 inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& params, const Scratch& s, Strip& strip,
-                         StripTask& task, CoverageGrid& grid) {
+                         StripTask& task, CoverageGrid& grid, bool direct) {
   const int width = grid.width(), height = grid.height();
   const int orient = s.view.orient;
   grid.set_rows(strip.first_row, strip.last_row);
@@ -133,13 +160,20 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
       w_min = std::min(w_min, bw);
     }
     if (task.run.empty()) continue;
-    task.patch_grid.reset(width, height);
-    task.patch_grid.set_rows(strip.first_row, strip.last_row);
-    if (!task.patch_grid.seed_frozen(grid, grid.cells_of(x0, y0, x1, y1), static_cast<float>(1.0 / w_min))) continue;
+    const CellRect cells = grid.cells_of(x0, y0, x1, y1);
+    const float nearest = static_cast<float>(1.0 / w_min);
     const RunMembers members{task.member_stamp, task.member_value};
     const auto* first = task.run.data();
-    insert_run(index, s, task.patch_grid, first, first + task.run.size(), members, inserted);
-    grid.absorb(task.patch_grid, params.patch_layers);
+    if (direct && nearest > 0.0f && grid.untouched(cells)) {
+      insert_run(index, s, grid, first, first + task.run.size(), members, inserted);
+      grid.end_band();
+    } else {
+      task.patch_grid.reset(width, height);
+      task.patch_grid.set_rows(strip.first_row, strip.last_row);
+      if (!task.patch_grid.seed_frozen(grid, cells, nearest)) continue;
+      insert_run(index, s, task.patch_grid, first, first + task.run.size(), members, inserted);
+      grid.absorb(task.patch_grid, params.patch_layers);
+    }
     for (const auto& member : task.run) {
       const std::uint32_t t = member.second;
       if (!members.has(t)) continue;  // dropped over covered cells
@@ -177,6 +211,7 @@ inline void insert_patches(const MeshIndex& index, const MeshOcclusionParams& pa
   const int strips = insertion_strips(params, height);
   const unsigned tasks = params.threads == 1 ? 1u : resolve_threads(params.threads, static_cast<std::size_t>(strips));
   const std::size_t n = s.by_patch.size();
+  const bool direct = params.patch_layers && depth_bounds_positive(index, s.view);
   std::size_t largest = 0;
   for (const auto& entry : s.patch_order)
     largest = std::max<std::size_t>(largest, s.patch_first[entry.second + 1] - s.patch_first[entry.second]);
@@ -190,7 +225,7 @@ inline void insert_patches(const MeshIndex& index, const MeshOcclusionParams& pa
   if (strips == 1) {
     if (s.strip_tasks.empty()) s.strip_tasks.resize(1);
     begin_strip_task(index, s.strip_tasks[0], width, height, largest, false);
-    insert_strip(index, params, s, s.strips[0], s.strip_tasks[0], s.grid);
+    insert_strip(index, params, s, s.strips[0], s.strip_tasks[0], s.grid, direct);
   } else {
     // The strips that most triangles reach are handed out first, so the last ones are short: the
     // order only decides which task takes a strip, never what the strip becomes.
@@ -212,7 +247,7 @@ inline void insert_patches(const MeshIndex& index, const MeshOcclusionParams& pa
       StripTask& own = s.strip_tasks[task];
       CoverageGrid& grid = task == 0 ? s.grid : own.grid;
       std::size_t first, last;
-      while (batches.claim(first, last)) insert_strip(index, params, s, s.strips[s.strip_order[first]], own, grid);
+      while (batches.claim(first, last)) insert_strip(index, params, s, s.strips[s.strip_order[first]], own, grid, direct);
     });
     for (unsigned k = 1; k < used; ++k) s.grid.take_rows(s.strip_tasks[k].grid);
   }
