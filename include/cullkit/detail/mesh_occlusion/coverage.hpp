@@ -538,6 +538,14 @@ class CoverageGrid {
   // row[i] = min(row[i], lowest) for i in [i0, i1].
   static void lower_row_flat(float* row, int i0, int i1, float lowest);
 
+#if CULLKIT_COVERAGE_AVX2
+  // The lanes of a group of eight cells that hold the first `count` (1 to 8) of them, for a masked
+  // load and store.
+  static __m256i tail_lanes(int count) {
+    return _mm256_cmpgt_epi32(_mm256_set1_epi32(count), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+  }
+#endif
+
   // Bit (i & 63) set for each i in [lo, hi] (one word's cells, lo <= hi) with row[i] >= limit.
   static std::uint64_t nearer_bits(const float* row, int lo, int hi, float limit);
 

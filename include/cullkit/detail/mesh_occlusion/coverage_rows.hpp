@@ -447,7 +447,10 @@ inline float CoverageGrid::tile_minimum(int j0, int j1, int i0, int i1) const {
 inline void CoverageGrid::lower_row_sloped(float* row, int i0, int i1, int step0, float start, float slope, float lowest) {
   int i = i0;
 #if CULLKIT_COVERAGE_AVX2
-  if (i + 7 <= i1) {
+  // Eight cells at a time, the last 1 to 7 as one masked group (the cells past i1 are neither read
+  // nor written): rows run about 9 cells, so a tail of four and then single cells would cost as
+  // much as the groups of eight.
+  {
     const __m256 low = _mm256_set1_ps(lowest), a = _mm256_set1_ps(slope), s = _mm256_set1_ps(start),
                  eight = _mm256_set1_ps(8.0f);
     __m256 steps = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(step0), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
@@ -455,6 +458,12 @@ inline void CoverageGrid::lower_row_sloped(float* row, int i0, int i1, int step0
       const __m256 v = _mm256_max_ps(_mm256_add_ps(s, _mm256_mul_ps(a, steps)), low);
       _mm256_storeu_ps(row + i, _mm256_min_ps(v, _mm256_loadu_ps(row + i)));
       steps = _mm256_add_ps(steps, eight);
+    }
+    if (i <= i1) {
+      const __m256 v = _mm256_max_ps(_mm256_add_ps(s, _mm256_mul_ps(a, steps)), low);
+      const __m256i lanes = tail_lanes(i1 - i + 1);
+      _mm256_maskstore_ps(row + i, lanes, _mm256_min_ps(v, _mm256_maskload_ps(row + i, lanes)));
+      return;
     }
   }
 #endif
@@ -480,6 +489,11 @@ inline void CoverageGrid::lower_row_flat(float* row, int i0, int i1, float lowes
 #if CULLKIT_COVERAGE_AVX2
   const __m256 low8 = _mm256_set1_ps(lowest);
   for (; i + 7 <= i1; i += 8) _mm256_storeu_ps(row + i, _mm256_min_ps(low8, _mm256_loadu_ps(row + i)));
+  if (i <= i1) {  // the last 1 to 7 cells, as lower_row_sloped
+    const __m256i lanes = tail_lanes(i1 - i + 1);
+    _mm256_maskstore_ps(row + i, lanes, _mm256_min_ps(low8, _mm256_maskload_ps(row + i, lanes)));
+    return;
+  }
 #endif
 #if CULLKIT_HAS_SSE2
   const __m128 low = _mm_set1_ps(lowest);
