@@ -319,25 +319,30 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const TriangleBvh& bvh, const float e
   std::uint64_t cm[4] = {0, 0, 0, 0};
   float nv[4];
   frame_node_test(node, eye, p, mask, cm, nv);
-  int order[4], count = 0;
+  // The children reached, pushed farthest first (equal distances: the lower child first), so the
+  // nearest is popped next. Each child's place is counted rather than found by an insertion sort:
+  // which children a packet reaches, and in what order, is noise to a branch predictor.
+  int reached[4], place[4];
+  for (int j = 0; j < 4; ++j)
+    reached[j] = static_cast<int>(cm[j] != 0) & static_cast<int>(node.child[j] != TriangleBvhNode::empty);
   for (int j = 0; j < 4; ++j) {
-    if (!cm[j] || node.child[j] == TriangleBvhNode::empty) continue;
-    int at = count++;
-    while (at > 0 && nv[order[at - 1]] < nv[j]) {
-      order[at] = order[at - 1];
-      --at;
-    }
-    order[at] = j;
+    int before = 0;
+    for (int i = 0; i < 4; ++i)
+      before += reached[i] & (static_cast<int>(nv[i] > nv[j]) |
+                              (static_cast<int>(nv[i] == nv[j]) & static_cast<int>(i < j)));
+    place[j] = before;
   }
-  for (int q = 0; q < count; ++q) {
-    const std::uint32_t code = node.child[order[q]];
+  for (int j = 0; j < 4; ++j) {
+    if (!reached[j]) continue;
+    const std::uint32_t code = node.child[j];
     if (TriangleBvhNode::is_leaf(code)) {
       leaf.prefetch(TriangleBvhNode::leaf_first(code), TriangleBvhNode::leaf_count(code));
     } else {
       detail::prefetch(bvh.nodes.data() + code);  // one cache line
     }
-    c.stack[c.top++] = FrameCursor::Entry{code, 0u, cm[order[q]], nv[order[q]] * (1.0f - frame_t_slack), 0u};
+    c.stack[c.top + place[j]] = FrameCursor::Entry{code, 0u, cm[j], nv[j] * (1.0f - frame_t_slack), 0u};
   }
+  c.top += reached[0] + reached[1] + reached[2] + reached[3];
 }
 
 }  // namespace cullkit::detail::nci
