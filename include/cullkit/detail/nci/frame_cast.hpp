@@ -233,12 +233,31 @@ CULLKIT_FORCEINLINE void frame_node_test(const TriangleBvhNode& node, const floa
 }
 
 // The rays of `mask` that meet the box lo..hi: frame_ray_meets for each, four rays per compare
-// where SSE is available (the same float operations in the same order, so the same answer; the
-// std::min / std::max operand order is kept by the order of the SSE operands).
+// where SSE is available, eight with AVX2 (the same float operations in the same order, so the same
+// answer; the std::min / std::max operand order is kept by the order of the SIMD operands).
 [[nodiscard]] CULLKIT_FORCEINLINE std::uint64_t frame_rays_meet(const FramePacket& p, std::uint64_t mask, const float lo[3],
                                                                 const float hi[3]) {
   std::uint64_t out = 0;
-#if CULLKIT_HAS_SSE2
+#if CULLKIT_HAS_SSE2 && defined(__AVX2__)
+  const __m256 l[3] = {_mm256_set1_ps(lo[0]), _mm256_set1_ps(lo[1]), _mm256_set1_ps(lo[2])};
+  const __m256 h[3] = {_mm256_set1_ps(hi[0]), _mm256_set1_ps(hi[1]), _mm256_set1_ps(hi[2])};
+  const __m256 lo_scale = _mm256_set1_ps(1.0f - frame_t_slack), hi_scale = _mm256_set1_ps(1.0f + frame_t_slack);
+  const float* inv[3] = {p.ix, p.iy, p.iz};
+  for (std::uint64_t m = mask; m;) {
+    const int g = detail::lowest_bit(m) & ~7;  // the first lane of the group of eight
+    m &= ~(std::uint64_t{0xFF} << g);
+    __m256 tn = _mm256_setzero_ps(), tf = _mm256_loadu_ps(p.t + g);
+    for (int a = 0; a < 3; ++a) {
+      const __m256 r = _mm256_loadu_ps(inv[a] + g);
+      const __m256 t0 = _mm256_mul_ps(l[a], r), t1 = _mm256_mul_ps(h[a], r);
+      tn = _mm256_max_ps(_mm256_min_ps(t1, t0), tn);
+      tf = _mm256_min_ps(_mm256_max_ps(t1, t0), tf);
+    }
+    const int in = _mm256_movemask_ps(_mm256_cmp_ps(_mm256_mul_ps(tn, lo_scale), _mm256_mul_ps(tf, hi_scale), _CMP_LE_OQ));
+    out |= static_cast<std::uint64_t>(in) << g;
+  }
+  return out & mask;
+#elif CULLKIT_HAS_SSE2
   const __m128 l[3] = {_mm_set1_ps(lo[0]), _mm_set1_ps(lo[1]), _mm_set1_ps(lo[2])};
   const __m128 h[3] = {_mm_set1_ps(hi[0]), _mm_set1_ps(hi[1]), _mm_set1_ps(hi[2])};
   const __m128 lo_scale = _mm_set1_ps(1.0f - frame_t_slack), hi_scale = _mm_set1_ps(1.0f + frame_t_slack);
