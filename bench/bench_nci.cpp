@@ -701,8 +701,10 @@ int frame_race(const std::string& name, int reps) {
           for (std::size_t i = 0; i < tri.size(); ++i)
             differ += tri[i] != px.triangle[i] || (tri[i] != NciPixels::miss && depth[i] != px.depth[i]);
           std::printf("frame_agree,%s,pixels_differing=%zu\n", race.c_str(), differ);
-          std::printf("frame_stats,%s,nodes=%llu,leaves=%llu\n", race.c_str(),
-                      static_cast<unsigned long long>(fc.stats.nodes), static_cast<unsigned long long>(fc.stats.leaves));
+          std::printf("frame_stats,%s,nodes=%llu,leaves=%llu,rays_per_node=%.2f,rays_per_leaf=%.2f\n", race.c_str(),
+                      static_cast<unsigned long long>(fc.stats.nodes), static_cast<unsigned long long>(fc.stats.leaves),
+                      double(fc.stats.node_rays) / double(std::max<std::uint64_t>(fc.stats.nodes, 1)),
+                      double(fc.stats.leaf_rays) / double(std::max<std::uint64_t>(fc.stats.leaves, 1)));
         }
         std::vector<cullkit_bench::Contestant> field = {
             {"embree_rtcIntersect1", [&] { cullkit_bench::keep(embree.render1(cam, threads)); }},

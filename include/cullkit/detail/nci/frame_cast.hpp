@@ -1,8 +1,9 @@
 // cullkit/detail/nci/frame_cast.hpp: casting packets of up to 64 rays from the eye through the
 // triangle hierarchy (triangle_bvh.hpp). Per node, each ray of the packet still reaching it takes one
-// 4-wide box test over the children; the children reached are entered nearest first, each with the
-// rays that reach it, and a ray leaves a subtree once its nearest solid hit lies before the
-// subtree's box. Leaves go to the caller's test.
+// 4-wide box test over the children (two rays per 8-wide test in a build for AVX2, the same answers);
+// the children reached are entered nearest first, each with the rays that reach it, and a ray
+// leaves a subtree once its nearest solid hit lies before the subtree's box. Leaves go to the
+// caller's test.
 //
 // A packet's traversal is a resumable cursor, so that several packets take turns (frame_tile.hpp
 // runs four): each step does one node or one phase of a leaf, and what the packet reads at its next
@@ -25,6 +26,9 @@
 
 #if CULLKIT_HAS_SSE2
 #include <emmintrin.h>
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
 #endif
 
 namespace cullkit::detail::nci {
@@ -33,9 +37,9 @@ namespace cullkit::detail::nci {
 // (ix, iy, iz)[k] (finite: a component below 1e-30 in magnitude is taken as +-1e-30) and holds its
 // nearest solid hit so far at t[k], which the leaf test lowers.
 struct FramePacket {
-  alignas(16) float ix[64];
-  alignas(16) float iy[64];
-  alignas(16) float iz[64];
+  alignas(16) float ix[64] = {};  // every lane defined: box tests read groups of four
+  alignas(16) float iy[64] = {};
+  alignas(16) float iz[64] = {};
   alignas(16) float t[64] = {};  // every lane defined: the depth cut compares four at a time
 };
 
@@ -60,6 +64,7 @@ inline constexpr std::size_t frame_turns = 4;
 
 struct FrameCastStats {
   std::uint64_t nodes = 0, leaves = 0;
+  std::uint64_t node_rays = 0, leaf_rays = 0;  // the rays of the entries visited, summed over the visits
 };
 
 struct FrameCursor {
@@ -97,8 +102,6 @@ CULLKIT_FORCEINLINE void frame_node_test(const TriangleBvhNode& node, const floa
                                          std::uint64_t mask, std::uint64_t cm[4], float nv[4]) {
   const float lo_scale = 1.0f - frame_t_slack, hi_scale = 1.0f + frame_t_slack;
 #if CULLKIT_HAS_SSE2
-  const __m128 los = _mm_set1_ps(lo_scale), his = _mm_set1_ps(hi_scale), zero = _mm_setzero_ps();
-  const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
   const __m128 sign = _mm_set1_ps(-0.0f);
   // The four bounds of row q on axis a (TriangleBvhNode::bound, four at a time), less the eye.
   const auto row = [&](const std::uint8_t q[4], int a) {
@@ -120,6 +123,42 @@ CULLKIT_FORCEINLINE void frame_node_test(const TriangleBvhNode& node, const floa
   const __m128 grow = _mm_mul_ps(far, _mm_set1_ps(frame_box_growth));
   lx = _mm_sub_ps(lx, grow), ly = _mm_sub_ps(ly, grow), lz = _mm_sub_ps(lz, grow);
   hx = _mm_add_ps(hx, grow), hy = _mm_add_ps(hy, grow), hz = _mm_add_ps(hz, grow);
+  // Which children each ray reaches goes to one byte per ray (bit j: child j), turned into the
+  // children's masks sixteen rays at a time after the loop: a store per ray instead of four
+  // masked updates.
+  alignas(16) std::uint8_t reach[64] = {};
+#if defined(__AVX2__)
+  // Two rays per compare: the low half of each register serves one ray, the high half the next
+  // (the same ray again when the mask holds an odd count), the same float operations per lane.
+  const __m256 los8 = _mm256_set1_ps(lo_scale), his8 = _mm256_set1_ps(hi_scale), zero8 = _mm256_setzero_ps();
+  const __m256 inf8 = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  const __m256 lx8 = _mm256_set_m128(lx, lx), hx8 = _mm256_set_m128(hx, hx), ly8 = _mm256_set_m128(ly, ly);
+  const __m256 hy8 = _mm256_set_m128(hy, hy), lz8 = _mm256_set_m128(lz, lz), hz8 = _mm256_set_m128(hz, hz);
+  __m256 nearest8 = inf8;
+  for (std::uint64_t m = mask; m;) {
+    const int k = detail::lowest_bit(m);
+    m &= m - 1;
+    const int k2 = m ? detail::lowest_bit(m) : k;
+    m &= m - 1;
+    const auto pair = [&](const float* v) { return _mm256_set_m128(_mm_set1_ps(v[k2]), _mm_set1_ps(v[k])); };
+    const __m256 rx = pair(p.ix), ry = pair(p.iy), rz = pair(p.iz);
+    const __m256 ax = _mm256_mul_ps(lx8, rx), bx = _mm256_mul_ps(hx8, rx);
+    const __m256 ay = _mm256_mul_ps(ly8, ry), by = _mm256_mul_ps(hy8, ry);
+    const __m256 az = _mm256_mul_ps(lz8, rz), bz = _mm256_mul_ps(hz8, rz);
+    const __m256 tn = _mm256_max_ps(_mm256_max_ps(_mm256_min_ps(ax, bx), _mm256_min_ps(ay, by)),
+                                    _mm256_max_ps(_mm256_min_ps(az, bz), zero8));
+    const __m256 tf = _mm256_min_ps(_mm256_min_ps(_mm256_max_ps(ax, bx), _mm256_max_ps(ay, by)),
+                                    _mm256_min_ps(_mm256_max_ps(az, bz), pair(p.t)));
+    const __m256 hit = _mm256_cmp_ps(_mm256_mul_ps(tn, los8), _mm256_mul_ps(tf, his8), _CMP_LE_OQ);
+    const int bits = _mm256_movemask_ps(hit);
+    nearest8 = _mm256_min_ps(nearest8, _mm256_or_ps(_mm256_and_ps(hit, tn), _mm256_andnot_ps(hit, inf8)));
+    reach[k] = static_cast<std::uint8_t>(bits & 0xF);
+    reach[k2] = static_cast<std::uint8_t>(bits >> 4);
+  }
+  const __m128 nearest = _mm_min_ps(_mm256_castps256_ps128(nearest8), _mm256_extractf128_ps(nearest8, 1));
+#else
+  const __m128 los = _mm_set1_ps(lo_scale), his = _mm_set1_ps(hi_scale), zero = _mm_setzero_ps();
+  const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
   __m128 nearest = inf;
   for (std::uint64_t m = mask; m; m &= m - 1) {
     const int k = detail::lowest_bit(m);
@@ -131,13 +170,19 @@ CULLKIT_FORCEINLINE void frame_node_test(const TriangleBvhNode& node, const floa
     const __m128 tf = _mm_min_ps(_mm_min_ps(_mm_max_ps(ax, bx), _mm_max_ps(ay, by)),
                                  _mm_min_ps(_mm_max_ps(az, bz), _mm_set1_ps(p.t[k])));
     const __m128 hit = _mm_cmple_ps(_mm_mul_ps(tn, los), _mm_mul_ps(tf, his));
-    const std::uint64_t bits = static_cast<std::uint64_t>(_mm_movemask_ps(hit));
     nearest = _mm_min_ps(nearest, _mm_or_ps(_mm_and_ps(hit, tn), _mm_andnot_ps(hit, inf)));
-    const std::uint64_t rb = std::uint64_t{1} << k;  // branch-free: which children a ray reaches is noise
-    cm[0] |= rb & (0 - (bits & 1u));
-    cm[1] |= rb & (0 - ((bits >> 1) & 1u));
-    cm[2] |= rb & (0 - ((bits >> 2) & 1u));
-    cm[3] |= rb & (0 - ((bits >> 3) & 1u));
+    reach[k] = static_cast<std::uint8_t>(_mm_movemask_ps(hit));
+  }
+#endif
+  // Bit j of each byte to the top of its byte (shifting 16-bit lanes: the low byte's bits land
+  // below bit 7 of the high one), sixteen rays' bits per movemask.
+  for (int c = 0; c < 4; ++c) {
+    if (!((mask >> (16 * c)) & 0xFFFFu)) continue;
+    const __m128i v = _mm_load_si128(reinterpret_cast<const __m128i*>(reach + 16 * c));
+    cm[0] |= static_cast<std::uint64_t>(static_cast<unsigned>(_mm_movemask_epi8(_mm_slli_epi16(v, 7)))) << (16 * c);
+    cm[1] |= static_cast<std::uint64_t>(static_cast<unsigned>(_mm_movemask_epi8(_mm_slli_epi16(v, 6)))) << (16 * c);
+    cm[2] |= static_cast<std::uint64_t>(static_cast<unsigned>(_mm_movemask_epi8(_mm_slli_epi16(v, 5)))) << (16 * c);
+    cm[3] |= static_cast<std::uint64_t>(static_cast<unsigned>(_mm_movemask_epi8(_mm_slli_epi16(v, 4)))) << (16 * c);
   }
   _mm_storeu_ps(nv, nearest);
 #else
@@ -188,12 +233,31 @@ CULLKIT_FORCEINLINE void frame_node_test(const TriangleBvhNode& node, const floa
 }
 
 // The rays of `mask` that meet the box lo..hi: frame_ray_meets for each, four rays per compare
-// where SSE is available (the same float operations in the same order, so the same answer; the
-// std::min / std::max operand order is kept by the order of the SSE operands).
+// where SSE is available, eight with AVX2 (the same float operations in the same order, so the same
+// answer; the std::min / std::max operand order is kept by the order of the SIMD operands).
 [[nodiscard]] CULLKIT_FORCEINLINE std::uint64_t frame_rays_meet(const FramePacket& p, std::uint64_t mask, const float lo[3],
                                                                 const float hi[3]) {
   std::uint64_t out = 0;
-#if CULLKIT_HAS_SSE2
+#if CULLKIT_HAS_SSE2 && defined(__AVX2__)
+  const __m256 l[3] = {_mm256_set1_ps(lo[0]), _mm256_set1_ps(lo[1]), _mm256_set1_ps(lo[2])};
+  const __m256 h[3] = {_mm256_set1_ps(hi[0]), _mm256_set1_ps(hi[1]), _mm256_set1_ps(hi[2])};
+  const __m256 lo_scale = _mm256_set1_ps(1.0f - frame_t_slack), hi_scale = _mm256_set1_ps(1.0f + frame_t_slack);
+  const float* inv[3] = {p.ix, p.iy, p.iz};
+  for (std::uint64_t m = mask; m;) {
+    const int g = detail::lowest_bit(m) & ~7;  // the first lane of the group of eight
+    m &= ~(std::uint64_t{0xFF} << g);
+    __m256 tn = _mm256_setzero_ps(), tf = _mm256_loadu_ps(p.t + g);
+    for (int a = 0; a < 3; ++a) {
+      const __m256 r = _mm256_loadu_ps(inv[a] + g);
+      const __m256 t0 = _mm256_mul_ps(l[a], r), t1 = _mm256_mul_ps(h[a], r);
+      tn = _mm256_max_ps(_mm256_min_ps(t1, t0), tn);
+      tf = _mm256_min_ps(_mm256_max_ps(t1, t0), tf);
+    }
+    const int in = _mm256_movemask_ps(_mm256_cmp_ps(_mm256_mul_ps(tn, lo_scale), _mm256_mul_ps(tf, hi_scale), _CMP_LE_OQ));
+    out |= static_cast<std::uint64_t>(in) << g;
+  }
+  return out & mask;
+#elif CULLKIT_HAS_SSE2
   const __m128 l[3] = {_mm_set1_ps(lo[0]), _mm_set1_ps(lo[1]), _mm_set1_ps(lo[2])};
   const __m128 h[3] = {_mm_set1_ps(hi[0]), _mm_set1_ps(hi[1]), _mm_set1_ps(hi[2])};
   const __m128 lo_scale = _mm_set1_ps(1.0f - frame_t_slack), hi_scale = _mm_set1_ps(1.0f + frame_t_slack);
@@ -264,33 +328,40 @@ CULLKIT_FORCEINLINE void frame_cursor_step(const TriangleBvh& bvh, const float e
       return;
     }
     ++stats.leaves;
+    stats.leaf_rays += static_cast<std::uint64_t>(detail::popcount(mask));
     leaf.test(first, count, mask, e.carry);
     return;
   }
   const TriangleBvhNode& node = bvh.nodes[e.code];
   ++stats.nodes;
+  stats.node_rays += static_cast<std::uint64_t>(detail::popcount(mask));
   std::uint64_t cm[4] = {0, 0, 0, 0};
   float nv[4];
   frame_node_test(node, eye, p, mask, cm, nv);
-  int order[4], count = 0;
+  // The children reached, pushed farthest first (equal distances: the lower child first), so the
+  // nearest is popped next. Each child's place is counted rather than found by an insertion sort:
+  // which children a packet reaches, and in what order, is noise to a branch predictor.
+  int reached[4], place[4];
+  for (int j = 0; j < 4; ++j)
+    reached[j] = static_cast<int>(cm[j] != 0) & static_cast<int>(node.child[j] != TriangleBvhNode::empty);
   for (int j = 0; j < 4; ++j) {
-    if (!cm[j] || node.child[j] == TriangleBvhNode::empty) continue;
-    int at = count++;
-    while (at > 0 && nv[order[at - 1]] < nv[j]) {
-      order[at] = order[at - 1];
-      --at;
-    }
-    order[at] = j;
+    int before = 0;
+    for (int i = 0; i < 4; ++i)
+      before += reached[i] & (static_cast<int>(nv[i] > nv[j]) |
+                              (static_cast<int>(nv[i] == nv[j]) & static_cast<int>(i < j)));
+    place[j] = before;
   }
-  for (int q = 0; q < count; ++q) {
-    const std::uint32_t code = node.child[order[q]];
+  for (int j = 0; j < 4; ++j) {
+    if (!reached[j]) continue;
+    const std::uint32_t code = node.child[j];
     if (TriangleBvhNode::is_leaf(code)) {
       leaf.prefetch(TriangleBvhNode::leaf_first(code), TriangleBvhNode::leaf_count(code));
     } else {
       detail::prefetch(bvh.nodes.data() + code);  // one cache line
     }
-    c.stack[c.top++] = FrameCursor::Entry{code, 0u, cm[order[q]], nv[order[q]] * (1.0f - frame_t_slack), 0u};
+    c.stack[c.top + place[j]] = FrameCursor::Entry{code, 0u, cm[j], nv[j] * (1.0f - frame_t_slack), 0u};
   }
+  c.top += reached[0] + reached[1] + reached[2] + reached[3];
 }
 
 }  // namespace cullkit::detail::nci
