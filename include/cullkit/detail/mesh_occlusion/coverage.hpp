@@ -261,7 +261,9 @@ class CoverageGrid {
       if (band_crossings_) {
         covered += accumulate_freeze_row(j, i0, i1, last);
       } else {
-        covered += freeze(j, i0, last);
+        // Whole groups of the vector loop (within the row): the cells around the band's range hold
+        // no crossing and none of them qualifies (see `freeze`), so they change nothing.
+        covered += freeze(j, i0 & ~(row_group - 1), std::min(i1 | (row_group - 1), width_ - 1));
       }
       grow(dirty_, CellRect{i0, j, last, j});
       use(j, i0, last);
@@ -273,7 +275,7 @@ class CoverageGrid {
 
   /// Freezes the cells of row j in [a, b] that are covered and not yet frozen at their running
   /// bound. Cells outside the band's changed ranges never qualify (any change of their counters
-  /// was scanned at the end of its band), so whole aligned groups of four may be tested.
+  /// was scanned at the end of its band), so whole aligned groups of cells may be tested.
   std::size_t freeze(int j, int a, int b);
 
   /// Starts a patch's own grid over the cells `r` of `main` (the union, a grid of the same size): a
@@ -302,7 +304,11 @@ class CoverageGrid {
         const int lo = std::max(r.x0, word << 6), hi = std::min(r.x1, (word << 6) + 63);
         const std::uint64_t range = (~std::uint64_t{0} << (lo & 63)) & (~std::uint64_t{0} >> (63 - (hi & 63)));
         const std::uint64_t candidates = every_cell ? range : covered[word] & range;
-        const std::uint64_t seeded = candidates == 0 ? 0 : nearer_bits(from, lo, hi, nearest) & candidates;
+        // Compared by whole groups of the vector loop (within the row): a comparison of a cell that is
+        // no candidate is masked off.
+        const std::uint64_t seeded =
+            candidates == 0 ? 0
+                            : nearer_bits(from, lo & ~(row_group - 1), std::min(hi | (row_group - 1), width_ - 1), nearest) & candidates;
         frozen[word] |= seeded;
         open = open || seeded != range;
       }
@@ -560,8 +566,8 @@ class CoverageGrid {
   // absorb's pass over the cells [a, b] of the row, `run` the crossings' sum carried in and out:
   // returns the cells newly covered here by the counts.
   std::size_t absorb_span(const AbsorbPass& pass, int a, int b, std::int32_t& run);
-  // Cells absorb_span's vector loop takes at once.
-  static constexpr int absorb_group = CULLKIT_COVERAGE_AVX2 ? 8 : CULLKIT_HAS_SSE2 ? 4 : 1;
+  // Cells the row kernels' vector loops (freeze, accumulate_freeze_row, absorb_span) take at once.
+  static constexpr int row_group = CULLKIT_COVERAGE_AVX2 ? 8 : CULLKIT_HAS_SSE2 ? 4 : 1;
 
   // True when every cell of row j in [i0, i1] is covered (0 <= i0 <= i1 < width).
   [[nodiscard]] bool row_frozen(int j, int i0, int i1) const {
@@ -611,8 +617,11 @@ class CoverageGrid {
   // through i1, and on to the row's end while the sum is not zero: a crossing beyond the last column
   // is dropped, so a row's sum need not return to zero. Every crossing of the band lies in
   // [i0, i1] (`mark`), so past i1 the sum is constant. In the same pass, freezes the cells whose
-  // count makes them covered (as `freeze` would after it). `last` gets the last cell changed;
-  // returns how many cells it covered.
+  // count makes them covered (as `freeze` would after it). `last` gets the last cell changed (i1,
+  // or the row's end); returns how many cells it covered. The pass runs over whole groups of its
+  // vector loop: a cell of the row outside the band's range holds no crossing, so before i0 the sum
+  // adds 0, past i1 it adds what the run on to the row's end would, and such a cell that counts at
+  // least one is covered already (see `freeze`).
   std::size_t accumulate_freeze_row(int j, int i0, int i1, int& last);
 
 #if CULLKIT_COVERAGE_AVX2

@@ -118,7 +118,7 @@ inline std::size_t CoverageGrid::absorb(CoverageGrid& patch, bool layers) {
     // The span widened to whole groups of the vector loop (within the row): the patch's cells
     // outside its used ones are empty (no count, crossing, bound or depth), and adding an empty cell
     // changes nothing here (see absorb_span), so the loop needs no cell-by-cell head or tail.
-    const int a = i0 & ~(absorb_group - 1), b = std::min(i1 | (absorb_group - 1), width_ - 1);
+    const int a = i0 & ~(row_group - 1), b = std::min(i1 | (row_group - 1), width_ - 1);
     covered += absorb_span(pass, a, b, run);
     int last = i1;
     if (run != 0) {
@@ -525,14 +525,15 @@ inline std::size_t CoverageGrid::accumulate_freeze_row(int j, int i0, int i1, in
     count[i] += run;
     freeze_cell(i);
   };
-  int i = i0;
+  const int end = std::min(i1 | (row_group - 1), width_ - 1);
+  int i = i0 & ~(row_group - 1);
 #if CULLKIT_COVERAGE_AVX2
   // Eight cells at a time: a prefix sum within each half, the low half's total added to the high
   // half, plus the carry so far (exact integer sums, as the scalar loop's).
-  for (; i <= i1 && (i & 7) != 0; ++i) one(i);
+  for (; i <= end && (i & 7) != 0; ++i) one(i);
   __m256i carry8 = _mm256_set1_epi32(run);
   const __m256i zero8 = _mm256_setzero_si256(), last_lane = _mm256_set1_epi32(7);
-  for (; i + 7 <= i1; i += 8) {
+  for (; i + 7 <= end; i += 8) {
     __m256i d = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(diff + i));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(diff + i), zero8);
     d = _mm256_add_epi32(d, _mm256_slli_si256(d, 4));
@@ -548,10 +549,10 @@ inline std::size_t CoverageGrid::accumulate_freeze_row(int j, int i0, int i1, in
 #endif
 #if CULLKIT_HAS_SSE2
   // Four cells at a time: an in-register prefix sum (two shifted adds) plus the carry so far.
-  for (; i <= i1 && (i & 3) != 0; ++i) one(i);
+  for (; i <= end && (i & 3) != 0; ++i) one(i);
   __m128i carry = _mm_set1_epi32(run);
   const __m128i zero = _mm_setzero_si128();
-  for (; i + 3 <= i1; i += 4) {
+  for (; i + 3 <= end; i += 4) {
     __m128i d = _mm_loadu_si128(reinterpret_cast<const __m128i*>(diff + i));
     _mm_storeu_si128(reinterpret_cast<__m128i*>(diff + i), zero);
     d = _mm_add_epi32(d, _mm_slli_si128(d, 4));
@@ -564,9 +565,9 @@ inline std::size_t CoverageGrid::accumulate_freeze_row(int j, int i0, int i1, in
   }
   run = _mm_cvtsi128_si32(carry);
 #endif
-  for (; i <= i1; ++i) one(i);
+  for (; i <= end; ++i) one(i);
   if (run == 0) {
-    last = i - 1;
+    last = i1;
     return covered;
   }
   // Past the band's last crossing the sum is constant: it is added on to the row's end.
