@@ -484,6 +484,57 @@ inline void CoverageGrid::lower_row_sloped(float* row, int i0, int i1, int step0
   }
 }
 
+inline void CoverageGrid::touch_centres(std::int32_t* row, int i0, int i1, const EdgeSides& e) {
+  const double qy = e.qy, dx = e.dx, dy = e.dy;
+  int i = i0;
+#if CULLKIT_COVERAGE_AVX2
+  {
+    const double along = dx * qy;  // rounded on its own, as in the scalar loop
+#if defined(__FMA__)
+    // s = dx * qy - dy * qx and tol = near_line + rounding * (|qx| + |qy|) as the scalar loop is
+    // compiled under FMA: the second product fused into the difference, the sum's product fused.
+    const auto side_of = [](__m256d b, __m256d q, __m256d a) { return _mm256_fnmadd_pd(b, q, a); };
+    const auto mul_add = [](__m256d b, __m256d c, __m256d a) { return _mm256_fmadd_pd(b, c, a); };
+#else
+    const auto side_of = [](__m256d b, __m256d q, __m256d a) { return _mm256_sub_pd(a, _mm256_mul_pd(b, q)); };
+    const auto mul_add = [](__m256d b, __m256d c, __m256d a) { return _mm256_add_pd(a, _mm256_mul_pd(b, c)); };
+#endif
+    const __m256d xa = _mm256_set1_pd(e.xa), half = _mm256_set1_pd(0.5), along4 = _mm256_set1_pd(along);
+    const __m256d dy4 = _mm256_set1_pd(dy), near_line = _mm256_set1_pd(e.near_line), rounding = _mm256_set1_pd(e.rounding);
+    const __m256d side = _mm256_set1_pd(static_cast<double>(e.side)), zero = _mm256_setzero_pd();
+    const __m256d magnitude_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffll));
+    const __m256d abs_qy = _mm256_set1_pd(std::fabs(qy));
+    const __m256d once = _mm256_set1_pd(static_cast<double>(e.delta)), twice = _mm256_set1_pd(static_cast<double>(2 * e.delta));
+    const __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
+    for (;;) {
+      const __m256d qx = _mm256_sub_pd(_mm256_add_pd(_mm256_cvtepi32_pd(_mm_add_epi32(_mm_set1_epi32(i), lane)), half), xa);
+      const __m256d s = side_of(dy4, qx, along4);  // orient2d(a, b, centre)
+      const __m256d tol = mul_add(_mm256_add_pd(_mm256_and_pd(qx, magnitude_mask), abs_qy), rounding, near_line);
+      const __m256d inner = _mm256_and_pd(_mm256_cmp_pd(_mm256_mul_pd(s, side), zero, _CMP_GT_OQ), once);
+      const __m256d too_close = _mm256_cmp_pd(_mm256_and_pd(s, magnitude_mask), tol, _CMP_LE_OQ);
+      const __m128i weight = _mm256_cvttpd_epi32(_mm256_blendv_pd(inner, twice, too_close));
+      __m128i* cells = reinterpret_cast<__m128i*>(row + i);
+      if (i + 3 < i1) {
+        _mm_storeu_si128(cells, _mm_sub_epi32(_mm_loadu_si128(cells), weight));
+        i += 4;
+        continue;
+      }
+      const __m128i lanes = _mm_cmpgt_epi32(_mm_set1_epi32(i1 - i + 1), lane);
+      _mm_maskstore_epi32(row + i, lanes, _mm_sub_epi32(_mm_maskload_epi32(row + i, lanes), weight));
+      return;
+    }
+  }
+#endif
+  for (; i <= i1; ++i) {
+    const double qx = i + 0.5 - e.xa;
+    const double s = dx * qy - dy * qx;  // orient2d(a, b, centre)
+    const double tol = e.near_line + e.rounding * (std::fabs(qx) + std::fabs(qy));
+    // Branch-free: which side a centre falls on is data, not a pattern.
+    const int inner = s * e.side > 0.0 ? e.delta : 0;
+    row[i] -= std::fabs(s) <= tol ? 2 * e.delta : inner;
+  }
+}
+
 inline void CoverageGrid::lower_row_flat(float* row, int i0, int i1, float lowest) {
   int i = i0;
 #if CULLKIT_COVERAGE_AVX2
