@@ -25,6 +25,11 @@
 //   (row_strips.hpp): 2 of 48 frames differ on the city, 10 of 16 on fzk_haus, in every setup;
 //   a triangle's depth plane set up on the strip's rows of its cells only (CoverageGrid::add_depth):
 //   lasdunasarena's camera 6 differs in 3 setups (6 checks).
+// One thread gathers on demand (occluders.hpp) and several threads gather all, so these compare the
+// two too. Mutants caught there (with the real scenes / the generated ones alone): a patch dropped
+// ungathered when ANY cell of its box is covered near enough: 1,224 of 1,351 / 910 of 1,021 checks
+// failed; when its box's cells are covered as near as its FARTHEST corner: 640 / 406 failed; the
+// ungathered patches ordered by their box's farthest corner: 830 / 546 failed.
 #include <algorithm>
 #include <cstdio>
 #include <string>

@@ -308,6 +308,28 @@ class CoverageGrid {
     return open;
   }
 
+  /// True when `r` (on the rows worked on) reaches some row and every cell of it is covered with an
+  /// inverse depth of at least `nearest` (positive): then `seed_frozen` from this grid over any part
+  /// of `r`, with any `nearest` no larger, finds no open cell, now and after any later operation on
+  /// this grid (a covered cell stays covered, and its depth only ever grows nearer).
+  [[nodiscard]] bool covered_nearer(CellRect r, float nearest) const {
+    if (!(nearest > 0.0f) || r.empty() || !window_rows(r)) return false;
+    for (int j = r.y0; j <= r.y1; ++j)
+      if (!row_frozen(j, r.x0, r.x1)) return false;
+    for (int j = r.y0; j <= r.y1; ++j) {
+      const float* depth = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+      for (int word = r.x0 >> 6; word <= r.x1 >> 6; ++word) {
+        const int lo = std::max(r.x0, word << 6), hi = std::min(r.x1, (word << 6) + 63);
+        const std::uint64_t range = (~std::uint64_t{0} << (lo & 63)) & (~std::uint64_t{0} >> (63 - (hi & 63)));
+        // The comparisons of seed_frozen, by the same whole groups.
+        const std::uint64_t nearer =
+            nearer_bits(depth, lo & ~(row_group - 1), std::min(hi | (row_group - 1), width_ - 1), nearest);
+        if ((nearer & range) != range) return false;
+      }
+    }
+    return true;
+  }
+
   /// True when `r` (on the rows worked on) reaches some row and no cell of it, nor the cell after it
   /// in its row, has been used since the grid was last cleared: those cells then hold no count,
   /// outline mark, bound, depth or covered bit (every operation that changes one uses the cell).

@@ -129,6 +129,12 @@ struct Scratch {
   // (nearest key, patch), nearest first, and its own sort buffer (radix_sort swaps the two: sharing
   // the triangles' would trade a small vector into their place and regrow it every frame).
   std::vector<std::pair<std::uint32_t, std::uint32_t>> patch_order, patch_sort_buffer;
+  // One thread gathers an occluder only when its turn may come (gather_on_demand, occluders.hpp):
+  // those not gathered yet as (lowest key they can have, occluder), lowest first, from
+  // `next_ungathered` on; the gathered ones waiting for their turn, a heap of (key, occluder).
+  bool on_demand = false;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> ungathered, ungathered_buffer, waiting;
+  std::size_t next_ungathered = 0;
   std::vector<std::uint32_t> member_stamp;
   std::uint32_t member_value = 0;
   CoverageGrid patch_grid;
@@ -278,7 +284,8 @@ inline BoxView project_box(const View& view, const Aabb& box) {
   return b;
 }
 
-/// A patch's box seen from the eye, projected once per frame.
+/// A patch's box seen from the eye, projected once per frame (for the patch of an object of one
+/// patch chosen as an occluder candidate, the object's box seen from the eye, which holds it).
 inline const BoxView& patch_box(const MeshIndex& index, Scratch& s, std::uint32_t patch) {
   if (s.patch_stamp[patch] != s.frame) {
     s.patch_stamp[patch] = s.frame;

@@ -45,6 +45,9 @@ struct PatchSet {
   // Per patch, 1 when one of its triangles is also in another patch (objects that overlap): only
   // such patches need a frame's check that a triangle goes in once.
   std::vector<std::uint8_t> shares_triangles;
+  // Per patch, the box of its triangles' corners and of the whole triangles its cut parts come from
+  // (its triangles' keys in a frame's sort reach the whole's corners); `box` when it holds no part.
+  std::vector<Aabb> key_box;
   std::uint32_t largest = 0;  // the most triangles of any patch
   // The welded corners of patch p's triangles, and of the whole triangles its cut parts come from,
   // each once: vertices[vertex_first[p], vertex_first[p + 1]). A frame projects its occluders' corners
@@ -124,6 +127,7 @@ inline void build_patches(PatchSet& set, const std::vector<glm::vec3>& positions
   for (const std::uint32_t t : set.triangles)
     if (patch_count[t] < 2) ++patch_count[t];
   set.shares_triangles.assign(set.patches.size(), 0);
+  set.key_box.resize(set.patches.size());
   set.largest = 0;
   set.vertex_first.assign(set.patches.size() + 1, 0);
   set.vertices.clear();
@@ -139,12 +143,16 @@ inline void build_patches(PatchSet& set, const std::vector<glm::vec3>& positions
     const Patch& patch = set.patches[p];
     set.largest = std::max(set.largest, patch.count);
     const auto id = static_cast<std::uint32_t>(p);
+    set.key_box[p] = patch.box;
     for (std::uint32_t k = patch.first; k < patch.first + patch.count; ++k) {
       const std::uint32_t t = set.triangles[k];
       if (patch_count[t] > 1) set.shares_triangles[p] = 1;
       add_corners(&corners[3 * std::size_t(t)], id);
-      if (!parts.whole.empty() && parts.whole[t] != none)
-        add_corners(&parts.whole_corners[3 * std::size_t(parts.whole[t])], id);
+      if (!parts.whole.empty() && parts.whole[t] != none) {
+        const std::uint32_t* whole = &parts.whole_corners[3 * std::size_t(parts.whole[t])];
+        for (int c = 0; c < 3; ++c) set.key_box[p] = merge(set.key_box[p], positions[whole[c]]);
+        add_corners(whole, id);
+      }
     }
     set.vertex_first[p + 1] = static_cast<std::uint32_t>(set.vertices.size());
   }

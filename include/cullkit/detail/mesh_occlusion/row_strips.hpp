@@ -81,7 +81,7 @@ inline bool depth_bounds_positive(const MeshIndex& index, const View& view) {
   return static_cast<float>((1.0 / w_max) * (1.0 - 0x1p-20)) > 0.0f;
 }
 
-/// Inserts every patch into the rows of `strip`, in the order of `s.patch_order`, with the memory
+/// Inserts every patch into the rows of `strip`, in the order `next` gives (below), with the memory
 /// of `task`, into `grid` (the union: the frame's grid or the task's own). Per patch, its
 /// triangles whose cells reach the strip's rows are its run there; its own grid is seeded from the
 /// union over the run's box (a cell the union covers at least as near as the run's nearest point
@@ -115,8 +115,13 @@ inline bool depth_bounds_positive(const MeshIndex& index, const View& view) {
 ///   and no depth both ways;
 /// - the edges shared with earlier patches are then taken out of the same union, as before.
 /// Without `patch_layers` the union drops the covered cells whose count fell, so `direct` needs them.
-inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& params, const Scratch& s, Strip& strip,
-                         StripTask& task, CoverageGrid& grid, bool direct) {
+///
+/// The patches come from `next(q, group, place, count)`: occluder q's sorted triangles group[0,
+/// count), at places [place, place + count) of `s.by_patch` (read for their extents on several
+/// strips); false when none is left. insert_strip takes them from `s.patch_order`.
+template <class NextPatch>
+inline void insert_strip_in_order(const MeshIndex& index, const MeshOcclusionParams& params, const Scratch& s,
+                                  Strip& strip, StripTask& task, CoverageGrid& grid, bool direct, NextPatch&& next) {
   const int width = grid.width(), height = grid.height();
   const int orient = s.view.orient;
   grid.set_rows(strip.first_row, strip.last_row);
@@ -128,17 +133,17 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
   // what it inserts directly: nothing to share with other strips.
   const bool whole = strip.first_row == 0 && strip.last_row == height - 1 && s.triangle_extents.empty();
   std::size_t inserted = 0;
-  for (const auto& entry : s.patch_order) {
-    const std::uint32_t q = entry.second;
-    const std::uint32_t b = s.patch_first[q], e = s.patch_first[q + 1];
+  std::uint32_t q = 0, place = 0, count = 0;
+  const std::pair<std::uint32_t, std::uint32_t>* group = nullptr;
+  while (next(q, group, place, count)) {
     if (++task.member_value == 0) {
       std::fill(task.member_stamp.begin(), task.member_stamp.end(), 0);
       task.member_value = 1;
     }
     task.run.clear();
     double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, w_min = HUGE_VAL;
-    for (std::uint32_t i = b; i < e; ++i) {
-      const std::uint32_t t = s.by_patch[i].second;
+    for (std::uint32_t i = place; i < place + count; ++i) {
+      const std::uint32_t t = group[i - place].second;
       double bx0, by0, bx1, by1, bw;
       if (whole) {
         const OccluderBox& box = occluder_box(s, t);
@@ -193,6 +198,50 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
   strip.inserted_count = whole ? inserted : 0;
 }
 
+/// insert_strip_in_order with the patches in the order of `s.patch_order`.
+inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& params, const Scratch& s, Strip& strip,
+                         StripTask& task, CoverageGrid& grid, bool direct) {
+  std::size_t k = 0;
+  insert_strip_in_order(index, params, s, strip, task, grid, direct,
+                        [&](std::uint32_t& q, const std::pair<std::uint32_t, std::uint32_t>*& group,
+                            std::uint32_t& place, std::uint32_t& count) {
+                          if (k == s.patch_order.size()) return false;
+                          q = s.patch_order[k++].second;
+                          place = s.patch_first[q];
+                          count = s.patch_first[q + 1] - place;
+                          group = s.by_patch.data() + place;
+                          return true;
+                        });
+}
+
+/// One thread: inserts the occluders into the frame's grid as one strip, as insert_strip does, in
+/// the same order, gathering each only when its turn may come (next_on_demand): one whose box's
+/// cells are all covered near enough by then is never gathered, and goes in nowhere, as
+/// insert_strip would have skipped it. The same grid and the same count of inserted triangles.
+inline void insert_on_demand(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+  const int width = s.grid.width(), height = s.grid.height();
+  if (s.strips.empty()) s.strips.resize(1);
+  if (s.strip_tasks.empty()) s.strip_tasks.resize(1);
+  Strip& strip = s.strips[0];
+  strip.first_row = 0;
+  strip.last_row = height - 1;
+  begin_strip_task(index, s.strip_tasks[0], width, height, index.patches.largest, false);
+  const bool direct = params.patch_layers && depth_bounds_positive(index, s.view);
+  // Gathering writes `s` while insert_strip_in_order reads it: never the same entries (a gathered
+  // occluder's region, slots and bands are not written again this frame).
+  insert_strip_in_order(index, params, s, strip, s.strip_tasks[0], s.grid, direct,
+                        [&](std::uint32_t& q, const std::pair<std::uint32_t, std::uint32_t>*& group,
+                            std::uint32_t& place, std::uint32_t& count) {
+                          if (!next_on_demand(index, params, s, q)) return false;
+                          place = s.region_first[q];
+                          count = s.gathered_count[q];
+                          group = s.triangles.data() + place;
+                          return true;
+                        });
+  s.grid.set_rows(0, height - 1);
+  s.stats.occluder_triangles += strip.inserted_count;
+}
+
 /// Inserts every gathered triangle into the frame's grid, patch by patch (a patch's nearest
 /// triangle first decides its turn), each patch alone into a grid of its own in depth bands, then
 /// added into the frame's grid; strip by strip of the grid's rows, the triangles' extents and the
@@ -206,6 +255,10 @@ inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& para
 /// the union's, the cell takes it (`patch_layers`). A wall standing on a floor that went in before
 /// it leaves its own depth, not the floor's, in front of what is behind it.
 inline void insert_patches(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+  if (s.on_demand) {
+    insert_on_demand(index, params, s);
+    return;
+  }
   if (s.by_patch.empty()) return;
   const int width = s.grid.width(), height = s.grid.height();
   const int strips = insertion_strips(params, height);
