@@ -146,7 +146,7 @@ struct Scratch {
   std::vector<Strip> strips;
   std::vector<StripTask> strip_tasks;
   std::vector<TriangleExtent> triangle_extents;
-  std::vector<std::uint32_t> strip_order, strip_work;
+  std::vector<std::uint32_t> strip_order, strip_work, row_work;
 };
 
 
