@@ -139,26 +139,72 @@ inline const BoxView& patch_box(const MeshIndex& index, TaskFrame& f, std::uint3
 inline bool box_hidden(const TaskFrame& f, const BoxView& b, const Aabb& box) { return box_hidden(f.frame, b, box); }
 
 /// s.boxes[i] for every object in the frustum, on `tasks` tasks; and, for the objects that may be
-/// occluders (those choose_occluders measures patch by patch), their patches' boxes in the frame's
-/// cache, so that the choice, on the calling thread, finds them projected. Each object's patches
-/// are its own: no two tasks write the same slot.
-inline void project_boxes_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, unsigned tasks) {
-  const double min_cells =
-      std::max(1.0, params.min_occluder_screen_fraction * double(s.grid.width()) * double(s.grid.height()));
+/// occluders (those object_candidates measures patch by patch), their patches' boxes in the frame's
+/// cache (only those inside the frustum: choose_occluders_on_tasks reads that from the cache).
+/// Each object's patches are its own: no two tasks write the same slot. The first task to start
+/// also empties the frame's grid (already of the parameters' size: its size is all the others read
+/// of it). Returns how far the objects reach (measure_reach), each task measuring the objects it took.
+inline ObjectReach project_boxes_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
+                                          unsigned tasks) {
+  const double min_cells = min_occluder_cells(params, s.grid);
   const PatchSet& ps = index.patches;
   BatchCounter batches(s.in_frustum.size(), box_batch);
-  run_each_task(params.task_runner, batches.tasks_for(tasks), [&](std::size_t) {
+  const unsigned used = batches.tasks_for(tasks);
+  if (s.tasks.size() < used) s.tasks.resize(used);
+  for (unsigned k = 0; k < used; ++k) s.tasks[k].reach = ObjectReach{};
+  std::atomic<bool> grid_taken{false};
+  run_each_task(params.task_runner, used, [&](std::size_t task) {
+    if (!grid_taken.exchange(true, std::memory_order_relaxed)) s.grid.reset(params.grid_width, params.grid_height);
+    ObjectReach& reach = s.tasks[task].reach;
     std::size_t first, last;
     while (batches.claim(first, last))
       for (std::size_t i = first; i < last; ++i) {
         const std::uint32_t o = s.in_frustum[i];
         s.boxes[i] = project_box(s.view, index.bounds[o]);
+        measure_reach(index, s, i, reach);
         const std::uint32_t p0 = ps.object_first[o], p1 = ps.object_first[o + 1];
         if (p1 - p0 < 2 || !index.objects[o].occludes || screen_cells(s.boxes[i], s.grid) < min_cells) continue;
         for (std::uint32_t p = p0; p < p1; ++p)
           if (s.frustum.classify(ps.patches[p].box) != Containment::outside) patch_box(index, s, p);
       }
   });
+  ObjectReach reach;
+  for (unsigned k = 0; k < used; ++k) reach.add(s.tasks[k].reach);
+  return reach;
+}
+
+/// Objects per batch that a task measures as occluders at a time.
+inline constexpr std::size_t choice_batch = 64;
+
+/// choose_occluders on `tasks` tasks, with the same result, after project_boxes_on_tasks (its
+/// `reach`): each task lists the candidate patches of the objects it takes and sorts its list; the
+/// lists are merged in the candidates' total order (bigger_candidate), which is the one sorted list
+/// of them all, and the occluders taken from it on the calling thread. A patch inside the frustum is
+/// one whose box the projection step put in the frame's cache.
+inline void choose_occluders_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, unsigned tasks,
+                                      const ObjectReach& reach) {
+  BatchCounter batches(s.in_frustum.size(), choice_batch);
+  const unsigned used = batches.tasks_for(tasks);
+  if (s.tasks.size() < used) s.tasks.resize(used);
+  const auto patch_view = [&s](std::uint32_t p) -> const BoxView* {
+    return s.patch_stamp[p] == s.frame ? &s.patch_boxes[p] : nullptr;
+  };
+  run_each_task(params.task_runner, used, [&](std::size_t task) {
+    std::vector<std::pair<float, std::uint32_t>>& list = s.tasks[task].candidates;
+    list.clear();
+    std::size_t first, last;
+    while (batches.claim(first, last))
+      for (std::size_t i = first; i < last; ++i) object_candidates(index, params, s, i, reach, patch_view, list);
+    std::sort(list.begin(), list.end(), bigger_candidate);
+  });
+  s.candidates.clear();
+  for (unsigned k = 0; k < used; ++k) {
+    const auto& list = s.tasks[k].candidates;
+    s.candidate_merge.resize(s.candidates.size() + list.size());
+    std::merge(s.candidates.begin(), s.candidates.end(), list.begin(), list.end(), s.candidate_merge.begin(), bigger_candidate);
+    s.candidates.swap(s.candidate_merge);
+  }
+  take_occluders(index, params, s);
 }
 
 /// The corners of the chosen occluders' triangles (and of the whole triangles their cut parts come
