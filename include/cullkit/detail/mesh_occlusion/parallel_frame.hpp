@@ -204,6 +204,10 @@ inline void choose_occluders_on_tasks(const MeshIndex& index, const MeshOcclusio
     std::merge(s.candidates.begin(), s.candidates.end(), list.begin(), list.end(), s.candidate_merge.begin(), bigger_candidate);
     s.candidates.swap(s.candidate_merge);
   }
+  // However the objects fall to the tasks next time, no list outgrows what the frame held (the
+  // merge's two buffers trade places, each holding a first task's list one time, all the next).
+  for (unsigned k = 0; k < used; ++k) s.tasks[k].candidates.reserve(s.candidates.size());
+  s.candidate_merge.reserve(s.candidates.size());
   take_occluders(index, params, s);
 }
 
