@@ -1,12 +1,15 @@
 // cullkit/detail/mesh_occlusion/parallel_frame.hpp: the parts of a frame of MeshOcclusionCuller::cull
 // that run on several tasks (MeshOcclusionParams::threads), through the caller's TaskRunner or the
 // library's pool: the projection of the objects' boxes (with the patch boxes the occluder choice
-// reads), the projection of the occluders' corners, and the object tests against the finished grid.
-// The occluder insertion runs on tasks strip by strip of the grid's rows (row_strips.hpp).
+// reads), the occluder candidates, the projection of the occluders' corners, the gathering of their
+// triangles, and the object tests against the finished grid. The occluder insertion runs on tasks
+// strip by strip of the grid's rows (row_strips.hpp).
 //
-// Why the answer cannot depend on the tasks: each object's box, each patch's box, each corner and
-// each object's test is a function of the frame's view and finished grid alone, computed by the same code in
-// every task; a task writes only the slots of the objects it took and its own caches.
+// Why the answer cannot depend on the tasks: each object's box, each patch's box, each candidate,
+// each corner and each object's test is a function of the frame's view and finished grid alone,
+// computed by the same code in every task; a task writes only the slots of the objects it took and
+// its own caches; what tasks list (candidates, gathered occluders) is merged or joined in an order
+// that does not depend on which task listed what.
 #pragma once
 
 #include <algorithm>

@@ -1,9 +1,9 @@
 // cullkit/detail/mesh_occlusion/query.hpp: one frame of MeshOcclusionCuller::cull, as named steps:
 // frustum walk, object boxes on screen, occluder choice (occluders.hpp), the occluder patches into
 // the coverage grid strip by strip of its rows (row_strips.hpp), moving occluders into the same grid
-// (moving.hpp), object tests (object_tests.hpp). The boxes, the corners, the gathering of the
-// occluder triangles, the strips and the object tests run on several tasks when the parameters ask
-// for threads (parallel_frame.hpp). The steps are compiled only where the frame's definition is
+// (moving.hpp), object tests (object_tests.hpp). The boxes, the occluder candidates, the corners,
+// the gathering of the occluder triangles, the strips and the object tests run on several tasks when
+// the parameters ask for threads (parallel_frame.hpp). The steps are compiled only where the frame's definition is
 // (CULLKIT_SEPARATE_CORE, config.hpp).
 #pragma once
 
