@@ -214,36 +214,83 @@ inline void choose_occluders_on_tasks(const MeshIndex& index, const MeshOcclusio
   take_occluders(index, params, s);
 }
 
-/// The corners of the chosen occluders' triangles (and of the whole triangles their cut parts come
-/// from, PatchSet::vertices) projected on `tasks` tasks (one: on the calling thread) into the
-/// frame's cache, so that gathering finds them there: the slots are given out here, in the order the
-/// occluders list them, and each is filled by one task with what project_vertex would put there
-/// (the same view, its final clipping level included). Projecting them in one pass, from each
-/// patch's list of its corners, costs less than looking each triangle's three up as it is gathered.
-/// Call after choose_occluders.
-inline void project_occluder_corners_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
-                                              unsigned tasks) {
+/// Gives the corners of the chosen occluders' patches (PatchSet::vertices) their slots in the
+/// frame's cache from `first_slot` on, in the order the occluders list them, each once, into
+/// `s.corner_list`'s places; after each occluder, `listed` tells how many have one (release: the
+/// places and slots before it are written). Returns the count.
+inline std::size_t list_occluder_corners(const MeshIndex& index, Scratch& s, std::size_t first_slot,
+                                         std::atomic<std::size_t>* listed) {
   const PatchSet& ps = index.patches;
-  const std::size_t first_slot = s.projected.size();
-  s.corner_list.clear();
-  for (const auto& occluder : s.occluders)
+  std::size_t count = 0;
+  for (const auto& occluder : s.occluders) {
     for (std::uint32_t i = ps.vertex_first[occluder.second]; i < ps.vertex_first[occluder.second + 1]; ++i) {
       const std::uint32_t v = ps.vertices[i];
       if (s.vertex_stamp[v] == s.frame) continue;
       s.vertex_stamp[v] = s.frame;
-      s.vertex_slot[v] = static_cast<std::uint32_t>(first_slot + s.corner_list.size());
-      s.corner_list.push_back(v);
+      s.vertex_slot[v] = static_cast<std::uint32_t>(first_slot + count);
+      s.corner_list[count++] = v;
     }
-  s.projected.resize(first_slot + s.corner_list.size());
-  BatchCounter batches(s.corner_list.size(), corner_batch);
-  run_each_task(params.task_runner, batches.tasks_for(tasks), [&](std::size_t) {
-    std::size_t first, last;
-    while (batches.claim(first, last))
-      for (std::size_t j = first; j < last; ++j) {
-        const glm::vec3& p = index.positions[s.corner_list[j]];
-        s.projected[first_slot + j] = s.view.project(p.x, p.y, p.z);
+    if (listed != nullptr) listed->store(count, std::memory_order_release);
+  }
+  return count;
+}
+
+/// The corners of the chosen occluders' triangles (and of the whole triangles their cut parts come
+/// from, PatchSet::vertices) projected on `tasks` tasks (one: on the calling thread) into the
+/// frame's cache, so that gathering finds them there: the slots are given out in the order the
+/// occluders list them (list_occluder_corners), and each is filled by one task with what
+/// project_vertex would put there (the same view, its final clipping level included). Projecting
+/// them in one pass, from each patch's list of its corners, costs less than looking each triangle's
+/// three up as it is gathered. On several tasks the first task to start gives out the slots while
+/// the others project the corners listed so far (it joins them when done): a task waits only while
+/// that task runs. Call after choose_occluders.
+inline void project_occluder_corners_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
+                                              unsigned tasks) {
+  const PatchSet& ps = index.patches;
+  const std::size_t first_slot = s.projected.size();
+  std::size_t places = 0;  // every corner each occluder lists: room for the ones given slots
+  for (const auto& occluder : s.occluders) places += ps.vertex_first[occluder.second + 1] - ps.vertex_first[occluder.second];
+  s.corner_list.resize(places);
+  s.projected.resize(first_slot + places);
+  const auto project = [&](std::size_t first, std::size_t last) {
+    for (std::size_t j = first; j < last; ++j) {
+      const glm::vec3& p = index.positions[s.corner_list[j]];
+      s.projected[first_slot + j] = s.view.project(p.x, p.y, p.z);
+    }
+  };
+  const unsigned used = BatchCounter(places, corner_batch).tasks_for(tasks);
+  std::size_t count = 0;
+  if (used == 1) {
+    count = list_occluder_corners(index, s, first_slot, nullptr);
+    project(0, count);
+  } else {
+    std::atomic<std::size_t> listed{0}, next{0};
+    std::atomic<bool> lister_taken{false}, all_listed{false};
+    run_each_task(params.task_runner, used, [&](std::size_t) {
+      if (!lister_taken.exchange(true, std::memory_order_relaxed)) {
+        list_occluder_corners(index, s, first_slot, &listed);
+        all_listed.store(true, std::memory_order_release);
       }
-  });
+      // Claims up to a batch of the corners listed so far; once all are listed and claimed, done.
+      std::size_t first = next.load(std::memory_order_relaxed);
+      for (;;) {
+        const bool over = all_listed.load(std::memory_order_acquire);
+        const std::size_t ready = listed.load(std::memory_order_acquire);
+        if (first >= ready) {
+          if (over) return;
+          first = next.load(std::memory_order_relaxed);
+          continue;
+        }
+        const std::size_t last = std::min(ready, first + corner_batch);
+        if (!next.compare_exchange_weak(first, last, std::memory_order_relaxed)) continue;
+        project(first, last);
+        first = next.load(std::memory_order_relaxed);
+      }
+    });
+    count = listed.load(std::memory_order_relaxed);
+  }
+  s.corner_list.resize(count);
+  s.projected.resize(first_slot + count);
 }
 
 /// Occluders per batch that a task gathers at a time (patches of up to a few hundred triangles).
