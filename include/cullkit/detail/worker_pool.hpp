@@ -76,6 +76,9 @@ class WorkerPool {
     wake_.notify_all();
     task(job, 0);
     claim(task, job, count);
+    // The other threads' last tasks end a few microseconds apart from this one's in a frame's
+    // steps: waiting for them without sleeping saves the wake-up that would follow.
+    spin_while_active();
     std::unique_lock<std::mutex> lock(mutex_);
     idle_.wait(lock, [&] { return active_ == 0; });
   }
@@ -100,6 +103,18 @@ class WorkerPool {
     const auto until = std::chrono::steady_clock::now() + spin_time;
     for (unsigned i = 1;; ++i) {
       if (published_.load(std::memory_order_acquire) != seen) return;
+#if CULLKIT_HAS_SSE2
+      _mm_pause();
+#endif
+      if ((i & 63u) == 0 && std::chrono::steady_clock::now() >= until) return;
+    }
+  }
+
+  // Waits up to `spin_time` without sleeping for the pool's threads to leave the claim loop.
+  void spin_while_active() const {
+    const auto until = std::chrono::steady_clock::now() + spin_time;
+    for (unsigned i = 1;; ++i) {
+      if (active_.load(std::memory_order_acquire) == 0) return;
 #if CULLKIT_HAS_SSE2
       _mm_pause();
 #endif
@@ -140,7 +155,8 @@ class WorkerPool {
   std::uint64_t generation_ = 0;
   std::atomic<std::uint64_t> published_{0};  // generation_, and a change at stop, readable unlocked
   static constexpr std::chrono::microseconds spin_time{std::chrono::microseconds(200)};
-  std::size_t active_ = 0;  // threads inside a claim loop
+  // Threads inside a claim loop: changed only under mutex_, read without it by a waiting caller.
+  std::atomic<std::size_t> active_{0};
   bool stop_ = false;
 };
 

@@ -32,6 +32,44 @@ struct BoxView {
   double w_max = HUGE_VAL;  // at least the largest depth of any point of the box, usable or not
 };
 
+/// The largest and the runner-up of a measure over the frustum's objects (for the object holding
+/// the largest, the farthest of the others is the runner-up). Ties and the order the objects come
+/// in change which object is `at`, never what `without` answers.
+struct Farthest {
+  double first = -HUGE_VAL, second = -HUGE_VAL;
+  std::size_t at = ~std::size_t{0};
+  void add(double v, std::size_t i) {
+    if (v > first) {
+      second = first;
+      first = v;
+      at = i;
+    } else if (v > second) {
+      second = v;
+    }
+  }
+  /// As if every object `other` saw had been added here too.
+  void add(const Farthest& other) {
+    if (other.first > first) {
+      second = std::max(first, other.second);
+      first = other.first;
+      at = other.at;
+    } else {
+      second = std::max(second, other.first);
+    }
+  }
+  [[nodiscard]] double without(std::size_t i) const { return i == at ? second : first; }
+};
+
+/// How far the frustum's objects reach from the eye, by depth and by distance: an occluder can only
+/// hide what lies beyond it along some ray from the eye, and both measures grow along every such ray.
+struct ObjectReach {
+  Farthest depth, distance;
+  void add(const ObjectReach& other) {
+    depth.add(other.depth);
+    distance.add(other.distance);
+  }
+};
+
 /// An occluder triangle clipped at the near plane (View::clip_level): its part beyond, a triangle or a
 /// quadrilateral in the triangle's own order. Corner k runs to corner k + 1 along the triangle's edge
 /// `edge[k]` (0 to 2), or along the clipping line (-1: always outline, never shared).
@@ -63,6 +101,10 @@ struct TaskScratch {
   std::vector<ClippedPolygon> clipped;
   std::vector<std::uint32_t> clipped_triangles, gathered;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> items, sort_buffer;
+  // Choosing the occluders: how far the objects this task projected reach, and the candidate
+  // patches of the objects it measured, sorted.
+  ObjectReach reach;
+  std::vector<std::pair<float, std::uint32_t>> candidates;
 };
 
 /// A strip of the grid's rows [first_row, last_row] in the occluder insertion (row_strips.hpp):
@@ -100,7 +142,7 @@ struct Scratch {
   glm::vec3 view_eye{0.0f};               // this frame's eye
   std::vector<std::uint32_t> in_frustum;  // tree positions, then objects
   std::vector<BoxView> boxes;             // parallel to in_frustum
-  std::vector<std::pair<float, std::uint32_t>> candidates;  // (screen cells, patch)
+  std::vector<std::pair<float, std::uint32_t>> candidates, candidate_merge;  // (screen cells, patch)
   std::vector<std::pair<double, std::uint32_t>> occluders;  // (depth key, patch)
   // (depth bits, triangle) of the gathered occluder triangles: occluder q's from region_first[q] on,
   // gathered_count[q] of them (gather_patch); and room to sort them.
@@ -152,7 +194,7 @@ struct Scratch {
   std::vector<Strip> strips;
   std::vector<StripTask> strip_tasks;
   std::vector<TriangleExtent> triangle_extents;
-  std::vector<std::uint32_t> strip_order, strip_work;
+  std::vector<std::uint32_t> strip_order, strip_work, row_work;
 };
 
 

@@ -40,95 +40,89 @@ inline bool patch_farther_than(const MeshIndex& index, const glm::dvec3& eye, co
   return true;
 }
 
-/// Picks occluder patches by size on screen, biggest first, within the triangle budget, leaving out
-/// those with fewer box cells per triangle than `min_occluder_cells_per_triangle`; fills
-/// `s.occluders`. A patch too big for what is left of the budget is skipped, smaller ones still fit.
-/// An object of one patch is measured by its own box (already projected).
-inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
-  const double grid_cells = double(s.grid.width()) * double(s.grid.height());
-  const double min_cells = std::max(1.0, params.min_occluder_screen_fraction * grid_cells);
-  const double cells_per_triangle = params.min_occluder_cells_per_triangle;
-  const PatchSet& ps = index.patches;
-  // Triangles that average under a cell each cost as much to insert as big ones and fill few cells.
-  const auto dense = [&](double cells, const Patch& patch) { return cells < cells_per_triangle * double(patch.count); };
-  // An occluder can only hide what lies beyond it along some ray from the eye, and both depth and
-  // distance from the eye grow along every such ray: a patch whose nearest point is farther, by
-  // either measure, than every point of every other object in the frustum hides none of them (a sky
-  // dome, the back wall of the view). Per measure, the largest over the objects and the runner-up
-  // (for the object holding the largest).
-  const glm::dvec3 eye(s.view.eye[0], s.view.eye[1], s.view.eye[2]);
-  struct Farthest {
-    double first = -HUGE_VAL, second = -HUGE_VAL;
-    std::size_t at = ~std::size_t{0};
-    void add(double v, std::size_t i) {
-      if (v > first) {
-        second = first;
-        first = v;
-        at = i;
-      } else if (v > second) {
-        second = v;
-      }
-    }
-    [[nodiscard]] double without(std::size_t i) const { return i == at ? second : first; }
-  } depth, distance;
-  for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
-    depth.add(s.boxes[i].w_max, i);
-    const Aabb& box = index.bounds[s.in_frustum[i]];
-    double d2 = 0.0;
-    for (int a = 0; a < 3; ++a) {
-      const double reach = std::max(std::fabs(double(box.min[a]) - eye[a]), std::fabs(double(box.max[a]) - eye[a]));
-      d2 += reach * reach;
-    }
-    distance.add(std::isfinite(d2) ? std::sqrt(d2) * (1.0 + 0x1p-30) : HUGE_VAL, i);
+/// Adds object i of the frustum (its box projected) to `reach`.
+inline void measure_reach(const MeshIndex& index, const Scratch& s, std::size_t i, ObjectReach& reach) {
+  reach.depth.add(s.boxes[i].w_max, i);
+  const Aabb& box = index.bounds[s.in_frustum[i]];
+  double d2 = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    const double r = std::max(std::fabs(double(box.min[a]) - s.view.eye[a]), std::fabs(double(box.max[a]) - s.view.eye[a]));
+    d2 += r * r;
   }
-  const auto beyond_the_rest = [&](const BoxView& b, const Patch& patch, std::size_t i) {
-    if (b.usable && b.w_min > depth.without(i)) return true;
+  reach.distance.add(std::isfinite(d2) ? std::sqrt(d2) * (1.0 + 0x1p-30) : HUGE_VAL, i);
+}
+
+/// Screen cells below which nothing is an occluder (MeshOcclusionParams::min_occluder_screen_fraction).
+inline double min_occluder_cells(const MeshOcclusionParams& params, const CoverageGrid& grid) {
+  return std::max(1.0, params.min_occluder_screen_fraction * double(grid.width()) * double(grid.height()));
+}
+
+/// Appends the patches of object i of the frustum that may be occluders to `out` as (screen cells,
+/// patch): those of at least `min_occluder_cells`, not too dense (`min_occluder_cells_per_triangle`)
+/// and not beyond every other object (`reach`). An object of one patch is measured by its own box;
+/// the patches of bigger ones by theirs: `patch_view(p)` gives patch p's box seen from the eye, or
+/// null when the patch is outside the frustum. Reads the frame only.
+template <class PatchView>
+inline void object_candidates(const MeshIndex& index, const MeshOcclusionParams& params, const Scratch& s, std::size_t i,
+                              const ObjectReach& reach, const PatchView& patch_view,
+                              std::vector<std::pair<float, std::uint32_t>>& out) {
+  const PatchSet& ps = index.patches;
+  const std::uint32_t o = s.in_frustum[i];
+  const std::uint32_t p0 = ps.object_first[o], p1 = ps.object_first[o + 1];
+  if (p0 == p1) return;
+  if (!index.objects[o].occludes) return;  // see-through: culled, never an occluder
+  const double min_cells = min_occluder_cells(params, s.grid);
+  const double object_cells = screen_cells(s.boxes[i], s.grid);
+  if (object_cells < min_cells) return;
+  // Triangles that average under a cell each cost as much to insert as big ones and fill few cells.
+  const double cells_per_triangle = params.min_occluder_cells_per_triangle;
+  const auto dense = [&](double cells, const Patch& patch) { return cells < cells_per_triangle * double(patch.count); };
+  // A patch whose nearest point is farther, by either measure, than every point of every other
+  // object in the frustum hides none of them (a sky dome, the back wall of the view).
+  const glm::dvec3 eye(s.view.eye[0], s.view.eye[1], s.view.eye[2]);
+  const auto beyond_the_rest = [&](const BoxView& b, const Patch& patch) {
+    if (b.usable && b.w_min > reach.depth.without(i)) return true;
     // A curved patch's box may reach far nearer than its surface, up to the eye (a piece of a sky
     // dome around the scene): its triangles' planes are the tighter bound. But a plane through a
     // point of the box is no farther from the eye than the box's farthest point: a box within the
     // limit (rounding far inside the margins) needs no look at its triangles.
-    const double limit = distance.without(i);
+    const double limit = reach.distance.without(i);
     if (!std::isfinite(limit)) return false;
     double d2 = 0.0;
     for (int a = 0; a < 3; ++a) {
-      const double reach =
-          std::max(std::fabs(double(patch.box.min[a]) - eye[a]), std::fabs(double(patch.box.max[a]) - eye[a]));
-      d2 += reach * reach;
+      const double r = std::max(std::fabs(double(patch.box.min[a]) - eye[a]), std::fabs(double(patch.box.max[a]) - eye[a]));
+      d2 += r * r;
     }
     if (std::sqrt(d2) * (1.0 + 0x1p-40) <= limit) return false;
     return patch_farther_than(index, eye, patch, limit);
   };
-  s.candidates.clear();
-  for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
-    const std::uint32_t o = s.in_frustum[i];
-    const std::uint32_t p0 = ps.object_first[o], p1 = ps.object_first[o + 1];
-    if (p0 == p1) continue;
-    if (!index.objects[o].occludes) continue;  // see-through: culled, never an occluder
-    const double object_cells = screen_cells(s.boxes[i], s.grid);
-    if (object_cells < min_cells) continue;
-    if (p1 - p0 == 1) {
-      if (!dense(object_cells, ps.patches[p0]) && !beyond_the_rest(s.boxes[i], ps.patches[p0], i)) {
-        s.candidates.emplace_back(static_cast<float>(object_cells), p0);
-        // Its patch's box seen from the eye, from here on: the object's holds the patch.
-        s.patch_stamp[p0] = s.frame;
-        s.patch_boxes[p0] = s.boxes[i];
-      }
-      continue;
-    }
-    for (std::uint32_t p = p0; p < p1; ++p) {
-      // A patch outside the frustum (behind the eye, say) would otherwise count as through the near
-      // plane, the biggest of all.
-      if (s.frustum.classify(ps.patches[p].box) == Containment::outside) continue;
-      const BoxView& b = patch_box(index, s, p);
-      const double cells = screen_cells(b, s.grid);
-      if (cells >= min_cells && !dense(cells, ps.patches[p]) && !beyond_the_rest(b, ps.patches[p], i)) s.candidates.emplace_back(static_cast<float>(cells), p);
-    }
+  if (p1 - p0 == 1) {
+    if (!dense(object_cells, ps.patches[p0]) && !beyond_the_rest(s.boxes[i], ps.patches[p0]))
+      out.emplace_back(static_cast<float>(object_cells), p0);
+    return;
   }
-  // Biggest first. A full sort of the candidates only (they are the patches above the size floor).
-  std::sort(s.candidates.begin(), s.candidates.end(),
-            [](const std::pair<float, std::uint32_t>& a, const std::pair<float, std::uint32_t>& b) {
-              return a.first > b.first || (a.first == b.first && a.second < b.second);
-            });
+  for (std::uint32_t p = p0; p < p1; ++p) {
+    // A patch outside the frustum (behind the eye, say) would otherwise count as through the near
+    // plane, the biggest of all.
+    const BoxView* b = patch_view(p);
+    if (b == nullptr) continue;
+    const double cells = screen_cells(*b, s.grid);
+    if (cells >= min_cells && !dense(cells, ps.patches[p]) && !beyond_the_rest(*b, ps.patches[p]))
+      out.emplace_back(static_cast<float>(cells), p);
+  }
+}
+
+/// The candidates' order: biggest on screen first, then by patch number (a total order, so any
+/// sort or merge of the same candidates gives the same list).
+inline bool bigger_candidate(const std::pair<float, std::uint32_t>& a, const std::pair<float, std::uint32_t>& b) {
+  return a.first > b.first || (a.first == b.first && a.second < b.second);
+}
+
+/// Takes the candidates of `s.candidates` (biggest first) into `s.occluders` within the triangle
+/// budget and the occluder count: a patch too big for what is left of the budget is skipped,
+/// smaller ones still fit. Then narrows the clipping level to the chosen patches' box.
+inline void take_occluders(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+  const PatchSet& ps = index.patches;
   s.occluders.clear();
   std::uint64_t budget = params.occluder_triangle_budget;
   Aabb chosen = Aabb::empty();
@@ -144,6 +138,35 @@ inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& 
     const double lo[3] = {chosen.min.x, chosen.min.y, chosen.min.z}, hi[3] = {chosen.max.x, chosen.max.y, chosen.max.z};
     s.view.narrow_clip_level(lo, hi);
   }
+}
+
+/// Picks occluder patches by size on screen, biggest first, within the triangle budget, leaving out
+/// those with fewer box cells per triangle than `min_occluder_cells_per_triangle`; fills
+/// `s.occluders` (object_candidates, take_occluders). On the calling thread; a cull on several
+/// tasks does the same on them (parallel_frame.hpp).
+inline void choose_occluders(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+  ObjectReach reach;
+  for (std::size_t i = 0; i < s.in_frustum.size(); ++i) measure_reach(index, s, i, reach);
+  const PatchSet& ps = index.patches;
+  const auto patch_view = [&](std::uint32_t p) -> const BoxView* {
+    if (s.frustum.classify(ps.patches[p].box) == Containment::outside) return nullptr;
+    return &patch_box(index, s, p);
+  };
+  s.candidates.clear();
+  for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
+    const std::size_t before = s.candidates.size();
+    object_candidates(index, params, s, i, reach, patch_view, s.candidates);
+    // An object of one patch lends its box, already projected, to its patch from here on (the
+    // object's box holds the patch): the occluders' gathering reads it.
+    const std::uint32_t o = s.in_frustum[i], p0 = ps.object_first[o];
+    if (s.candidates.size() != before && ps.object_first[o + 1] - p0 == 1) {
+      s.patch_stamp[p0] = s.frame;
+      s.patch_boxes[p0] = s.boxes[i];
+    }
+  }
+  // A full sort of the candidates only (they are the patches above the size floor).
+  std::sort(s.candidates.begin(), s.candidates.end(), bigger_candidate);
+  take_occluders(index, params, s);
 }
 
 /// Clips the occluder triangle of welded corners c (`inside`: a bit per corner beyond the clipping

@@ -1,12 +1,15 @@
 // cullkit/detail/mesh_occlusion/parallel_frame.hpp: the parts of a frame of MeshOcclusionCuller::cull
 // that run on several tasks (MeshOcclusionParams::threads), through the caller's TaskRunner or the
 // library's pool: the projection of the objects' boxes (with the patch boxes the occluder choice
-// reads), the projection of the occluders' corners, and the object tests against the finished grid.
-// The occluder insertion runs on tasks strip by strip of the grid's rows (row_strips.hpp).
+// reads), the occluder candidates, the projection of the occluders' corners, the gathering of their
+// triangles, and the object tests against the finished grid. The occluder insertion runs on tasks
+// strip by strip of the grid's rows (row_strips.hpp).
 //
-// Why the answer cannot depend on the tasks: each object's box, each patch's box, each corner and
-// each object's test is a function of the frame's view and finished grid alone, computed by the same code in
-// every task; a task writes only the slots of the objects it took and its own caches.
+// Why the answer cannot depend on the tasks: each object's box, each patch's box, each candidate,
+// each corner and each object's test is a function of the frame's view and finished grid alone,
+// computed by the same code in every task; a task writes only the slots of the objects it took and
+// its own caches; what tasks list (candidates, gathered occluders) is merged or joined in an order
+// that does not depend on which task listed what.
 #pragma once
 
 #include <algorithm>
@@ -139,58 +142,155 @@ inline const BoxView& patch_box(const MeshIndex& index, TaskFrame& f, std::uint3
 inline bool box_hidden(const TaskFrame& f, const BoxView& b, const Aabb& box) { return box_hidden(f.frame, b, box); }
 
 /// s.boxes[i] for every object in the frustum, on `tasks` tasks; and, for the objects that may be
-/// occluders (those choose_occluders measures patch by patch), their patches' boxes in the frame's
-/// cache, so that the choice, on the calling thread, finds them projected. Each object's patches
-/// are its own: no two tasks write the same slot.
-inline void project_boxes_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, unsigned tasks) {
-  const double min_cells =
-      std::max(1.0, params.min_occluder_screen_fraction * double(s.grid.width()) * double(s.grid.height()));
+/// occluders (those object_candidates measures patch by patch), their patches' boxes in the frame's
+/// cache (only those inside the frustum: choose_occluders_on_tasks reads that from the cache).
+/// Each object's patches are its own: no two tasks write the same slot. The first task to start
+/// also empties the frame's grid (already of the parameters' size: its size is all the others read
+/// of it). Returns how far the objects reach (measure_reach), each task measuring the objects it took.
+inline ObjectReach project_boxes_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
+                                          unsigned tasks) {
+  const double min_cells = min_occluder_cells(params, s.grid);
   const PatchSet& ps = index.patches;
   BatchCounter batches(s.in_frustum.size(), box_batch);
-  run_each_task(params.task_runner, batches.tasks_for(tasks), [&](std::size_t) {
+  const unsigned used = batches.tasks_for(tasks);
+  if (s.tasks.size() < used) s.tasks.resize(used);
+  for (unsigned k = 0; k < used; ++k) s.tasks[k].reach = ObjectReach{};
+  std::atomic<bool> grid_taken{false};
+  run_each_task(params.task_runner, used, [&](std::size_t task) {
+    if (!grid_taken.exchange(true, std::memory_order_relaxed)) s.grid.reset(params.grid_width, params.grid_height);
+    ObjectReach& reach = s.tasks[task].reach;
     std::size_t first, last;
     while (batches.claim(first, last))
       for (std::size_t i = first; i < last; ++i) {
         const std::uint32_t o = s.in_frustum[i];
         s.boxes[i] = project_box(s.view, index.bounds[o]);
+        measure_reach(index, s, i, reach);
         const std::uint32_t p0 = ps.object_first[o], p1 = ps.object_first[o + 1];
         if (p1 - p0 < 2 || !index.objects[o].occludes || screen_cells(s.boxes[i], s.grid) < min_cells) continue;
         for (std::uint32_t p = p0; p < p1; ++p)
           if (s.frustum.classify(ps.patches[p].box) != Containment::outside) patch_box(index, s, p);
       }
   });
+  ObjectReach reach;
+  for (unsigned k = 0; k < used; ++k) reach.add(s.tasks[k].reach);
+  return reach;
 }
 
-/// The corners of the chosen occluders' triangles (and of the whole triangles their cut parts come
-/// from, PatchSet::vertices) projected on `tasks` tasks (one: on the calling thread) into the
-/// frame's cache, so that gathering finds them there: the slots are given out here, in the order the
-/// occluders list them, and each is filled by one task with what project_vertex would put there
-/// (the same view, its final clipping level included). Projecting them in one pass, from each
-/// patch's list of its corners, costs less than looking each triangle's three up as it is gathered.
-/// Call after choose_occluders.
-inline void project_occluder_corners_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
-                                              unsigned tasks) {
+/// Objects per batch that a task measures as occluders at a time.
+inline constexpr std::size_t choice_batch = 64;
+
+/// choose_occluders on `tasks` tasks, with the same result, after project_boxes_on_tasks (its
+/// `reach`): each task lists the candidate patches of the objects it takes and sorts its list; the
+/// lists are merged in the candidates' total order (bigger_candidate), which is the one sorted list
+/// of them all, and the occluders taken from it on the calling thread. A patch inside the frustum is
+/// one whose box the projection step put in the frame's cache.
+inline void choose_occluders_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, unsigned tasks,
+                                      const ObjectReach& reach) {
+  BatchCounter batches(s.in_frustum.size(), choice_batch);
+  const unsigned used = batches.tasks_for(tasks);
+  if (s.tasks.size() < used) s.tasks.resize(used);
+  const auto patch_view = [&s](std::uint32_t p) -> const BoxView* {
+    return s.patch_stamp[p] == s.frame ? &s.patch_boxes[p] : nullptr;
+  };
+  run_each_task(params.task_runner, used, [&](std::size_t task) {
+    std::vector<std::pair<float, std::uint32_t>>& list = s.tasks[task].candidates;
+    list.clear();
+    std::size_t first, last;
+    while (batches.claim(first, last))
+      for (std::size_t i = first; i < last; ++i) object_candidates(index, params, s, i, reach, patch_view, list);
+    std::sort(list.begin(), list.end(), bigger_candidate);
+  });
+  s.candidates.clear();
+  for (unsigned k = 0; k < used; ++k) {
+    const auto& list = s.tasks[k].candidates;
+    s.candidate_merge.resize(s.candidates.size() + list.size());
+    std::merge(s.candidates.begin(), s.candidates.end(), list.begin(), list.end(), s.candidate_merge.begin(), bigger_candidate);
+    s.candidates.swap(s.candidate_merge);
+  }
+  // However the objects fall to the tasks next time, no list outgrows what the frame held (the
+  // merge's two buffers trade places, each holding a first task's list one time, all the next).
+  for (unsigned k = 0; k < used; ++k) s.tasks[k].candidates.reserve(s.candidates.size());
+  s.candidate_merge.reserve(s.candidates.size());
+  take_occluders(index, params, s);
+}
+
+/// Gives the corners of the chosen occluders' patches (PatchSet::vertices) their slots in the
+/// frame's cache from `first_slot` on, in the order the occluders list them, each once, into
+/// `s.corner_list`'s places; after each occluder, `listed` tells how many have one (release: the
+/// places and slots before it are written). Returns the count.
+inline std::size_t list_occluder_corners(const MeshIndex& index, Scratch& s, std::size_t first_slot,
+                                         std::atomic<std::size_t>* listed) {
   const PatchSet& ps = index.patches;
-  const std::size_t first_slot = s.projected.size();
-  s.corner_list.clear();
-  for (const auto& occluder : s.occluders)
+  std::size_t count = 0;
+  for (const auto& occluder : s.occluders) {
     for (std::uint32_t i = ps.vertex_first[occluder.second]; i < ps.vertex_first[occluder.second + 1]; ++i) {
       const std::uint32_t v = ps.vertices[i];
       if (s.vertex_stamp[v] == s.frame) continue;
       s.vertex_stamp[v] = s.frame;
-      s.vertex_slot[v] = static_cast<std::uint32_t>(first_slot + s.corner_list.size());
-      s.corner_list.push_back(v);
+      s.vertex_slot[v] = static_cast<std::uint32_t>(first_slot + count);
+      s.corner_list[count++] = v;
     }
-  s.projected.resize(first_slot + s.corner_list.size());
-  BatchCounter batches(s.corner_list.size(), corner_batch);
-  run_each_task(params.task_runner, batches.tasks_for(tasks), [&](std::size_t) {
-    std::size_t first, last;
-    while (batches.claim(first, last))
-      for (std::size_t j = first; j < last; ++j) {
-        const glm::vec3& p = index.positions[s.corner_list[j]];
-        s.projected[first_slot + j] = s.view.project(p.x, p.y, p.z);
+    if (listed != nullptr) listed->store(count, std::memory_order_release);
+  }
+  return count;
+}
+
+/// The corners of the chosen occluders' triangles (and of the whole triangles their cut parts come
+/// from, PatchSet::vertices) projected on `tasks` tasks (one: on the calling thread) into the
+/// frame's cache, so that gathering finds them there: the slots are given out in the order the
+/// occluders list them (list_occluder_corners), and each is filled by one task with what
+/// project_vertex would put there (the same view, its final clipping level included). Projecting
+/// them in one pass, from each patch's list of its corners, costs less than looking each triangle's
+/// three up as it is gathered. On several tasks the first task to start gives out the slots while
+/// the others project the corners listed so far (it joins them when done): a task waits only while
+/// that task runs. Call after choose_occluders.
+inline void project_occluder_corners_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
+                                              unsigned tasks) {
+  const PatchSet& ps = index.patches;
+  const std::size_t first_slot = s.projected.size();
+  std::size_t places = 0;  // every corner each occluder lists: room for the ones given slots
+  for (const auto& occluder : s.occluders) places += ps.vertex_first[occluder.second + 1] - ps.vertex_first[occluder.second];
+  s.corner_list.resize(places);
+  s.projected.resize(first_slot + places);
+  const auto project = [&](std::size_t first, std::size_t last) {
+    for (std::size_t j = first; j < last; ++j) {
+      const glm::vec3& p = index.positions[s.corner_list[j]];
+      s.projected[first_slot + j] = s.view.project(p.x, p.y, p.z);
+    }
+  };
+  const unsigned used = BatchCounter(places, corner_batch).tasks_for(tasks);
+  std::size_t count = 0;
+  if (used == 1) {
+    count = list_occluder_corners(index, s, first_slot, nullptr);
+    project(0, count);
+  } else {
+    std::atomic<std::size_t> listed{0}, next{0};
+    std::atomic<bool> lister_taken{false}, all_listed{false};
+    run_each_task(params.task_runner, used, [&](std::size_t) {
+      if (!lister_taken.exchange(true, std::memory_order_relaxed)) {
+        list_occluder_corners(index, s, first_slot, &listed);
+        all_listed.store(true, std::memory_order_release);
       }
-  });
+      // Claims up to a batch of the corners listed so far; once all are listed and claimed, done.
+      std::size_t first = next.load(std::memory_order_relaxed);
+      for (;;) {
+        const bool over = all_listed.load(std::memory_order_acquire);
+        const std::size_t ready = listed.load(std::memory_order_acquire);
+        if (first >= ready) {
+          if (over) return;
+          first = next.load(std::memory_order_relaxed);
+          continue;
+        }
+        const std::size_t last = std::min(ready, first + corner_batch);
+        if (!next.compare_exchange_weak(first, last, std::memory_order_relaxed)) continue;
+        project(first, last);
+        first = next.load(std::memory_order_relaxed);
+      }
+    });
+    count = listed.load(std::memory_order_relaxed);
+  }
+  s.corner_list.resize(count);
+  s.projected.resize(first_slot + count);
 }
 
 /// Occluders per batch that a task gathers at a time (patches of up to a few hundred triangles).

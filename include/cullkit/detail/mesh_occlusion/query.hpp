@@ -1,9 +1,9 @@
 // cullkit/detail/mesh_occlusion/query.hpp: one frame of MeshOcclusionCuller::cull, as named steps:
 // frustum walk, object boxes on screen, occluder choice (occluders.hpp), the occluder patches into
 // the coverage grid strip by strip of its rows (row_strips.hpp), moving occluders into the same grid
-// (moving.hpp), object tests (object_tests.hpp). The boxes, the corners, the gathering of the
-// occluder triangles, the strips and the object tests run on several tasks when the parameters ask
-// for threads (parallel_frame.hpp). The steps are compiled only where the frame's definition is
+// (moving.hpp), object tests (object_tests.hpp). The boxes, the occluder candidates, the corners,
+// the gathering of the occluder triangles, the strips and the object tests run on several tasks when
+// the parameters ask for threads (parallel_frame.hpp). The steps are compiled only where the frame's definition is
 // (CULLKIT_SEPARATE_CORE, config.hpp).
 #pragma once
 
@@ -76,13 +76,18 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
     s.view.clip_level = s.view.drawable_level = HUGE_VAL;  // no static occluder, no object to test
   }
   begin_frame(index, s);
-  s.grid.reset(params.grid_width, params.grid_height);
   s.boxes.resize(s.in_frustum.size());
   const unsigned tasks = frame_tasks(params, s.in_frustum.size());
-  if (tasks > 1) project_boxes_on_tasks(index, params, s, tasks);
-  else
+  // On several tasks, one of them empties the grid while the others project boxes.
+  if (tasks == 1 || s.grid.width() != params.grid_width || s.grid.height() != params.grid_height)
+    s.grid.reset(params.grid_width, params.grid_height);
+  if (tasks > 1) {
+    const ObjectReach reach = project_boxes_on_tasks(index, params, s, tasks);
+    choose_occluders_on_tasks(index, params, s, tasks, reach);
+  } else {
     for (std::size_t i = 0; i < s.in_frustum.size(); ++i) s.boxes[i] = project_box(s.view, index.bounds[s.in_frustum[i]]);
-  choose_occluders(index, params, s);
+    choose_occluders(index, params, s);
+  }
   const bool extents = insertion_strips(params, s.grid.height()) > 1;
   project_occluder_corners_on_tasks(index, params, s, tasks);
   if (tasks > 1) gather_triangles_on_tasks(index, params, s, tasks, extents);
