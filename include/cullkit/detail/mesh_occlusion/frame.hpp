@@ -173,10 +173,14 @@ struct Scratch {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> patch_order, patch_sort_buffer;
   // One thread gathers an occluder only when its turn may come (gather_on_demand, occluders.hpp):
   // those not gathered yet as (lowest key they can have, occluder), lowest first, from
-  // `next_ungathered` on; the gathered ones waiting for their turn, a heap of (key, occluder).
+  // `next_ungathered` on; the gathered ones waiting for their turn, a heap of (key, occluder). Per
+  // occluder waiting ungathered, the cells its patch's box may reach and the inverse depth the union
+  // must cover them at for it to be dropped (drop_test), set up with its lowest key.
   bool on_demand = false;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> ungathered, ungathered_buffer, waiting;
   std::size_t next_ungathered = 0;
+  std::vector<CellRect> drop_cells;
+  std::vector<float> drop_nearest;
   std::vector<std::uint32_t> member_stamp;
   std::uint32_t member_value = 0;
   CoverageGrid patch_grid;

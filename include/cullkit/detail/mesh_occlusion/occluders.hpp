@@ -486,17 +486,23 @@ inline std::uint32_t lowest_key(const MeshIndex& index, Scratch& s, std::uint32_
   return bits;
 }
 
-/// True when the union `grid` covers every cell that patch box `b` may reach (false when it is not
-/// usable), each at least as near as `depth_floor`: every triangle gathered from the patch has its
-/// screen box and nearest point within (the box's rectangle widened by 2^-16 of its coordinates,
-/// far beyond the rounding of a projection), so the patch would be skipped at its turn
-/// (insert_strip: no open cell to seed), and covered cells stay so.
-inline bool box_covered(const CoverageGrid& grid, const BoxView& b) {
-  if (!b.usable) return false;
+/// The test that drops a patch whose box is seen as `b` ungathered: the cells it may reach, into
+/// `cells`, and the inverse depth, into `nearest`, that the union must cover each of them at
+/// (CoverageGrid::covered_nearer). Every triangle gathered from the patch has its screen box and
+/// nearest point within (the box's rectangle widened by 2^-16 of its coordinates, far beyond the
+/// rounding of a projection, and its `depth_floor`), so when the union passes the test the patch
+/// would be skipped at its turn (insert_strip: no open cell to seed), and covered cells stay so.
+/// A box that is not usable gets an empty rectangle, which never passes.
+inline void drop_test(const CoverageGrid& grid, const BoxView& b, CellRect& cells, float& nearest) {
+  if (!b.usable) {
+    cells = CellRect{0, 0, -1, -1};
+    nearest = 0.0f;
+    return;
+  }
   const double magnitude = std::max(std::max(std::fabs(b.x0), std::fabs(b.x1)), std::max(std::fabs(b.y0), std::fabs(b.y1)));
   const double m = 0x1p-16 * (1.0 + magnitude);
-  const CellRect r = grid.cells_of(b.x0 - m, b.y0 - m, b.x1 + m, b.y1 + m);
-  return grid.covered_nearer(r, static_cast<float>(1.0 / depth_floor(b)));
+  cells = grid.cells_of(b.x0 - m, b.y0 - m, b.x1 + m, b.y1 + m);
+  nearest = static_cast<float>(1.0 / depth_floor(b));
 }
 
 /// Sorts items[0, n) by key, ties in their order (`buffer`: room for n): by insertion when few, else
@@ -560,11 +566,18 @@ inline void gather_on_demand(const MeshIndex& index, const MeshOcclusionParams& 
   s.waiting.clear();
   s.ungathered.clear();
   s.next_ungathered = 0;
+  s.drop_cells.resize(s.occluders.size());
+  s.drop_nearest.resize(s.occluders.size());
   for (std::size_t q = 0; q < s.occluders.size(); ++q) {
     const std::uint32_t patch = s.occluders[q].second;
     const std::uint32_t lowest = ps.shares_triangles[patch] ? 0 : lowest_key(index, s, patch);
-    if (lowest == 0) gather_waiting(index, params, s, static_cast<std::uint32_t>(q));
-    else s.ungathered.emplace_back(lowest, static_cast<std::uint32_t>(q));
+    if (lowest == 0) {
+      gather_waiting(index, params, s, static_cast<std::uint32_t>(q));
+      continue;
+    }
+    s.ungathered.emplace_back(lowest, static_cast<std::uint32_t>(q));
+    // Set up now, while the patch's box is at hand, not at its turn.
+    drop_test(s.grid, patch_box(index, s, patch), s.drop_cells[q], s.drop_nearest[q]);
   }
   radix_sort(s.ungathered, s.ungathered_buffer);
 }
@@ -573,7 +586,7 @@ inline void gather_on_demand(const MeshIndex& index, const MeshOcclusionParams& 
 /// all of them (order_groups: nearest triangle's key first, ties by occluder), into q. Before
 /// taking the nearest waiting occluder, gathers each ungathered one whose lowest key is not above
 /// that key (it may come first), except that one whose box's cells the union covers already at
-/// least as near (box_covered) is dropped ungathered: at its turn insert_strip would have skipped
+/// least as near (drop_test) is dropped ungathered: at its turn insert_strip would have skipped
 /// it. False when none is left.
 inline bool next_on_demand(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, std::uint32_t& q) {
   for (;;) {
@@ -581,7 +594,7 @@ inline bool next_on_demand(const MeshIndex& index, const MeshOcclusionParams& pa
     if (s.next_ungathered < s.ungathered.size() &&
         (!any_waiting || s.ungathered[s.next_ungathered].first <= s.waiting.front().first)) {
       const std::uint32_t u = s.ungathered[s.next_ungathered++].second;
-      if (!box_covered(s.grid, patch_box(index, s, s.occluders[u].second))) gather_waiting(index, params, s, u);
+      if (!s.grid.covered_nearer(s.drop_cells[u], s.drop_nearest[u])) gather_waiting(index, params, s, u);
       continue;
     }
     if (!any_waiting) return false;
