@@ -33,9 +33,11 @@ namespace cullkit {
 namespace detail {
 namespace mesh_occlusion {
 
-/// Objects per batch that a task takes at a time: the projection of a box is cheap, an object test
-/// varies from one rectangle to hundreds of triangles.
-inline constexpr std::size_t box_batch = 256;
+/// Objects per batch that a task takes at a time. A frame has a few hundred objects in the frustum,
+/// and an occluder's patch boxes cost many times its own box: batches of 32 give each task several,
+/// where a batch of 256 left most of the step on one task. An object test varies from one rectangle
+/// to hundreds of triangles.
+inline constexpr std::size_t box_batch = 32;
 inline constexpr std::size_t test_batch = 16;
 inline constexpr std::size_t corner_batch = 512;
 
@@ -176,8 +178,9 @@ inline ObjectReach project_boxes_on_tasks(const MeshIndex& index, const MeshOccl
   return reach;
 }
 
-/// Objects per batch that a task measures as occluders at a time.
-inline constexpr std::size_t choice_batch = 64;
+/// Objects per batch that a task measures as occluders at a time: few objects are occluders, and
+/// each costs a look at every patch, so small batches share them evenly.
+inline constexpr std::size_t choice_batch = 16;
 
 /// choose_occluders on `tasks` tasks, with the same result, after project_boxes_on_tasks (its
 /// `reach`): each task lists the candidate patches of the objects it takes and sorts its list; the
