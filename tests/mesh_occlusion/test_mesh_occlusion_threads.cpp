@@ -31,10 +31,10 @@
 // failed; when its box's cells are covered as near as its FARTHEST corner: 640 / 406 failed; the
 // ungathered patches ordered by their box's farthest corner: 830 / 546 failed.
 // One thread projects a patch's corners as it gathers it, several threads all chosen patches' first.
-// Mutants: a part's whole triangle's corners read unprojected (occluders.hpp): 12 checks failed, all
-// on sportsCar (the generated scenes cut no triangle); the corners not projected first when several
-// threads' frame runs on the calling thread alone (query.hpp): a crash on the office of two rooms,
-// the only scene with frames of so few objects.
+// Mutants: each patch's last listed corner left unprojected (project_patch_corners): 50 checks
+// failed, all on the generated city; the corners not projected first when several threads' frame
+// runs on the calling thread alone (query.hpp): a crash on the office of two rooms, the only scene
+// with frames of so few objects.
 #include <algorithm>
 #include <cstdio>
 #include <string>
