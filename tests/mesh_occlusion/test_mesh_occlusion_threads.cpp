@@ -30,6 +30,11 @@
 // ungathered when ANY cell of its box is covered near enough: 1,224 of 1,351 / 910 of 1,021 checks
 // failed; when its box's cells are covered as near as its FARTHEST corner: 640 / 406 failed; the
 // ungathered patches ordered by their box's farthest corner: 830 / 546 failed.
+// One thread projects a patch's corners as it gathers it, several threads all chosen patches' first.
+// Mutants: each patch's last listed corner left unprojected (project_patch_corners): 50 checks
+// failed, all on the generated city; the corners not projected first when several threads' frame
+// runs on the calling thread alone (query.hpp): a crash on the office of two rooms, the only scene
+// with frames of so few objects.
 #include <algorithm>
 #include <cstdio>
 #include <string>
@@ -199,6 +204,10 @@ int main() {
   // The generated frames hide objects: the comparisons can see a difference.
   CHECK(check_scene(cullkit::support::make_city(5, 10), 24) > 0);
   CHECK(check_scene(cullkit::support::make_office(2, 6, 5), 24) > 0);
+  // Few objects in view: several threads then cull on the calling thread alone, yet insert by
+  // strips, gathering every occluder at once (its corners projected first), where one thread
+  // gathers on demand, projecting corners as it goes.
+  CHECK(check_scene(cullkit::support::make_office(3, 1, 2), 24) > 0);
   {
     // Objects that overlap: every third building also gets an object spanning it and the next one,
     // so their triangles are in two patches each, and a triangle goes in once, with the first

@@ -89,7 +89,9 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
     choose_occluders(index, params, s);
   }
   const bool extents = insertion_strips(params, s.grid.height()) > 1;
-  project_occluder_corners_on_tasks(index, params, s, tasks);
+  // One thread with one strip gathers on demand (gather_triangles), projecting a patch's corners
+  // as it gathers it: most of the chosen patches of a frame of many small ones are never gathered.
+  if (tasks > 1 || extents) project_occluder_corners_on_tasks(index, params, s, tasks);
   if (tasks > 1) gather_triangles_on_tasks(index, params, s, tasks, extents);
   else gather_triangles(index, params, s, extents);
   stats.occluders_used = s.occluders.size();
