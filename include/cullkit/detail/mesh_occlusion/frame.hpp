@@ -171,7 +171,7 @@ struct Scratch {
   // (nearest key, patch), nearest first, and its own sort buffer (radix_sort swaps the two: sharing
   // the triangles' would trade a small vector into their place and regrow it every frame).
   std::vector<std::pair<std::uint32_t, std::uint32_t>> patch_order, patch_sort_buffer;
-  // One thread gathers an occluder only when its turn may come (gather_on_demand, occluders.hpp):
+  // One thread gathers an occluder only when its turn may come (gather_on_demand.hpp):
   // those not gathered yet as (lowest key they can have, occluder), lowest first, from
   // `next_ungathered` on; the gathered ones waiting for their turn, a heap of (key, occluder). Per
   // occluder waiting ungathered, the cells its patch's box may reach and the inverse depth the union

@@ -14,6 +14,7 @@
 #include "../../config.hpp"
 #include "../../geometry/camera.hpp"
 #include "frame.hpp"
+#include "gather_on_demand.hpp"
 #include "index.hpp"
 #include "moving.hpp"
 #if CULLKIT_CORE_BODIES
@@ -89,10 +90,11 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
     choose_occluders(index, params, s);
   }
   const bool extents = insertion_strips(params, s.grid.height()) > 1;
-  // One thread with one strip gathers on demand (gather_triangles), projecting a patch's corners
+  // One thread with one strip gathers on demand (gather_on_demand.hpp), projecting a patch's corners
   // as it gathers it: most of the chosen patches of a frame of many small ones are never gathered.
   if (tasks > 1 || extents) project_occluder_corners_on_tasks(index, params, s, tasks);
   if (tasks > 1) gather_triangles_on_tasks(index, params, s, tasks, extents);
+  else if (!extents) gather_on_demand(index, params, s);  // one strip: each patch at its turn
   else gather_triangles(index, params, s, extents);
   stats.occluders_used = s.occluders.size();
   insert_patches(index, params, s);

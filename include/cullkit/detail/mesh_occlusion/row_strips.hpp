@@ -30,6 +30,7 @@
 #include "../bits.hpp"
 #include "coverage.hpp"
 #include "frame.hpp"
+#include "gather_on_demand.hpp"
 #include "index.hpp"
 #include "occluders.hpp"
 #include "parallel_frame.hpp"
