@@ -155,6 +155,31 @@ void touching_boxes() {
   CHECK(clipped.hidden < clipped.targets);
 }
 
+// touching_boxes with two places in the tree (max_box_occluders = 2) and a third solid box, the
+// biggest on screen, standing behind a wall of one quad (no solid box) that hides it on the grid:
+// the hidden box must leave its place to the two touching boxes, which hide the cubes behind their
+// seam.
+void box_behind_wall() {
+  TestScene s;
+  s.box(glm::vec3(-4, 0, -1), glm::vec3(0, 3, 0));
+  s.box(glm::vec3(0, 0, -1), glm::vec3(4, 5, 0));
+  std::vector<std::uint32_t> cubes;
+  for (int k = 0; k < 3; ++k) cubes.push_back(s.box(glm::vec3(-0.3f, 0.4f + 0.6f * k, -3.3f), glm::vec3(0.3f, 0.8f + 0.6f * k, -2.7f)));
+  s.begin_object();
+  grid_quads(s, glm::vec3(-6, -2, 3), glm::vec3(5, 0, 0), glm::vec3(0, 8, 0), 1, 1);
+  s.box(glm::vec3(-3.6f, -1, 1), glm::vec3(-2, 4, 2));
+  const std::vector<glm::vec3> eyes = {{0, 1.7f, 6}, {-0.4f, 1.5f, 7}, {0.3f, 2.0f, 5}};
+  cullkit::MeshOcclusionParams two_boxes;
+  two_boxes.max_box_occluders = 2;
+  const Tally two = run(s, cubes, eyes, glm::vec3(0, 1.2f, -2), 0.1f, two_boxes, "box_behind_wall two boxes");
+  CHECK_MSG(two.hidden == two.targets, "box_behind_wall: %d of %d cubes hidden", two.hidden, two.targets);
+  // The control: with one place the seam stays open on the grid and in the tree.
+  cullkit::MeshOcclusionParams one_box;
+  one_box.max_box_occluders = 1;
+  const Tally one = run(s, cubes, eyes, glm::vec3(0, 1.2f, -2), 0.1f, one_box, "box_behind_wall one box");
+  CHECK_MSG(one.hidden + 3 <= two.hidden, "box_behind_wall: %d cubes hidden with one box, %d with two", one.hidden, two.hidden);
+}
+
 // A wall of 8 x 4 quads at z = 0 facing +z, with 6 cubes behind it.
 std::vector<std::uint32_t> wall_and_cubes(TestScene& s) {
   s.begin_object();
@@ -283,6 +308,7 @@ int main() {
   big_object();
   slanted_beam();
   touching_boxes();
+  box_behind_wall();
   far_backdrop();
   dense_wall();
   thin_slats();

@@ -239,6 +239,10 @@ inline bool box_meets_pyramid(const Aabb& box, const NearPyramid& py) {
 /// that enter it beyond the near plane (what lies nearer is clipped: a ray entering there goes on
 /// inside it and out through a back face), so a box that may meet the part of the frustum nearer
 /// than the near plane is left out; a building beside the eye that reaches behind it stays in.
+/// A box the finished grid hides already (its rectangle on cells covered nearer than it) is left
+/// out too: every ray it could stop is stopped nearer on the grid, so it is taken neither into the
+/// tree's work nor among the `max_box_occluders`, whose places go to boxes the grid leaves open.
+/// Leaving an occluder out only hides less: conservative either way.
 /// Leaves `s.box_occluders` empty when there are none.
 inline void insert_box_occluders(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera,
                                  Scratch& s) {
@@ -248,7 +252,7 @@ inline void insert_box_occluders(const MeshIndex& index, const MeshOcclusionPara
   s.box_candidates.clear();
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
     const std::uint32_t o = s.in_frustum[i];
-    if (!index.solid_box[o] || !index.objects[o].occludes) continue;
+    if (!index.solid_box[o] || !index.objects[o].occludes || rect_hidden(s.grid, s.boxes[i])) continue;
     const double cells = screen_cells(s.boxes[i], s.grid);
     if (cells >= min_cells) s.box_candidates.emplace_back(static_cast<float>(cells), o);
   }
