@@ -11,6 +11,9 @@
 //   a T-junction, which the coverage grid cannot fuse); cubes behind the seam are hidden by the
 //   solid-box tree, not without it (max_box_occluders = 0). Eyes nearer a box than the near plane
 //   check that a box reaching into the clipped part of the frustum hides nothing it should not.
+// - box_behind_wall: the same boxes with two places in the tree (max_box_occluders = 2) and a third
+//   solid box, the biggest on screen, hidden on the grid behind a wall of one quad: it must leave
+//   its place to the touching boxes, which then hide the cubes (with one place, the control, not).
 // - far_backdrop: the same wall and cubes inside a sky dome (an inward-facing sphere of 2,048
 //   triangles, one object, whose patches' boxes hold the eye). The dome is farther than every other
 //   object, so it can hide none of them: it must take no part in the occluders (the same occluder
@@ -133,12 +136,18 @@ void slanted_beam() {
   CHECK(without.hidden == 0);  // the control: the box shows through the window
 }
 
-void touching_boxes() {
-  TestScene s;
+// Two closed boxes of different heights side by side, and 3 cubes behind their seam (returned).
+std::vector<std::uint32_t> boxes_and_cubes(TestScene& s) {
   s.box(glm::vec3(-4, 0, -1), glm::vec3(0, 3, 0));
   s.box(glm::vec3(0, 0, -1), glm::vec3(4, 5, 0));
   std::vector<std::uint32_t> cubes;
   for (int k = 0; k < 3; ++k) cubes.push_back(s.box(glm::vec3(-0.3f, 0.4f + 0.6f * k, -3.3f), glm::vec3(0.3f, 0.8f + 0.6f * k, -2.7f)));
+  return cubes;
+}
+
+void touching_boxes() {
+  TestScene s;
+  const std::vector<std::uint32_t> cubes = boxes_and_cubes(s);
   const std::vector<glm::vec3> eyes = {{0, 1.7f, 6}, {-0.4f, 1.5f, 7}, {0.3f, 2.0f, 5}, {0.1f, 1.0f, 9}};
   cullkit::MeshOcclusionParams with_boxes;
   const Tally with = run(s, cubes, eyes, glm::vec3(0, 1.2f, -2), 0.1f, with_boxes, "touching_boxes box tree");
@@ -155,16 +164,10 @@ void touching_boxes() {
   CHECK(clipped.hidden < clipped.targets);
 }
 
-// touching_boxes with two places in the tree (max_box_occluders = 2) and a third solid box, the
-// biggest on screen, standing behind a wall of one quad (no solid box) that hides it on the grid:
-// the hidden box must leave its place to the two touching boxes, which hide the cubes behind their
-// seam.
+// A solid box hidden on the grid takes no place in the tree (see the file's comment).
 void box_behind_wall() {
   TestScene s;
-  s.box(glm::vec3(-4, 0, -1), glm::vec3(0, 3, 0));
-  s.box(glm::vec3(0, 0, -1), glm::vec3(4, 5, 0));
-  std::vector<std::uint32_t> cubes;
-  for (int k = 0; k < 3; ++k) cubes.push_back(s.box(glm::vec3(-0.3f, 0.4f + 0.6f * k, -3.3f), glm::vec3(0.3f, 0.8f + 0.6f * k, -2.7f)));
+  const std::vector<std::uint32_t> cubes = boxes_and_cubes(s);
   s.begin_object();
   grid_quads(s, glm::vec3(-6, -2, 3), glm::vec3(5, 0, 0), glm::vec3(0, 8, 0), 1, 1);
   s.box(glm::vec3(-3.6f, -1, 1), glm::vec3(-2, 4, 2));
