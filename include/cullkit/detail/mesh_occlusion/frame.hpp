@@ -110,8 +110,8 @@ struct TaskScratch {
 };
 
 /// A strip of the grid's rows [first_row, last_row] in the occluder insertion (row_strips.hpp):
-/// which gathered triangles (by their place in Scratch::by_patch) it inserted (1), and the cells it
-/// covered.
+/// which gathered triangles (by their place in Scratch::triangles) it inserted (1), and the cells
+/// it covered.
 struct Strip {
   int first_row = 0, last_row = -1;
   std::vector<std::uint8_t> inserted;  // per gathered triangle, inserted here (several strips)
@@ -221,7 +221,7 @@ struct Scratch {
   std::vector<std::uint8_t> hidden;
   std::vector<std::uint32_t> corner_list;  // occluder corners given a slot in `projected`, in slot order
   // The occluder insertion strip by strip: the strips, each task's memory, the gathered triangles'
-  // extents (by place in by_patch, set when gathered), and the order the strips are handed out in
+  // extents (by place in `triangles`, set when gathered), and the order the strips are handed out in
   // (biggest first).
   std::vector<Strip> strips;
   std::vector<StripTask> strip_tasks;

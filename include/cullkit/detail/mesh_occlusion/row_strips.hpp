@@ -110,8 +110,8 @@ inline bool depth_bounds_positive(const MeshIndex& index, const View& view) {
 /// Without `patch_layers` the union drops the covered cells whose count fell, so `direct` needs them.
 ///
 /// The patches come from `next(q, group, place, count)`: occluder q's sorted triangles group[0,
-/// count), at places [place, place + count) of `s.by_patch` (read for their extents on several
-/// strips); false when none is left. insert_strip takes them from `s.patch_order`.
+/// count), at places [place, place + count) of the occluders' regions of `s.triangles` (read for
+/// their extents on several strips); false when none is left.
 template <class NextPatch>
 inline void insert_strip_in_order(const MeshIndex& index, const MeshOcclusionParams& params, const Scratch& s,
                                   Strip& strip, StripTask& task, CoverageGrid& grid, bool direct, NextPatch&& next) {

@@ -95,7 +95,13 @@ inline bool gather_for_strips(const MeshOcclusionParams& params, const MeshIndex
   std::atomic<std::uint8_t>& state = s.gather_claims.state[q];
   std::uint8_t seen = state.load(std::memory_order_acquire);
   if (seen != 0 || !state.compare_exchange_strong(seen, 1, std::memory_order_acq_rel)) return seen == 2;
-  const std::uint32_t kept = gather_patch(index, s, q, unused, nullptr, params.min_occluder_width_cells);
+  std::uint32_t kept = gather_patch(index, s, q, unused, nullptr, params.min_occluder_width_cells);
+  if (!unused.empty()) {
+    // Cannot happen (prepare_strip_gathering gathers such patches first): a polygon clipped here
+    // would be in no list the insertion reads, so the patch is then no occluder (covers less).
+    unused.clear();
+    kept = 0;
+  }
   s.gathered_count[q] = kept;
   const std::uint32_t first = s.region_first[q];
   auto* group = s.triangles.data() + first;
