@@ -3,9 +3,11 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -108,8 +110,8 @@ struct TaskScratch {
 };
 
 /// A strip of the grid's rows [first_row, last_row] in the occluder insertion (row_strips.hpp):
-/// which gathered triangles (by their place in Scratch::by_patch) it inserted (1), and the cells it
-/// covered.
+/// which gathered triangles (by their place in Scratch::triangles) it inserted (1), and the cells
+/// it covered.
 struct Strip {
   int first_row = 0, last_row = -1;
   std::vector<std::uint8_t> inserted;  // per gathered triangle, inserted here (several strips)
@@ -130,9 +132,35 @@ struct TriangleExtent {
 /// however the strips fall to the tasks.
 struct StripTask {
   CoverageGrid grid, patch_grid;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> run;  // (place in by_patch, triangle) of one patch
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> run;  // (place in its region, triangle) of one patch
   std::vector<std::uint32_t> member_stamp, done_stamp;
   std::uint32_t member_value = 0, done_value = 0;
+  // The strip's gathered occluders waiting for their turn and those another task is gathering
+  // (strip_gather.hpp), and a list gathering clips nothing into there.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> waiting, pending;
+  std::vector<ClippedPolygon> unused_clipped;
+};
+
+/// Per occluder of a cull on several tasks, whether it is gathered yet (0: no, 1: being gathered,
+/// 2: done), claimed by the first strip that needs it (strip_gather.hpp). Copies of a context start
+/// with none (it is only working memory).
+struct GatherClaims {
+  std::unique_ptr<std::atomic<std::uint8_t>[]> state;
+  std::size_t capacity = 0;
+  GatherClaims() = default;
+  GatherClaims(const GatherClaims&) {}
+  GatherClaims& operator=(const GatherClaims&) { return *this; }
+  GatherClaims(GatherClaims&&) noexcept = default;
+  GatherClaims& operator=(GatherClaims&&) noexcept = default;
+  ~GatherClaims() = default;
+  /// `n` occluders, none gathered; allocates only when there are more than ever before.
+  void reset(std::size_t n) {
+    if (n > capacity) {
+      state.reset(new std::atomic<std::uint8_t>[n]);
+      capacity = n;
+    }
+    for (std::size_t q = 0; q < n; ++q) state[q].store(0, std::memory_order_relaxed);
+  }
 };
 
 /// Per-thread working memory of a query; only grows.
@@ -193,12 +221,17 @@ struct Scratch {
   std::vector<std::uint8_t> hidden;
   std::vector<std::uint32_t> corner_list;  // occluder corners given a slot in `projected`, in slot order
   // The occluder insertion strip by strip: the strips, each task's memory, the gathered triangles'
-  // extents (by place in by_patch, set when gathered), and the order the strips are handed out in
+  // extents (by place in `triangles`, set when gathered), and the order the strips are handed out in
   // (biggest first).
   std::vector<Strip> strips;
   std::vector<StripTask> strip_tasks;
   std::vector<TriangleExtent> triangle_extents;
   std::vector<std::uint32_t> strip_order, strip_work, row_work;
+  // The strips gather on demand (strip_gather.hpp): per occluder, 1 when gathered before the
+  // strips; those of them that kept triangles as (nearest key, occluder); and who gathers the others.
+  std::vector<std::uint8_t> gather_first;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> gathered_first;
+  GatherClaims gather_claims;
 };
 
 

@@ -28,6 +28,7 @@
 #include "index.hpp"
 #include "object_tests.hpp"
 #include "occluders.hpp"
+#include "strip_gather.hpp"
 
 namespace cullkit {
 namespace detail {
@@ -299,19 +300,17 @@ inline void project_occluder_corners_on_tasks(const MeshIndex& index, const Mesh
 /// Occluders per batch that a task gathers at a time (patches of up to a few hundred triangles).
 inline constexpr std::size_t gather_batch = 4;
 
-/// gather_triangles on `tasks` tasks, with the same result: the occluders whose patches share no
-/// triangle with another patch are gathered on the tasks, each into its own region of the frame's
-/// arrays (gather_patch writes nothing else of the frame but the slots of its own triangles), the
-/// polygons of the triangles a task clips into the task's list, and each task then sorts the
-/// occluders it took (order_gathered); those lists join the frame's, and the occluders whose patches
-/// share triangles (objects that overlap) are gathered and sorted on the calling thread in order, so
-/// a triangle goes in with the first occluder that keeps it, as on one thread. Each occluder's
-/// triangles end sorted by key with ties in the patch's order, as one sort of them all leaves them.
-/// Call after the corners are projected.
-inline void gather_triangles_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s,
-                                      unsigned tasks, bool extents) {
+/// The occluders gathered before the strips (`s.gather_first`, prepare_strip_gathering) on `tasks`
+/// tasks: those whose patches share no triangle with another patch are gathered on the tasks, each
+/// into its own region of the frame's arrays (gather_patch writes nothing else of the frame but the
+/// slots of its own triangles), the polygons of the triangles a task clips into the task's list, and
+/// each task then sorts the occluders it took (order_gathered: keys, depth bands, extents); those
+/// whose patches share triangles (objects that overlap) are gathered and sorted on the calling thread
+/// in order, so a triangle goes in with the first occluder that keeps it, as on one thread. Each
+/// occluder's triangles end sorted by key with ties in the patch's order, as one sort of them all
+/// leaves them. Then lists them for the strips (list_gathered_first).
+inline void gather_first_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, unsigned tasks) {
   const PatchSet& ps = index.patches;
-  begin_gather(index, s, extents);
   const std::size_t n = s.occluders.size();
   const std::size_t total = s.region_first[n];
   BatchCounter batches(n, gather_batch);
@@ -331,7 +330,7 @@ inline void gather_triangles_on_tasks(const MeshIndex& index, const MeshOcclusio
     std::size_t first, last;
     while (batches.claim(first, last))
       for (std::size_t q = first; q < last; ++q)
-        if (!ps.shares_triangles[s.occluders[q].second]) {
+        if (s.gather_first[q] && !ps.shares_triangles[s.occluders[q].second]) {
           s.gathered_count[q] = gather_patch(index, s, q, own.clipped, &own.clipped_triangles, params.min_occluder_width_cells);
           own.gathered.push_back(static_cast<std::uint32_t>(q));
         }
@@ -359,7 +358,7 @@ inline void gather_triangles_on_tasks(const MeshIndex& index, const MeshOcclusio
     s.tasks[k].clipped_triangles.reserve(s.clipped.size());
     s.tasks[k].sort_buffer.reserve(total);
   }
-  finish_gather(s);
+  list_gathered_first(s);
 }
 
 /// The object tests against the finished frame on `tasks` tasks: appends the objects not hidden

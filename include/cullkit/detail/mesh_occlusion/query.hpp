@@ -3,7 +3,7 @@
 // the coverage grid strip by strip of its rows (row_strips.hpp), moving occluders into the same grid
 // (moving.hpp), object tests (object_tests.hpp). The boxes, the occluder candidates, the corners,
 // the gathering of the occluder triangles, the strips and the object tests run on several tasks when
-// the parameters ask for threads (parallel_frame.hpp). The steps are compiled only where the frame's definition is
+// the parameters ask for threads (parallel_frame.hpp, strip_gather.hpp). The steps are compiled only where the frame's definition is
 // (CULLKIT_SEPARATE_CORE, config.hpp).
 #pragma once
 
@@ -89,13 +89,17 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
     for (std::size_t i = 0; i < s.in_frustum.size(); ++i) s.boxes[i] = project_box(s.view, index.bounds[s.in_frustum[i]]);
     choose_occluders(index, params, s);
   }
-  const bool extents = insertion_strips(params, s.grid.height()) > 1;
-  // One thread with one strip gathers on demand (gather_on_demand.hpp), projecting a patch's corners
-  // as it gathers it: most of the chosen patches of a frame of many small ones are never gathered.
-  if (tasks > 1 || extents) project_occluder_corners_on_tasks(index, params, s, tasks);
-  if (tasks > 1) gather_triangles_on_tasks(index, params, s, tasks, extents);
-  else if (!extents) gather_on_demand(index, params, s);  // one strip: each patch at its turn
-  else gather_triangles(index, params, s, extents);
+  // One thread gathers on demand (gather_on_demand.hpp), projecting a patch's corners as it gathers
+  // it: most of the chosen patches of a frame of many small ones are never gathered. Several threads
+  // project every chosen patch's corners and gather those with no lower bound on their keys first;
+  // each strip of rows then gathers the others on demand (strip_gather.hpp).
+  if (params.threads == 1) {
+    gather_on_demand(index, params, s);
+  } else {
+    project_occluder_corners_on_tasks(index, params, s, tasks);
+    prepare_strip_gathering(index, s);
+    gather_first_on_tasks(index, params, s, tasks);
+  }
   stats.occluders_used = s.occluders.size();
   insert_patches(index, params, s);
   if (moving_count > 0) insert_moving(params, moving, moving_count, s, *m);

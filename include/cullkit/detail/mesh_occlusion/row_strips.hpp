@@ -34,6 +34,7 @@
 #include "index.hpp"
 #include "occluders.hpp"
 #include "parallel_frame.hpp"
+#include "strip_gather.hpp"
 
 namespace cullkit {
 namespace detail {
@@ -44,12 +45,6 @@ namespace mesh_occlusion {
 /// but a triangle reaching several strips is set up in each (on one thread, 4 strips cost 3 to 7% of
 /// the frame over 1, 6 strips 8 to 15%, `bench_mesh_occlusion --hash`): one thread takes one strip.
 inline int strip_count(int height) { return std::max(1, std::min(8, height / 32)); }
-
-/// Strips of rows the occluder insertion cuts the grid into: one on one thread (the same answer
-/// either way).
-inline int insertion_strips(const MeshOcclusionParams& params, int height) {
-  return params.threads == 1 ? 1 : strip_count(height);
-}
 
 /// Makes a task's memory fit `index`, a grid of width x height and patches of up to `largest`
 /// gathered triangles, whichever strips the task takes (so a warm context allocates nothing however
@@ -115,8 +110,8 @@ inline bool depth_bounds_positive(const MeshIndex& index, const View& view) {
 /// Without `patch_layers` the union drops the covered cells whose count fell, so `direct` needs them.
 ///
 /// The patches come from `next(q, group, place, count)`: occluder q's sorted triangles group[0,
-/// count), at places [place, place + count) of `s.by_patch` (read for their extents on several
-/// strips); false when none is left. insert_strip takes them from `s.patch_order`.
+/// count), at places [place, place + count) of the occluders' regions of `s.triangles` (read for
+/// their extents on several strips); false when none is left.
 template <class NextPatch>
 inline void insert_strip_in_order(const MeshIndex& index, const MeshOcclusionParams& params, const Scratch& s,
                                   Strip& strip, StripTask& task, CoverageGrid& grid, bool direct, NextPatch&& next) {
@@ -196,26 +191,11 @@ inline void insert_strip_in_order(const MeshIndex& index, const MeshOcclusionPar
   strip.inserted_count = whole ? inserted : 0;
 }
 
-/// insert_strip_in_order with the patches in the order of `s.patch_order`.
-inline void insert_strip(const MeshIndex& index, const MeshOcclusionParams& params, const Scratch& s, Strip& strip,
-                         StripTask& task, CoverageGrid& grid, bool direct) {
-  std::size_t k = 0;
-  insert_strip_in_order(index, params, s, strip, task, grid, direct,
-                        [&](std::uint32_t& q, const std::pair<std::uint32_t, std::uint32_t>*& group,
-                            std::uint32_t& place, std::uint32_t& count) {
-                          if (k == s.patch_order.size()) return false;
-                          q = s.patch_order[k++].second;
-                          place = s.patch_first[q];
-                          count = s.patch_first[q + 1] - place;
-                          group = s.by_patch.data() + place;
-                          return true;
-                        });
-}
-
-/// One thread: inserts the occluders into the frame's grid as one strip, as insert_strip does, in
-/// the same order, gathering each only when its turn may come (next_on_demand): one whose box's
-/// cells are all covered near enough by then is never gathered, and goes in nowhere, as
-/// insert_strip would have skipped it. The same grid and the same count of inserted triangles.
+/// One thread: inserts the occluders into the frame's grid as one strip, in the order of a
+/// gathering of all of them, gathering each only when its turn may come (next_on_demand): one whose
+/// box's cells are all covered near enough by then is never gathered, and goes in nowhere, as
+/// insert_strip_in_order would have skipped it. The same grid and the same count of inserted
+/// triangles.
 inline void insert_on_demand(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
   const int width = s.grid.width(), height = s.grid.height();
   if (s.strips.empty()) s.strips.resize(1);
@@ -244,29 +224,57 @@ inline void insert_on_demand(const MeshIndex& index, const MeshOcclusionParams& 
 /// strips are cut on these weights.
 inline constexpr std::uint32_t strip_setup_rows = 4;
 
-/// Cuts the grid's `height` rows into `strips` strips of about equal work for the gathered
-/// triangles (each weighs its rows and a setup), each at least one row, into s.strips[0, strips)
-/// in row order, with their estimated work in s.strip_work. Where a strip's rows end changes no
-/// answer (every row ends as the whole grid's would), only how evenly the tasks share the insertion:
-/// cut at equal rows, four strips of sportsCar's frames left the busier of two tasks 1.28 times half
-/// the strips' time, cut so 1.07.
-inline void cut_strips(Scratch& s, int height, int strips) {
+/// Adds `amount` to the rows [first, last] of the difference array `diff` (a row more than the
+/// grid's): unsigned sums wrap, and the running sums come out right.
+inline void add_to_rows(std::uint32_t* diff, int first, int last, std::uint32_t amount) {
+  diff[first] += amount;
+  diff[last + 1] -= amount;
+}
+
+/// Estimates each row's insertion work before the strips gather (a triangle weighs its rows and a
+/// setup, as a strip walks it) into s.row_work[0, height): the triangles gathered before the strips
+/// by their extents; an occluder waiting ungathered, of c triangles, spread over its box's rows as
+/// sqrt(c) triangles across all of them (a patch's triangles are about that many rows tall each),
+/// with its setups evenly over them. Dropped occluders count too: the estimate only cuts the strips.
+inline void estimate_row_work(const MeshIndex& index, Scratch& s, int height) {
   const auto rows = static_cast<std::size_t>(height);
-  // Per row, the triangles whose rows start there and those whose rows end there.
-  s.row_work.assign(2 * rows, 0);
-  std::uint32_t* starts = s.row_work.data();
-  std::uint32_t* ends = starts + rows;
-  for (std::size_t i = 0; i < s.by_patch.size(); ++i)
-    if (const TriangleExtent& e = s.triangle_extents[i]; e.row0 <= e.row1) {
-      ++starts[e.row0];
-      ++ends[e.row1];
-    }
-  std::uint64_t total = 0, open = 0;
-  for (std::size_t j = 0; j < rows; ++j) {
-    open += starts[j];
-    total += open + std::uint64_t(strip_setup_rows) * starts[j];
-    open -= ends[j];
+  s.row_work.assign(3 * rows + 2, 0);
+  std::uint32_t* open = s.row_work.data() + rows;  // difference arrays, rows + 1 each
+  std::uint32_t* setup = open + rows + 1;
+  for (const auto& first : s.gathered_first) {
+    const std::uint32_t q = first.second, place = s.region_first[q];
+    for (std::uint32_t k = 0; k < s.gathered_count[q]; ++k)
+      if (const TriangleExtent& e = s.triangle_extents[place + k]; e.row0 <= e.row1) {
+        add_to_rows(open, e.row0, e.row1, 1);
+        add_to_rows(setup, e.row0, e.row0, strip_setup_rows);
+      }
   }
+  for (const auto& waiting : s.ungathered) {
+    const std::uint32_t q = waiting.second;
+    const CellRect& cells = s.drop_cells[q];
+    if (cells.empty()) continue;
+    const std::uint32_t count = index.patches.patches[s.occluders[q].second].count;
+    const auto tall = static_cast<std::uint32_t>(cells.y1 - cells.y0 + 1);
+    add_to_rows(open, cells.y0, cells.y1, static_cast<std::uint32_t>(std::lround(std::sqrt(double(count)))));
+    add_to_rows(setup, cells.y0, cells.y1, (strip_setup_rows * count + tall - 1) / tall);
+  }
+  std::uint32_t* work = s.row_work.data();
+  std::uint32_t reaching = 0, setups = 0;
+  for (std::size_t j = 0; j < rows; ++j) {
+    reaching += open[j];
+    setups += setup[j];
+    work[j] = reaching + setups;
+  }
+}
+
+/// Cuts the grid's `height` rows into `strips` strips of about equal estimated work
+/// (estimate_row_work), each at least one row, into s.strips[0, strips) in row order, with their
+/// work in s.strip_work. Where a strip's rows end changes no answer (every row ends as the whole
+/// grid's would), only how evenly the tasks share the insertion.
+inline void cut_strips(Scratch& s, int height, int strips) {
+  const std::uint32_t* work = s.row_work.data();
+  std::uint64_t total = 0;
+  for (int j = 0; j < height; ++j) total += work[j];
   // Strip k ends at the first row where the work so far reaches k + 1 shares of the total, leaving
   // a row to each strip after it.
   int first = 0, j = 0;
@@ -275,62 +283,35 @@ inline void cut_strips(Scratch& s, int height, int strips) {
     const bool last_strip = k + 1 == strips;
     const std::uint64_t goal = total * std::uint64_t(k + 1) / std::uint64_t(strips);
     const int last_allowed = height - (strips - k);
-    std::uint64_t work = 0;
+    std::uint64_t strip_work = 0;
     do {
-      const auto r = static_cast<std::size_t>(j);
-      open += starts[r];
-      const std::uint64_t row = open + std::uint64_t(strip_setup_rows) * starts[r];
-      work += row;
-      done += row;
-      open -= ends[r];
+      strip_work += work[j];
+      done += work[j];
       ++j;
     } while (j <= last_allowed && (last_strip || done < goal));
     Strip& strip = s.strips[static_cast<std::size_t>(k)];
     strip.first_row = first;
     strip.last_row = j - 1;
-    s.strip_work[static_cast<std::size_t>(k)] = static_cast<std::uint32_t>(std::min<std::uint64_t>(work, 0xffffffffu));
+    s.strip_work[static_cast<std::size_t>(k)] = static_cast<std::uint32_t>(std::min<std::uint64_t>(strip_work, 0xffffffffu));
     first = j;
   }
 }
 
-/// Inserts every gathered triangle into the frame's grid, patch by patch (a patch's nearest
-/// triangle first decides its turn), each patch alone into a grid of its own in depth bands, then
-/// added into the frame's grid; strip by strip of the grid's rows, the triangles' extents and the
-/// strips on up to MeshOcclusionParams::threads tasks (through its task_runner), however few
-/// objects the frame has. Counts the triangles inserted (into some strip) into the statistics.
-///
-/// The frame's grid holds the union of all occluders: an edge that a patch shares with a patch
-/// inserted before it is no outline there, so the earlier patch's mark of it and this patch's (its
-/// own grid's, now added) are both taken out again, and the seam fuses. The patch's own grid says
-/// which cells the patch covers by itself, at the patch's own depth bound: where that is nearer than
-/// the union's, the cell takes it (`patch_layers`). A wall standing on a floor that went in before
-/// it leaves its own depth, not the floor's, in front of what is behind it.
-inline void insert_patches(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
-  if (s.on_demand) {
-    insert_on_demand(index, params, s);
-    return;
-  }
-  if (s.by_patch.empty()) return;
+/// Several threads: inserts the chosen occluders into the frame's grid strip by strip of its rows
+/// (strip_count), the strips on up to MeshOcclusionParams::threads tasks (through its task_runner),
+/// however few objects the frame has; each strip gathers the occluders it needs on demand
+/// (strip_gather.hpp: those gathered before the strips, prepare_strip_gathering and
+/// gather_first_on_tasks, wait from the start). Counts the triangles inserted (into some strip) into
+/// the statistics.
+inline void insert_strips_on_tasks(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
   const int width = s.grid.width(), height = s.grid.height();
-  const int strips = insertion_strips(params, height);
-  const unsigned tasks = params.threads == 1 ? 1u : resolve_threads(params.threads, static_cast<std::size_t>(strips));
-  const std::size_t n = s.by_patch.size();
+  const int strips = strip_count(height);
+  const unsigned tasks = resolve_threads(params.threads, static_cast<std::size_t>(strips));
+  const std::size_t places = s.region_first[s.occluders.size()];
   const bool direct = params.patch_layers && depth_bounds_positive(index, s.view);
-  std::size_t largest = 0;
-  for (const auto& entry : s.patch_order)
-    largest = std::max<std::size_t>(largest, s.patch_first[entry.second + 1] - s.patch_first[entry.second]);
   if (s.strips.size() < static_cast<std::size_t>(strips)) s.strips.resize(static_cast<std::size_t>(strips));
-  if (strips == 1) {
-    s.strips[0].first_row = 0;
-    s.strips[0].last_row = height - 1;
-    if (s.strip_tasks.empty()) s.strip_tasks.resize(1);
-    begin_strip_task(index, s.strip_tasks[0], width, height, largest, false);
-    insert_strip(index, params, s, s.strips[0], s.strip_tasks[0], s.grid, direct);
-    s.grid.set_rows(0, height - 1);
-    s.stats.occluder_triangles += s.strips[0].inserted_count;
-    return;
-  }
   s.strip_work.resize(static_cast<std::size_t>(strips));
+  estimate_row_work(index, s, height);
   cut_strips(s, height, strips);
   // The strips that cost most are handed out first, so the last ones are short: the order only
   // decides which task takes a strip, never what the strip becomes.
@@ -344,13 +325,27 @@ inline void insert_patches(const MeshIndex& index, const MeshOcclusionParams& pa
   if (s.strip_tasks.size() < used) s.strip_tasks.resize(used);
   run_each_task(params.task_runner, used, [&](std::size_t task) {
     StripTask& own = s.strip_tasks[task];
-    begin_strip_task(index, own, width, height, largest, task > 0);
+    begin_strip_task(index, own, width, height, index.patches.largest, task > 0);
+    own.waiting.reserve(s.occluders.size());
+    own.pending.reserve(s.occluders.size());
     CoverageGrid& grid = task == 0 ? s.grid : own.grid;
     std::size_t first, last;
     while (batches.claim(first, last)) {
       Strip& strip = s.strips[s.strip_order[first]];
-      strip.inserted.assign(n, 0);
-      insert_strip(index, params, s, strip, own, grid, direct);
+      strip.inserted.assign(places, 0);
+      StripWalk walk{own.waiting, own.pending};
+      begin_strip_walk(s, walk);
+      // Gathering writes `s` while insert_strip_in_order reads it: never the same entries (an
+      // occluder's region, slots and bands are written once, before any strip reads them).
+      insert_strip_in_order(index, params, s, strip, own, grid, direct,
+                            [&](std::uint32_t& q, const std::pair<std::uint32_t, std::uint32_t>*& group,
+                                std::uint32_t& place, std::uint32_t& count) {
+                              if (!next_in_strip(params, index, s, strip, grid, walk, own.unused_clipped, q)) return false;
+                              place = s.region_first[q];
+                              count = s.gathered_count[q];
+                              group = s.triangles.data() + place;
+                              return true;
+                            });
     }
   });
   for (unsigned k = 1; k < used; ++k) s.grid.take_rows(s.strip_tasks[k].grid);
@@ -358,7 +353,7 @@ inline void insert_patches(const MeshIndex& index, const MeshOcclusionParams& pa
   // A triangle counts once, in whichever strips it went in: the strips' flags (0 or 1) ORed eight
   // at a time, then counted.
   std::size_t inserted = 0, i = 0;
-  for (; i + 8 <= n; i += 8) {
+  for (; i + 8 <= places; i += 8) {
     std::uint64_t any = 0;
     for (int k = 0; k < strips; ++k) {
       std::uint64_t flags;
@@ -367,12 +362,28 @@ inline void insert_patches(const MeshIndex& index, const MeshOcclusionParams& pa
     }
     inserted += static_cast<std::size_t>(detail::popcount(any));
   }
-  for (; i < n; ++i) {
+  for (; i < places; ++i) {
     std::uint8_t any = 0;
     for (int k = 0; k < strips; ++k) any = static_cast<std::uint8_t>(any | s.strips[static_cast<std::size_t>(k)].inserted[i]);
     inserted += any;
   }
   s.stats.occluder_triangles += inserted;
+}
+
+/// Inserts every chosen occluder into the frame's grid, patch by patch (a patch's nearest triangle
+/// first decides its turn), each patch alone into a grid of its own in depth bands, then added into
+/// the frame's grid: on one thread as one strip (insert_on_demand), on several by strips of rows
+/// (insert_strips_on_tasks).
+///
+/// The frame's grid holds the union of all occluders: an edge that a patch shares with a patch
+/// inserted before it is no outline there, so the earlier patch's mark of it and this patch's (its
+/// own grid's, now added) are both taken out again, and the seam fuses. The patch's own grid says
+/// which cells the patch covers by itself, at the patch's own depth bound: where that is nearer than
+/// the union's, the cell takes it (`patch_layers`). A wall standing on a floor that went in before
+/// it leaves its own depth, not the floor's, in front of what is behind it.
+inline void insert_patches(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s) {
+  if (s.on_demand) insert_on_demand(index, params, s);
+  else insert_strips_on_tasks(index, params, s);
 }
 
 }  // namespace mesh_occlusion
