@@ -190,15 +190,8 @@ struct Scratch {
   std::vector<Projected> projected;
   View view;
   CoverageGrid grid;
-  // Insertion patch by patch (insert_patches, row_strips.hpp): the occluder that gathered each
-  // triangle, the gathered triangles grouped by it (`by_patch`, group q starting at
-  // patch_first[q]), the order of the groups; and, for the moving occluders (moving.hpp), a stamp
-  // for the members of the run going in and the grid each goes into alone.
-  std::vector<std::uint32_t> triangle_owner, patch_first;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> by_patch;
-  // (nearest key, patch), nearest first, and its own sort buffer (radix_sort swaps the two: sharing
-  // the triangles' would trade a small vector into their place and regrow it every frame).
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> patch_order, patch_sort_buffer;
+  // Per gathered triangle, the occluder that gathered it (insertion by strips, row_strips.hpp).
+  std::vector<std::uint32_t> triangle_owner;
   // One thread gathers an occluder only when its turn may come (gather_on_demand.hpp):
   // those not gathered yet as (lowest key they can have, occluder), lowest first, from
   // `next_ungathered` on; the gathered ones waiting for their turn, a heap of (key, occluder). Per

@@ -2,8 +2,8 @@
 // its turn among the patches may come, and never one whose box the union already covers nearer.
 // A patch's turn is its nearest gathered triangle's key; its box bounds that key from below, so the
 // patches wait ungathered in the order of their bounds and are gathered as the gathered ones' keys
-// reach them: the insertion order is that of gathering all first (gather_triangles, occluders.hpp),
-// and the answers are the same.
+// reach them: the insertion order is that of gathering all first and sorting the patches by their
+// nearest triangle's key, and the answers are the same.
 #pragma once
 
 #include <algorithm>
@@ -137,8 +137,6 @@ inline void gather_on_demand(const MeshIndex& index, const MeshOcclusionParams& 
   const PatchSet& ps = index.patches;
   begin_gather(index, s, false);
   s.on_demand = true;
-  s.by_patch.clear();
-  s.patch_order.clear();
   s.waiting.clear();
   s.ungathered.clear();
   s.next_ungathered = 0;
@@ -159,7 +157,7 @@ inline void gather_on_demand(const MeshIndex& index, const MeshOcclusionParams& 
 }
 
 /// One thread: the next occluder to insert into the union `s.grid`, in the order of a gathering of
-/// all of them (order_groups: nearest triangle's key first, ties by occluder), into q. Before
+/// all of them (nearest triangle's key first, ties by occluder), into q. Before
 /// taking the nearest waiting occluder, gathers each ungathered one whose lowest key is not above
 /// that key (it may come first), except that one whose box's cells the union covers already at
 /// least as near (drop_test) is dropped ungathered: at its turn insert_strip would have skipped

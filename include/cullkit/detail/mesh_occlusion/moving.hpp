@@ -122,7 +122,7 @@ struct PolygonExtent {
   }
 };
 
-/// gather_triangles' front-facing rule: the polygon's signed grid area, by `orient`, clearly positive
+/// gather_patch's front-facing rule: the polygon's signed grid area, by `orient`, clearly positive
 /// against its extent (edge-on and back-facing polygons never occlude).
 inline bool clearly_front_facing(const double* x, const double* y, int n, const PolygonExtent& e, int orient) {
   double twice_area = 0.0;
@@ -132,7 +132,7 @@ inline bool clearly_front_facing(const double* x, const double* y, int n, const 
   return twice_area * orient > 1e-9 * size * size;
 }
 
-/// Keeps the moving occluder's triangles that can occlude, by gather_triangles' rules (clearly
+/// Keeps the moving occluder's triangles that can occlude, by gather_patch's rules (clearly
 /// front-facing, touching the grid, some corner beyond the clipping level, clipped there), into
 /// `m.s.triangles`, nearest first; marks them as the run's members. Returns the screen box and the
 /// nearest depth of what was kept in xmin..wmin.
@@ -174,7 +174,7 @@ inline void gather_moving(MovingScratch& m, int grid_width, int grid_height, dou
       s.clip_slot[t] = static_cast<std::uint32_t>(s.clipped.size());
       s.clipped.push_back(poly);
     }
-    // A clipped polygon goes in by its farthest depth, as a static one does (gather_triangles).
+    // A clipped polygon goes in by its farthest depth, as a static one does (gather_patch).
     const float key = static_cast<float>(inside != 7u ? e.w1 : e.w0);
     std::uint32_t bits;
     std::memcpy(&bits, &key, sizeof bits);

@@ -422,67 +422,6 @@ inline void order_gathered(const MeshOcclusionParams& params, Scratch& s, const 
   }
 }
 
-/// Sets `s.patch_first` from the occluders' gathered counts (group q of `s.by_patch` from
-/// patch_first[q]).
-inline void count_groups(Scratch& s) {
-  const std::size_t n = s.occluders.size();
-  s.patch_first.resize(n + 1);
-  s.patch_first[0] = 0;
-  for (std::size_t q = 0; q < n; ++q) s.patch_first[q + 1] = s.patch_first[q] + s.gathered_count[q];
-  s.by_patch.resize(s.patch_first[n]);
-}
-
-/// Orders the groups of `s.by_patch` by their nearest triangle (`s.patch_order`).
-inline void order_groups(Scratch& s) {
-  s.patch_order.clear();
-  for (std::size_t q = 0; q < s.occluders.size(); ++q)
-    if (s.gathered_count[q] > 0) s.patch_order.emplace_back(s.by_patch[s.patch_first[q]].first, static_cast<std::uint32_t>(q));
-  radix_sort(s.patch_order, s.patch_sort_buffer);
-}
-
-/// Joins the occluders' gathered and ordered triangles (order_gathered) into `s.by_patch` (group q
-/// from `s.patch_first[q]`, each nearest first) with their extents when wanted, and orders the
-/// groups (`s.patch_order`).
-inline void finish_gather(Scratch& s) {
-  count_groups(s);
-  const bool extents = !s.triangle_extents.empty();
-  for (std::size_t q = 0; q < s.occluders.size(); ++q) {
-    const std::uint32_t from = s.region_first[q], to = s.patch_first[q], count = s.gathered_count[q];
-    std::copy(s.triangles.data() + from, s.triangles.data() + from + count, s.by_patch.data() + to);
-    // Places only move down (to <= from): forward copying in place is safe.
-    if (extents && to != from)
-      for (std::uint32_t i = 0; i < count; ++i) s.triangle_extents[to + i] = s.triangle_extents[from + i];
-  }
-  order_groups(s);
-}
-
-/// Gathers every chosen occluder's triangles on the calling thread (gather_patch), in order, each
-/// occluder's right after the previous one's (the corners projected first); then
-/// sorts them all at once by key (stable) and groups them by occluder into `s.by_patch`, each
-/// group nearest first with its depth bands (and extents when wanted), and orders the groups. One
-/// thread inserting the grid as one strip gathers on demand instead (gather_on_demand.hpp).
-inline void gather_triangles(const MeshIndex& index, const MeshOcclusionParams& params, Scratch& s, bool extents) {
-  begin_gather(index, s, extents);
-  const std::size_t n = s.occluders.size();
-  std::uint32_t total = 0;
-  for (std::size_t q = 0; q < n; ++q) {
-    s.region_first[q] = total;
-    s.gathered_count[q] = gather_patch(index, s, q, s.clipped, nullptr, params.min_occluder_width_cells);
-    total += s.gathered_count[q];
-  }
-  const auto* sorted = radix_sort(s.triangles.data(), total, s.sort_buffer.data());
-  count_groups(s);
-  for (std::size_t q = 0; q < n; ++q) s.region_cursor[q] = s.patch_first[q];
-  for (std::uint32_t i = 0; i < total; ++i) s.by_patch[s.region_cursor[s.triangle_owner[sorted[i].second]]++] = sorted[i];
-  for (std::size_t q = 0; q < n; ++q) {
-    const auto* group = s.by_patch.data() + s.patch_first[q];
-    assign_depth_bands(params, group, group + s.gathered_count[q], s.triangle_band);
-  }
-  if (extents)
-    for (std::uint32_t i = 0; i < total; ++i) s.triangle_extents[i] = triangle_extent(s.grid, occluder_box(s, s.by_patch[i].second));
-  order_groups(s);
-}
-
 /// Inserts a clipped occluder polygon as insert_run does a triangle: its depth and counts as a
 /// fan of triangles whose diagonals are left out of the counts (each would cancel its twin in the
 /// fan exactly), its edges along the triangle's edges shared with neighbours as the triangle's
