@@ -14,6 +14,7 @@
 #include <limits>
 #include <vector>
 
+#include "../bits.hpp"
 #include "../parallel.hpp"
 #include "../../config.hpp"
 
@@ -127,8 +128,9 @@ struct TriangleBvhItem {
 // Binned SAH build (16 bins on each axis) of a 4-wide tree: each node splits its largest child
 // until it has four or none can be split. Leaves hold at most leaf_max triangles and are cut where
 // the heuristic says a leaf costs less than a split. The top is cut into up to 16 ranges (the bins
-// of its long ranges filled on `threads` threads), whose subtrees are built on `threads` threads
-// and spliced in range order, so the tree does not depend on the thread count. Each range carries
+// of its long ranges filled, their sides marked and measured on `threads` threads), whose subtrees
+// are built on `threads` threads and spliced in range order, so the tree does not depend on the
+// thread count. Each range carries
 // the box of its centroids, measured by the partition that made it, and a split weighs only the
 // planes after occupied bins (the others cut the same sides at the same cost): the tree is the
 // plain binned build's, bit for bit, with fewer passes over the ranges.
@@ -143,17 +145,21 @@ class TriangleBvhBuilder {
   TriangleBvh build() {
     TriangleBvh out;
     const std::size_t n = items_.size();
-    // The passes over a range read its boxes in order: they travel with their ids.
+    // The passes over a range read its boxes in order: they travel with their ids. Filled on
+    // every thread for large sets (the first touch of the array's pages is a good part of it).
     refs_.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      for (int a = 0; a < 3; ++a) {
-        refs_[i].lo[a] = items_[i].lo[a];
-        refs_[i].hi[a] = items_[i].hi[a];
-      }
-      refs_[i].id = static_cast<std::uint32_t>(i);
-      refs_[i].zero = 0.0f;
-    }
     if (n == 0) return out;
+    {
+      const std::size_t slices = threads_ < 2 || n < parallel_bins ? 1 : std::min<std::size_t>(threads_, 64);
+      struct Job {
+        TriangleBvhBuilder* self;
+        std::size_t n, slices;
+      } job{this, n, slices};
+      detail::run_tasks(runner_, slices, [](void* j, std::size_t t) {
+        const Job& jb = *static_cast<const Job*>(j);
+        jb.self->copy_items(jb.n * t / jb.slices, jb.n * (t + 1) / jb.slices);
+      }, &job);
+    }
     const Range all = bounds_of(0, n);
     for (int a = 0; a < 3; ++a) {
       out.root_lo[a] = all.lo[a];
@@ -213,7 +219,8 @@ class TriangleBvhBuilder {
     std::size_t n;
   };
   // While the top is cut (before the subtrees' tasks, which never dispatch tasks of their own),
-  // ranges at least this long fill their bins on all threads (slices merged in slice order).
+  // ranges at least this long fill their bins (slices merged in slice order) and mark and measure
+  // their sides on all threads; so are the refs filled from the items.
   static constexpr std::size_t parallel_bins = std::size_t{1} << 17;
   // Ranges at least this long fill two sets of bins (fill_bins).
   static constexpr std::size_t two_sets = 64;
@@ -222,6 +229,19 @@ class TriangleBvhBuilder {
   std::vector<Ref> refs_;  // the items in the tree's order as it is built
   unsigned threads_;
   TaskRunner runner_;
+
+  // refs_[b, e) from items_[b, e).
+  void copy_items(std::size_t b, std::size_t e) noexcept {
+    for (std::size_t i = b; i < e; ++i) {
+      Ref& ref = refs_[i];
+      for (int a = 0; a < 3; ++a) {
+        ref.lo[a] = items_[i].lo[a];
+        ref.hi[a] = items_[i].hi[a];
+      }
+      ref.id = static_cast<std::uint32_t>(i);
+      ref.zero = 0.0f;
+    }
+  }
 
   static float area(const float lo[3], const float hi[3]) noexcept {
     const float x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2];
@@ -449,85 +469,163 @@ class TriangleBvhBuilder {
     return true;
   }
 
-  // Moves the refs of r whose centroid falls below bin `plane` of axis a to its front (the
-  // two-ended exchange of std::partition, so the order it leaves is the same), measuring each
-  // side's centroid box on the way; left.e and right.b become the cut, which it returns.
-  std::size_t partition(const Range& r, int a, float scale, int plane, Range& left, Range& right) noexcept {
-    const float c0 = r.cl[a];
+  // Whether a ref's centroid falls below bin `plane` of axis a: its bin as fill_bins computes it.
+  struct SideTest {
+#if CULLKIT_HAS_SSE2
+    __m128 keep3, c0, scale;
+    __m128i plane;
+    int a;
+    SideTest(const float cl[3], float scale_a, int plane_at, int axis) noexcept : a(axis) {
+      // The other lanes' scale is 0; a bin below `plane` is a clamped bin below it, as plane lies
+      // in [1, bins - 1].
+      alignas(16) float c0_lanes[4] = {0, 0, 0, 0}, scale_lanes[4] = {0, 0, 0, 0};
+      c0_lanes[a] = cl[a];
+      scale_lanes[a] = scale_a;
+      keep3 = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
+      c0 = _mm_load_ps(c0_lanes);
+      scale = _mm_load_ps(scale_lanes);
+      plane = _mm_set1_epi32(plane_at);
+    }
+    [[nodiscard]] std::uint64_t left(const Ref& it) const noexcept {
+      const __m128 c4 = _mm_add_ps(_mm_and_ps(_mm_load_ps(it.lo), keep3), _mm_load_ps(it.hi));
+      const __m128i below = _mm_cmplt_epi32(_mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(c4, c0), scale)), plane);
+      return static_cast<std::uint64_t>((_mm_movemask_ps(_mm_castsi128_ps(below)) >> a) & 1);
+    }
+#else
+    float c0, scale;
+    int plane, a;
+    SideTest(const float cl[3], float scale_a, int plane_at, int axis) noexcept
+        : c0(cl[axis]), scale(scale_a), plane(plane_at), a(axis) {}
+    [[nodiscard]] std::uint64_t left(const Ref& it) const noexcept {
+      return static_cast<std::uint64_t>(std::clamp(static_cast<int>((it.lo[a] + it.hi[a] - c0) * scale), 0, bins - 1) < plane);
+    }
+#endif
+  };
+
+  // Marks the sides of the refs of words [w0, w1) of a range of n refs from `base` (bit i of
+  // word i / 64: ref i goes left); returns how many go left.
+  static std::size_t mark_sides(const Ref* base, std::size_t n, std::size_t w0, std::size_t w1, const SideTest& test,
+                                std::uint64_t* side) noexcept {
+    std::size_t lefts = 0;
+    for (std::size_t w = w0; w < w1; ++w) {
+      const std::size_t first = 64 * w, count = std::min<std::size_t>(64, n - first);
+      std::uint64_t bits = 0;
+      for (std::size_t k = 0; k < count; ++k) bits |= test.left(base[first + k]) << k;
+      side[w] = bits;
+      lefts += static_cast<std::size_t>(detail::popcount(bits));
+    }
+    return lefts;
+  }
+
+  // The box of the centroids (doubled) of refs_[b, e) into cl, ch (empty when b == e).
+  void centroid_box(std::size_t b, std::size_t e, float (&cl)[4], float (&ch)[4]) const noexcept {
 #if CULLKIT_HAS_SSE2
     const __m128 keep3 = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
-    __m128 lcl4 = _mm_set1_ps(std::numeric_limits<float>::infinity()), rcl4 = lcl4;
-    __m128 lch4 = _mm_set1_ps(-std::numeric_limits<float>::infinity()), rch4 = lch4;
-    // The bin of lane a as fill_bins computes it (the other lanes' scale is 0); a bin below
-    // `plane` is a clamped bin below it, as plane lies in [1, bins - 1].
-    alignas(16) float c0_lanes[4] = {0, 0, 0, 0}, scale_lanes[4] = {0, 0, 0, 0};
-    c0_lanes[a] = c0;
-    scale_lanes[a] = scale;
-    const __m128 c0v = _mm_load_ps(c0_lanes), sv = _mm_load_ps(scale_lanes);
-    const __m128i planev = _mm_set1_epi32(plane);
-    const auto goes_left = [&](const Ref& it) {
-      const __m128 c4 = _mm_add_ps(_mm_and_ps(_mm_load_ps(it.lo), keep3), _mm_load_ps(it.hi));
-      const __m128i below = _mm_cmplt_epi32(_mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(c4, c0v), sv)), planev);
-      const bool l = ((_mm_movemask_ps(_mm_castsi128_ps(below)) >> a) & 1) != 0;
-      if (l) {
-        lcl4 = _mm_min_ps(lcl4, c4);
-        lch4 = _mm_max_ps(lch4, c4);
-      } else {
-        rcl4 = _mm_min_ps(rcl4, c4);
-        rch4 = _mm_max_ps(rch4, c4);
-      }
-      return l;
-    };
+    __m128 cl4 = _mm_set1_ps(std::numeric_limits<float>::infinity());
+    __m128 ch4 = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+    for (std::size_t i = b; i < e; ++i) {
+      const __m128 c4 = _mm_add_ps(_mm_and_ps(_mm_load_ps(refs_[i].lo), keep3), _mm_load_ps(refs_[i].hi));
+      cl4 = _mm_min_ps(cl4, c4);
+      ch4 = _mm_max_ps(ch4, c4);
+    }
+    _mm_storeu_ps(cl, cl4);
+    _mm_storeu_ps(ch, ch4);
 #else
-    float lcl[3], lch[3], rcl[3], rch[3];
-    empty_box(lcl, lch, 3);
-    empty_box(rcl, rch, 3);
-    const auto goes_left = [&](const Ref& it) {
-      float c[3];
-      for (int j = 0; j < 3; ++j) c[j] = it.lo[j] + it.hi[j];
-      const bool l = std::clamp(static_cast<int>((c[a] - c0) * scale), 0, bins - 1) < plane;
-      float* cl = l ? lcl : rcl;
-      float* ch = l ? lch : rch;
+    empty_box(cl, ch, 4);
+    for (std::size_t i = b; i < e; ++i)
       for (int j = 0; j < 3; ++j) {
-        cl[j] = std::min(cl[j], c[j]);
-        ch[j] = std::max(ch[j], c[j]);
+        cl[j] = std::min(cl[j], refs_[i].lo[j] + refs_[i].hi[j]);
+        ch[j] = std::max(ch[j], refs_[i].lo[j] + refs_[i].hi[j]);
       }
-      return l;
+#endif
+  }
+
+  // Moves the refs of r whose centroid falls below bin `plane` of axis a to its front, in the order
+  // of the two-ended exchange of std::partition (the k-th ref going right from the front trades
+  // places with the k-th ref going left from the back), and measures each side's centroid box; left.e
+  // and right.b become the cut, which it returns. Each ref's side is first marked in a bit set
+  // without a branch, so the exchanges are found a word of 64 refs at a time: the side of a ref
+  // deep in the tree is hard to predict, and branching on it per ref cost more than the test. While
+  // the top is cut, long ranges mark and measure on all threads (slices of whole words).
+  std::size_t partition(const Range& r, int a, float scale, int plane, Range& left, Range& right) {
+    const std::size_t n = r.e - r.b;
+    Ref* const base = refs_.data() + r.b;
+    const SideTest test(r.cl, scale, plane, a);
+    const std::size_t words = (n + 63) / 64;
+    thread_local std::vector<std::uint64_t> side_bits;
+    if (side_bits.size() < words) side_bits.resize(words);
+    std::uint64_t* const side = side_bits.data();
+    const std::size_t slices = top_ && threads_ >= 2 && n >= parallel_bins ? std::min<std::size_t>(threads_, 64) : 1;
+    struct Slice {
+      std::size_t lefts;
+      alignas(16) float box[4][4];  // left cl, ch; right cl, ch
     };
-#endif
-    Ref* first = refs_.data() + r.b;
-    Ref* last = refs_.data() + r.e;
-    while (first != last) {
-      if (goes_left(*first)) {
-        ++first;
-        continue;
-      }
-      bool exchanged = false;  // *first goes right: the last unread ref going left takes its place
-      while (first != --last) {
-        if (goes_left(*last)) {
-          std::swap(*first, *last);
-          ++first;
-          exchanged = true;
-          break;
+    Slice part[64];
+    struct Job {
+      TriangleBvhBuilder* self;
+      const Ref* base;
+      std::size_t first, n, words, mid;
+      const SideTest* test;
+      std::uint64_t* side;
+      Slice* part;
+      std::size_t slices;
+    } job{this, base, r.b, n, words, 0, &test, side, part, slices};
+    const auto each_slice = [&](ParallelTask task) {
+      if (slices == 1) task(&job, 0);
+      else detail::run_tasks(runner_, slices, task, &job);
+    };
+    each_slice([](void* j, std::size_t t) {
+      Job& jb = *static_cast<Job*>(j);
+      const std::size_t count = jb.slices;
+      jb.part[t].lefts = mark_sides(jb.base, jb.n, jb.words * t / count, jb.words * (t + 1) / count, *jb.test, jb.side);
+    });
+    std::size_t lefts = 0;
+    for (std::size_t t = 0; t < slices; ++t) lefts += part[t].lefts;
+    // Refs going right below the cut (from the front) trade places with refs going left above it
+    // (from the back); there are as many of each.
+    const auto below_cut = [&](std::size_t w) {  // bits of word w before the cut
+      return lefts >= 64 * (w + 1) ? ~std::uint64_t{0} : lefts <= 64 * w ? 0 : (std::uint64_t{1} << (lefts - 64 * w)) - 1;
+    };
+    if (lefts > 0 && lefts < n) {
+      std::size_t lw = 0, rw = words;
+      std::uint64_t front = ~side[0] & below_cut(0), back = 0;  // the words' refs still to exchange
+      for (;;) {
+        while (front == 0 && 64 * ++lw < lefts) front = ~side[lw] & below_cut(lw);
+        if (front == 0) break;
+        while (back == 0) {
+          --rw;
+          back = side[rw] & ~below_cut(rw);
         }
+        const int i = detail::lowest_bit(front), j = detail::highest_bit(back);
+        front &= front - 1;
+        back &= ~(std::uint64_t{1} << j);
+        std::swap(base[64 * lw + static_cast<std::size_t>(i)], base[64 * rw + static_cast<std::size_t>(j)]);
       }
-      if (!exchanged) break;
     }
-    const std::size_t mid = static_cast<std::size_t>(first - refs_.data());
+    const std::size_t mid = r.b + lefts;
     left.e = right.b = mid;
-#if CULLKIT_HAS_SSE2
-    alignas(16) float lcl[4], lch[4], rcl[4], rch[4];
-    _mm_store_ps(lcl, lcl4);
-    _mm_store_ps(lch, lch4);
-    _mm_store_ps(rcl, rcl4);
-    _mm_store_ps(rch, rch4);
-#endif
-    for (int j = 0; j < 3; ++j) {
-      left.cl[j] = lcl[j];
-      left.ch[j] = lch[j];
-      right.cl[j] = rcl[j];
-      right.ch[j] = rch[j];
-    }
+    // Each side's centroid box, merged over the slices (minima and maxima do not depend on the
+    // order but for the sign of a zero, which no bin reads: a centroid minus either zero falls in
+    // the same bin).
+    job.mid = lefts;
+    each_slice([](void* j, std::size_t t) {
+      Job& jb = *static_cast<Job*>(j);
+      Slice& sl = jb.part[t];
+      const std::size_t count = jb.slices, b = jb.first;
+      const auto cut = [&](std::size_t e, std::size_t k) { return jb.mid + (e - jb.mid) * k / count; };
+      jb.self->centroid_box(b + jb.mid * t / count, b + jb.mid * (t + 1) / count, sl.box[0], sl.box[1]);
+      jb.self->centroid_box(b + cut(jb.n, t), b + cut(jb.n, t + 1), sl.box[2], sl.box[3]);
+    });
+    empty_box(left.cl, left.ch, 3);
+    empty_box(right.cl, right.ch, 3);
+    for (std::size_t t = 0; t < slices; ++t)
+      for (int j = 0; j < 3; ++j) {
+        const Slice& sl = part[t];
+        left.cl[j] = std::min(left.cl[j], sl.box[0][j]);
+        left.ch[j] = std::max(left.ch[j], sl.box[1][j]);
+        right.cl[j] = std::min(right.cl[j], sl.box[2][j]);
+        right.ch[j] = std::max(right.ch[j], sl.box[3][j]);
+      }
     return mid;
   }
 
