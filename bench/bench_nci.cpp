@@ -26,7 +26,8 @@
 // rtcIntersect1 on the same mesh under RTC_SCENE_FLAG_ROBUST (watertight, the guarantee
 // select_visible gives; medium quality, built on the same threads), raced last on the same rays, and
 // prints one `nci_robust` line per path: select_visible over the default scene's median and over the
-// robust one's, the default's over the robust's, and the pixels each hit. CSV on stdout.
+// robust one's, the default's over the robust's, the pixels each hit, and the pixels whose first hit
+// is another triangle (or none) in one than in the other. CSV on stdout.
 // --frame-race SCENE [REPS] [--threads LIST] [--path LIST] [--robust]: see frame_race below (env
 // FRAME_VIEWS=1: the outside view only; SCENE as for --profile; --robust adds the robust scene and
 // one `frame_robust` line per race: each contestant's median over the robust scene's).
@@ -138,20 +139,7 @@ struct Embree {
         rays.directions(0, y, cam.width, dx.data(), dy.data(), dz.data());
         for (int x = 0; x < cam.width; ++x) {
           const std::size_t i = static_cast<std::size_t>(x);
-          RTCRayHit rh;
-          rh.ray.org_x = cam.eye.x;
-          rh.ray.org_y = cam.eye.y;
-          rh.ray.org_z = cam.eye.z;
-          rh.ray.dir_x = dx[i];
-          rh.ray.dir_y = dy[i];
-          rh.ray.dir_z = dz[i];
-          rh.ray.tnear = 0.0f;
-          rh.ray.tfar = 3.0e38f;
-          rh.ray.mask = 0xFFFFFFFFu;
-          rh.ray.time = 0.0f;
-          rh.ray.flags = 0;
-          rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-          rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+          RTCRayHit rh = pixel_ray(cam, dx[i], dy[i], dz[i]);
           rtcIntersect1(scene, &ctx, &rh);
           n += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
         }
@@ -160,6 +148,44 @@ struct Embree {
     };
     run_threads(threads, work);
     return hits.load();
+  }
+
+  static RTCRayHit pixel_ray(const Camera& cam, float dx, float dy, float dz) {
+    RTCRayHit rh;
+    rh.ray.org_x = cam.eye.x;
+    rh.ray.org_y = cam.eye.y;
+    rh.ray.org_z = cam.eye.z;
+    rh.ray.dir_x = dx;
+    rh.ray.dir_y = dy;
+    rh.ray.dir_z = dz;
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = 3.0e38f;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.time = 0.0f;
+    rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    return rh;
+  }
+
+  // The triangle render1 hits at each pixel, row by row (RTC_INVALID_GEOMETRY_ID for none); one
+  // thread, untimed.
+  std::vector<unsigned> first_hits(const Camera& cam) const {
+    const PixelRays rays(cam);
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    const std::size_t w = static_cast<std::size_t>(cam.width);
+    std::vector<unsigned> prim(w * static_cast<std::size_t>(cam.height), RTC_INVALID_GEOMETRY_ID);
+    std::vector<float> dx(w), dy(w), dz(w);
+    for (int y = 0; y < cam.height; ++y) {
+      rays.directions(0, y, cam.width, dx.data(), dy.data(), dz.data());
+      for (std::size_t x = 0; x < w; ++x) {
+        RTCRayHit rh = pixel_ray(cam, dx[x], dy[x], dz[x]);
+        rtcIntersect1(scene, &ctx, &rh);
+        if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) prim[static_cast<std::size_t>(y) * w + x] = rh.hit.primID;
+      }
+    }
+    return prim;
   }
 
   // 4x4 pixel packets.
@@ -424,10 +450,13 @@ void speed(const std::string& name, const Scene& s, unsigned build_threads, bool
         if (robust) {
           const double robust_ns = result.back().median_ns;
           const long long hits = embree.render1(cam, threads), robust_hits = robust->render1(cam, threads);
+          const std::vector<unsigned> first = embree.first_hits(cam), robust_first = robust->first_hits(cam);
+          std::size_t differing = 0;
+          for (std::size_t i = 0; i < first.size(); ++i) differing += first[i] != robust_first[i];
           for (std::size_t k = 0; k < g_paths.size(); ++k)
-            std::printf("nci_robust,%s,%s,%.3f,%.3f,%.3f,%lld,%lld\n", race.c_str(), g_paths[k].name,
+            std::printf("nci_robust,%s,%s,%.3f,%.3f,%.3f,%lld,%lld,%zu\n", race.c_str(), g_paths[k].name,
                         result[2 + k].median_ns / result[0].median_ns, result[2 + k].median_ns / robust_ns,
-                        result[0].median_ns / robust_ns, hits, robust_hits);
+                        result[0].median_ns / robust_ns, hits, robust_hits, differing);
         }
         std::printf("nci_crowding,%s,triangles_per_box_pixel=%.3f\n", race.c_str(), triangles_per_pixel(s, cam));
         for (std::size_t k = 0; k < g_paths.size(); ++k) {
@@ -837,7 +866,7 @@ int main(int argc, char** argv) {
     if (g_robust)
       std::printf("# embree_build_robust,scene,triangles,build_s,bytes_per_triangle\n"
                   "# nci_robust,race,path,select_over_rtcIntersect1,select_over_robust,rtcIntersect1_over_robust,"
-                  "pixels_hit,pixels_hit_robust\n");
+                  "pixels_hit,pixels_hit_robust,pixels_hitting_another_triangle\n");
   }
   for (const auto& [name, s] : scenes) {
     if (hash && small) pixel_hash(name, s, threads);
