@@ -22,9 +22,15 @@
 // NciParams::tile_size for it). --path LIST: the crowded-cell paths raced (comma-separated walk, rays,
 // auto; default auto): `--path walk,auto` races the walk alone against the automatic choice in the
 // same run; with --hash, the first path of the list answers (every path must print the same hashes).
-// --threads LIST: thread counts of the races (default 1,2). CSV on stdout.
-// --frame-race SCENE [REPS] [--threads LIST] [--path LIST]: see frame_race below (env FRAME_VIEWS=1:
-// the outside view only; SCENE as for --profile).
+// --threads LIST: thread counts of the races (default 1,2). --robust: each race also times
+// rtcIntersect1 on the same mesh under RTC_SCENE_FLAG_ROBUST (watertight, the guarantee
+// select_visible gives; medium quality, built on the same threads), raced last on the same rays, and
+// prints one `nci_robust` line per path: select_visible over the default scene's median and over the
+// robust one's, the default's over the robust's, the pixels each hit, and the pixels whose first hit
+// is another triangle (or none) in one than in the other. CSV on stdout.
+// --frame-race SCENE [REPS] [--threads LIST] [--path LIST] [--robust]: see frame_race below (env
+// FRAME_VIEWS=1: the outside view only; SCENE as for --profile; --robust adds the robust scene and
+// one `frame_robust` line per race: each contestant's median over the robust scene's).
 // --profile SCENE VIEW [FRAMES]: for callgrind (instructions per frame: a run of 3 frames minus a run of 1,
 // halved; or `--collect-atstart=no --toggle-collect='*process_tile*'` for the tiles alone):
 // one thread, select_visible only, at 640x480, FRAMES frames (default 1) of view VIEW (0: outside,
@@ -82,19 +88,23 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// A plain Embree scene for racing: default (two-sided) triangles, medium build quality.
+// A plain Embree scene for racing: default (two-sided) triangles, medium build quality. With
+// `robust`, the same scene under RTC_SCENE_FLAG_ROBUST: watertight hits (no ray slips between two
+// triangles sharing an edge) and no traversal shortcuts that lose accuracy, the guarantee
+// select_visible gives.
 struct Embree {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   double build_seconds = 0;
   long long bytes = 0;
-  Embree(const Scene& s, unsigned threads) {
+  Embree(const Scene& s, unsigned threads, bool robust = false) {
     const std::string cfg = "threads=" + std::to_string(threads);
     device = rtcNewDevice(cfg.c_str());
     rtcSetDeviceMemoryMonitorFunction(device, memory_monitor, nullptr);
     const long long before = g_embree_bytes.load();
     const auto t0 = std::chrono::steady_clock::now();
     scene = rtcNewScene(device);
+    if (robust) rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                           3 * sizeof(float), s.positions.size()));
@@ -129,20 +139,7 @@ struct Embree {
         rays.directions(0, y, cam.width, dx.data(), dy.data(), dz.data());
         for (int x = 0; x < cam.width; ++x) {
           const std::size_t i = static_cast<std::size_t>(x);
-          RTCRayHit rh;
-          rh.ray.org_x = cam.eye.x;
-          rh.ray.org_y = cam.eye.y;
-          rh.ray.org_z = cam.eye.z;
-          rh.ray.dir_x = dx[i];
-          rh.ray.dir_y = dy[i];
-          rh.ray.dir_z = dz[i];
-          rh.ray.tnear = 0.0f;
-          rh.ray.tfar = 3.0e38f;
-          rh.ray.mask = 0xFFFFFFFFu;
-          rh.ray.time = 0.0f;
-          rh.ray.flags = 0;
-          rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-          rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+          RTCRayHit rh = pixel_ray(cam, dx[i], dy[i], dz[i]);
           rtcIntersect1(scene, &ctx, &rh);
           n += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
         }
@@ -151,6 +148,44 @@ struct Embree {
     };
     run_threads(threads, work);
     return hits.load();
+  }
+
+  static RTCRayHit pixel_ray(const Camera& cam, float dx, float dy, float dz) {
+    RTCRayHit rh;
+    rh.ray.org_x = cam.eye.x;
+    rh.ray.org_y = cam.eye.y;
+    rh.ray.org_z = cam.eye.z;
+    rh.ray.dir_x = dx;
+    rh.ray.dir_y = dy;
+    rh.ray.dir_z = dz;
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = 3.0e38f;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.time = 0.0f;
+    rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    return rh;
+  }
+
+  // The triangle render1 hits at each pixel, row by row (RTC_INVALID_GEOMETRY_ID for none); one
+  // thread, untimed.
+  std::vector<unsigned> first_hits(const Camera& cam) const {
+    const PixelRays rays(cam);
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    const std::size_t w = static_cast<std::size_t>(cam.width);
+    std::vector<unsigned> prim(w * static_cast<std::size_t>(cam.height), RTC_INVALID_GEOMETRY_ID);
+    std::vector<float> dx(w), dy(w), dz(w);
+    for (int y = 0; y < cam.height; ++y) {
+      rays.directions(0, y, cam.width, dx.data(), dy.data(), dz.data());
+      for (std::size_t x = 0; x < w; ++x) {
+        RTCRayHit rh = pixel_ray(cam, dx[x], dy[x], dz[x]);
+        rtcIntersect1(scene, &ctx, &rh);
+        if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) prim[static_cast<std::size_t>(y) * w + x] = rh.hit.primID;
+      }
+    }
+    return prim;
   }
 
   // 4x4 pixel packets.
@@ -280,6 +315,7 @@ double triangles_per_pixel(const Scene& s, const Camera& cam) {
 
 int g_foliage_trees = 70;  // --foliage-trees: trees per side of the generated forest
 bool g_quick = false;  // --quick: precision at the default parameters only, timing at 640x480 only
+bool g_robust = false;  // --robust: race Embree's robust (watertight) scene too
 
 struct PathChoice {
   NciCrowdedPath path;
@@ -374,6 +410,12 @@ std::vector<std::unique_ptr<NormalClassIndex<glm::vec3>>> indices_per_path(const
 // on each path of --path (an index per path and thread count: both are fixed at build).
 void speed(const std::string& name, const Scene& s, unsigned build_threads, bool smoke, bool from_above = false) {
   const Embree embree(s, build_threads);
+  std::optional<Embree> robust;
+  if (g_robust) {
+    robust.emplace(s, build_threads, true);
+    std::printf("embree_build_robust,%s,%zu,%.3f,%.1f\n", name.c_str(), s.triangle_count(), robust->build_seconds,
+                double(robust->bytes) / double(s.triangle_count()));
+  }
   const std::vector<std::pair<int, int>> sizes =
       smoke     ? std::vector<std::pair<int, int>>{{64, 48}}
       : g_quick ? std::vector<std::pair<int, int>>{{640, 480}}
@@ -401,7 +443,21 @@ void speed(const std::string& name, const Scene& s, unsigned build_threads, bool
                              cullkit_bench::keep(out.triangles.size());
                            }});
         }
+        // Last, so the rows and ratios above keep their places.
+        if (robust)
+          field.push_back({"embree_rtcIntersect1_robust", [&] { cullkit_bench::keep(robust->render1(cam, threads)); }});
         const auto result = cullkit_bench::race(race, field, smoke ? 2 : 9);
+        if (robust) {
+          const double robust_ns = result.back().median_ns;
+          const long long hits = embree.render1(cam, threads), robust_hits = robust->render1(cam, threads);
+          const std::vector<unsigned> first = embree.first_hits(cam), robust_first = robust->first_hits(cam);
+          std::size_t differing = 0;
+          for (std::size_t i = 0; i < first.size(); ++i) differing += first[i] != robust_first[i];
+          for (std::size_t k = 0; k < g_paths.size(); ++k)
+            std::printf("nci_robust,%s,%s,%.3f,%.3f,%.3f,%lld,%lld,%zu\n", race.c_str(), g_paths[k].name,
+                        result[2 + k].median_ns / result[0].median_ns, result[2 + k].median_ns / robust_ns,
+                        result[0].median_ns / robust_ns, hits, robust_hits, differing);
+        }
         std::printf("nci_crowding,%s,triangles_per_box_pixel=%.3f\n", race.c_str(), triangles_per_pixel(s, cam));
         for (std::size_t k = 0; k < g_paths.size(); ++k) {
           index[k]->select_visible(cam, ctx[k], out, nullptr);  // the stats of one frame
@@ -673,6 +729,12 @@ int frame_race(const std::string& name, int reps) {
   const Embree embree(*s, hw);
   std::printf("frame_build,%s,triangles=%zu,embree_s=%.3f,embree_bytes_per_tri=%.1f\n", name.c_str(), s->triangle_count(),
               embree.build_seconds, double(embree.bytes) / double(s->triangle_count()));
+  std::optional<Embree> robust;
+  if (g_robust) {
+    robust.emplace(*s, hw, true);
+    std::printf("frame_build,%s,embree_robust_s=%.3f,embree_robust_bytes_per_tri=%.1f\n", name.c_str(),
+                robust->build_seconds, double(robust->bytes) / double(s->triangle_count()));
+  }
   const FrameCaster fc(*s, hw);
   std::printf("frame_build,%s,frame_bvh_s=%.3f,nodes=%zu,bytes_per_tri=%.2f\n", name.c_str(), fc.build_seconds,
               fc.bvh.nodes.size(), double(fc.bvh.memory_bytes()) / double(s->triangle_count()));
@@ -714,7 +776,15 @@ int frame_race(const std::string& name, int reps) {
                              index[k]->select_visible(cam, ctx[k], out, nullptr);
                              cullkit_bench::keep(out.triangles.size());
                            }});
-        cullkit_bench::race(race, field, reps);
+        if (robust)  // last, so the rows above keep their places
+          field.push_back({"embree_rtcIntersect1_robust", [&] { cullkit_bench::keep(robust->render1(cam, threads)); }});
+        const auto result = cullkit_bench::race(race, field, reps);
+        if (robust) {  // each contestant over the robust scene's median
+          std::printf("frame_robust,%s", race.c_str());
+          for (std::size_t k = 0; k + 1 < result.size(); ++k)
+            std::printf(",%s=%.3f", result[k].name.c_str(), result[k].median_ns / result.back().median_ns);
+          std::printf("\n");
+        }
         for (std::size_t k = 0; k < g_paths.size(); ++k) {
           index[k]->select_visible(cam, ctx[k], out, nullptr);
           const NciSelectStats& st = ctx[k].stats;
@@ -734,11 +804,13 @@ int main(int argc, char** argv) {
   if (argc >= 4 && !std::strcmp(argv[1], "--profile"))
     return profile(argv[2], std::atoi(argv[3]), argc >= 5 ? std::max(1, std::atoi(argv[4])) : 1);
   if (argc >= 3 && !std::strcmp(argv[1], "--frame-race")) {
-    for (int i = 4; i + 1 < argc; ++i) {
+    for (int i = 3; i < argc; ++i) {
+      if (!std::strcmp(argv[i], "--robust")) g_robust = true;
+      if (i < 4 || i + 1 >= argc) continue;
       if (!std::strcmp(argv[i], "--threads") && !parse_threads(argv[i + 1], g_threads)) return 2;
       if (!std::strcmp(argv[i], "--path") && !parse_paths(argv[i + 1], g_paths)) return 2;
     }
-    return frame_race(argv[2], argc >= 4 ? std::max(1, std::atoi(argv[3])) : 5);
+    return frame_race(argv[2], argc >= 4 && argv[3][0] != '-' ? std::max(1, std::atoi(argv[3])) : 5);
   }
   const bool smoke = cullkit_bench::smoke();
   bool big = !smoke, small = true, precision = true, timing = true, hash = false, no_precision = false;
@@ -756,6 +828,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--only-foliage")) small = precision = timing = big = false, foliage = true;
     if (!std::strcmp(argv[i], "--no-precision")) precision = false, no_precision = true;
     if (!std::strcmp(argv[i], "--quick")) g_quick = true;
+    if (!std::strcmp(argv[i], "--robust")) g_robust = true;
     if (!std::strcmp(argv[i], "--foliage-trees") && (i + 1 >= argc || (g_foliage_trees = std::atoi(argv[++i])) < 1)) {
       std::fprintf(stderr, "--foliage-trees: a positive count of trees per side\n");
       return 2;
@@ -790,6 +863,10 @@ int main(int argc, char** argv) {
     for (const PathChoice& p : g_paths) std::printf(" %s", p.name);
     std::printf("\n# nci_cells,race,path,cells_walked,tiles_ray_cast,tested,triangles_met,triangles_no_pixel\n"
                 "# nci_path_ratio,race,path_over_first_path,median_ratio\n");
+    if (g_robust)
+      std::printf("# embree_build_robust,scene,triangles,build_s,bytes_per_triangle\n"
+                  "# nci_robust,race,path,select_over_rtcIntersect1,select_over_robust,rtcIntersect1_over_robust,"
+                  "pixels_hit,pixels_hit_robust,pixels_hitting_another_triangle\n");
   }
   for (const auto& [name, s] : scenes) {
     if (hash && small) pixel_hash(name, s, threads);
