@@ -40,7 +40,9 @@
 //                  alternately per camera, best of `reps` each, in wall time: per scene, both answers'
 //                  hashes and whether they are the same, both medians (min-max), the ratio of the medians
 //                  and of the sums over the cameras, and the N-thread cull's CPU time per frame (all
-//                  threads).
+//                  threads). Then `hot_ratio`: the same N-thread cull through a TaskRunner whose
+//                  threads never sleep (an engine's job system mid-frame), over the one-thread time
+//                  (meaningful for N up to the cores: its threads spin).
 //   --scene=TEXT   only the scenes whose name contains TEXT (each scene keeps the cameras of a full run).
 //   --grid=WxH     the culler's grid size; overrides GW and GH.
 //   --split-edges=LEN  the real scenes with every edge longer than LEN (scene units) split at its midpoint,
@@ -58,6 +60,7 @@
 // CULLKIT_BENCH_SMOKE=1: the small generated city, 2 cameras, 320x180, 1 rep.
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -65,6 +68,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <glm/ext/matrix_clip_space.hpp>
@@ -611,6 +615,62 @@ struct TimedTasks {
   }
 };
 
+/// A TaskRunner whose N - 1 threads spin for as long as it lives, as an engine's job system's
+/// workers are running when a query hands out its tasks in the middle of a frame: the split's own
+/// cost, without the wake-ups of the library's sleeping pool. Each dispatch is a barrier: it returns
+/// once every task ran and every worker has left it, so the next dispatch's fields are not read by a
+/// worker still in the last one.
+class SpinningWorkers {
+ public:
+  explicit SpinningWorkers(unsigned threads) {
+    for (unsigned i = 1; i < threads; ++i) workers_.emplace_back([this] { loop(); });
+  }
+  SpinningWorkers(const SpinningWorkers&) = delete;
+  SpinningWorkers& operator=(const SpinningWorkers&) = delete;
+  ~SpinningWorkers() {
+    stop_.store(true, std::memory_order_release);
+    for (std::thread& t : workers_) t.join();
+  }
+  TaskRunner runner() { return TaskRunner{dispatch, this}; }
+
+ private:
+  static void dispatch(void* self, std::size_t count, void (*run)(void*, std::size_t), void* job) {
+    SpinningWorkers& w = *static_cast<SpinningWorkers*>(self);
+    w.run_ = run;
+    w.job_ = job;
+    w.count_ = count;
+    w.next_.store(0, std::memory_order_relaxed);
+    w.left_.store(0, std::memory_order_relaxed);
+    w.generation_.fetch_add(1, std::memory_order_release);
+    w.work();
+    for (unsigned spins = 0; w.left_.load(std::memory_order_acquire) < w.workers_.size();)
+      if ((++spins & 255u) == 0) std::this_thread::yield();
+  }
+  void work() {
+    for (std::size_t i; (i = next_.fetch_add(1, std::memory_order_relaxed)) < count_;) run_(job_, i);
+  }
+  void loop() {
+    std::uint64_t seen = 0;
+    for (unsigned spins = 0; !stop_.load(std::memory_order_acquire);) {
+      const std::uint64_t g = generation_.load(std::memory_order_acquire);
+      if (g == seen) {
+        if ((++spins & 255u) == 0) std::this_thread::yield();  // more threads than cores still progress
+        continue;
+      }
+      seen = g;
+      work();
+      left_.fetch_add(1, std::memory_order_acq_rel);
+    }
+  }
+  std::vector<std::thread> workers_;
+  std::atomic<std::uint64_t> generation_{0};
+  std::atomic<std::size_t> next_{0}, left_{0};
+  std::atomic<bool> stop_{false};
+  void (*run_)(void*, std::size_t) = nullptr;
+  void* job_ = nullptr;
+  std::size_t count_ = 0;
+};
+
 /// --threads=N: the culler with one thread and with N (MeshOcclusionParams::threads, the library's
 /// pool), alternately per camera, best of `reps` each, in wall time; the hashes of both answers
 /// (they must be equal), both medians, the ratio of the medians and of the sums over the cameras,
@@ -680,12 +740,33 @@ void culler_threads(const std::string& name, const CullScene& cs, const std::vec
     cpu_split += best_split;
     cpu_tasks += best_tasks;
   }
+  // The same cull through running workers, alternating with one thread again, in wall time.
+  SpinningWorkers spinning(threads);
+  MeshOcclusionParams hot = many;
+  hot.task_runner = spinning.runner();
+  const MeshOcclusionCuller<glm::vec3> culler_hot(cs.scene.mesh(), map.objects.data(), map.objects.size(), hot);
+  MeshOcclusionContext context_hot;
+  std::vector<double> wall_one_again, wall_hot;
+  for (const Camera& cam : cams) {
+    double best_one = 1e300, best_hot = 1e300;
+    for (int r = 0; r < reps; ++r) {
+      auto t0 = Clock::now();
+      culler_one.cull(cam, context_one, kept_one);
+      best_one = std::min(best_one, ms_since(t0));
+      t0 = Clock::now();
+      culler_hot.cull(cam, context_hot, kept_many);
+      best_hot = std::min(best_hot, ms_since(t0));
+      same = same && kept_one == kept_many;
+    }
+    wall_one_again.push_back(best_one);
+    wall_hot.push_back(best_hot);
+  }
   std::printf("threads,%s,%u,%016llx,%016llx,%s,one_ms=%s,many_ms=%s,median_ratio=%.3f,sum_ratio=%.3f,many_cpu_ms=%s,"
-              "task_share=%.3f,ideal_ratio=%.3f\n",
+              "task_share=%.3f,ideal_ratio=%.3f,hot_ratio=%.3f\n",
               name.c_str(), threads, static_cast<unsigned long long>(hash_one), static_cast<unsigned long long>(hash_many),
               same ? "same" : "DIFFERENT", ms_text(wall_one).c_str(), ms_text(wall_many).c_str(), ratio(wall_many, wall_one),
               sum_one > 0 ? sum_many / sum_one : 0.0, ms_text(cpu_many).c_str(), cpu_split > 0 ? cpu_tasks / cpu_split : 0.0,
-              cpu_one > 0 ? (cpu_split - cpu_tasks + cpu_tasks / threads) / cpu_one : 0.0);
+              cpu_one > 0 ? (cpu_split - cpu_tasks + cpu_tasks / threads) / cpu_one : 0.0, ratio(wall_hot, wall_one_again));
 }
 
 // ---- --engine: the parts of an engine frame ----
