@@ -96,8 +96,7 @@ CULLKIT_CORE_FN bool cull(const MeshIndex& index, const MeshOcclusionParams& par
   if (params.threads == 1) {
     gather_on_demand(index, params, s);
   } else {
-    project_occluder_corners_on_tasks(index, params, s, tasks);
-    prepare_strip_gathering(index, s);
+    project_occluder_corners_on_tasks(index, params, s, tasks, [&] { prepare_strip_gathering(index, s); });
     gather_first_on_tasks(index, params, s, tasks);
   }
   stats.occluders_used = s.occluders.size();

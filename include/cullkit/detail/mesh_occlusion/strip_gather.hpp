@@ -49,7 +49,8 @@ inline bool beyond_clip_level(const View& view, const Aabb& box) {
   return std::isfinite(view.clip_level) && lowest >= 2.0 * view.clip_level;
 }
 
-/// Sets up the strips' gathering, after the occluders' corners are projected: each occluder either
+/// Sets up the strips' gathering, after the occluders are chosen (it reads none of their corners, so
+/// it runs beside their projection, project_occluder_corners_on_tasks): each occluder either
 /// is gathered before the strips (`s.gather_first`: patches sharing triangles, gathered in order;
 /// those whose lowest key is not bounded; those a triangle of which may be clipped, whose polygons
 /// go into the frame's one list), or waits ungathered in `s.ungathered` (lowest key first, ties by
