@@ -271,8 +271,8 @@ inline void estimate_row_work(const MeshIndex& index, Scratch& s, int height) {
 /// weigh 2 and the rest 1. The strips are handed out biggest first, so each task starts on a big
 /// one, and the small ones left for last even out where the tasks end. The first strips also
 /// gather most of the occluders (the first strip to need one gathers it), work the estimate leaves
-/// out: with four strips of equal estimates the tasks ended 120 us apart on lasdunasarena and 90 on
-/// sportsCar, with 2:2:1:1 about 75 and 70 (`bench_mesh_occlusion --threads=2`).
+/// out: with four strips of equal estimates the tasks ended 120-130 us apart on lasdunasarena and
+/// 85-95 on sportsCar, with 2:2:1:1 about 80 and 75 (`bench_mesh_occlusion --threads=2`).
 inline std::uint64_t strip_weight(int k, int strips) { return strips >= 3 && k >= (strips + 1) / 2 ? 1 : 2; }
 
 /// Cuts the grid's `height` rows into `strips` strips of estimated work (estimate_row_work) in
