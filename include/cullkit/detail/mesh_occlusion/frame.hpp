@@ -17,6 +17,7 @@
 #include "../../config.hpp"
 #include "../../geometry/camera.hpp"
 #include "../../occlusion_tree.hpp"
+#include "../default_init_allocator.hpp"
 #include "coverage.hpp"
 #include "index.hpp"
 #include "view.hpp"
@@ -88,6 +89,11 @@ struct OccluderBox {
   double xmin, ymin, xmax, ymax, wmin;
 };
 
+/// A per-frame buffer whose `resize` only makes room (DefaultInitAllocator): its users write every
+/// slot they later read.
+template <class T>
+using ScratchVector = std::vector<T, DefaultInitAllocator<T>>;
+
 /// Working memory of one task of a cull on several threads (parallel_frame.hpp): the corners and
 /// patch boxes it projects itself, per vertex and per patch (valid where the stamp equals `frame`).
 /// Sized by the index, not by the objects a task happens to take, so a warm context never grows
@@ -96,7 +102,7 @@ struct TaskScratch {
   const void* owner = nullptr;  // the index the caches fit
   std::uint32_t frame = 0;
   std::vector<std::uint32_t> vertex_stamp, patch_stamp;
-  std::vector<Projected> projected;
+  ScratchVector<Projected> projected;
   std::vector<BoxView> patch_boxes;
   // Gathering occluder triangles (parallel_frame.hpp): the polygons of the triangles this task
   // clipped and those triangles, the occluders it gathered, and room to sort their triangles.
@@ -187,7 +193,7 @@ struct Scratch {
   std::vector<OccluderBox> occluder_boxes;
   std::vector<std::uint32_t> box_slot;
   std::vector<BoxView> patch_boxes;       // per patch, valid where patch_stamp equals `frame`
-  std::vector<Projected> projected;
+  ScratchVector<Projected> projected;
   View view;
   CoverageGrid grid;
   // Per gathered triangle, the occluder that gathered it (insertion by strips, row_strips.hpp).
@@ -212,7 +218,7 @@ struct Scratch {
   // in `in_frustum` (1: hidden), written by whichever task tests the object.
   std::vector<TaskScratch> tasks;
   std::vector<std::uint8_t> hidden;
-  std::vector<std::uint32_t> corner_list;  // occluder corners given a slot in `projected`, in slot order
+  ScratchVector<std::uint32_t> corner_list;  // occluder corners given a slot in `projected`, in slot order
   // The occluder insertion strip by strip: the strips, each task's memory, the gathered triangles'
   // extents (by place in `triangles`, set when gathered), and the order the strips are handed out in
   // (biggest first).
