@@ -798,30 +798,49 @@ class CoverageGrid {
     const double rounding = 0x1p-48 * (std::fabs(dx) + std::fabs(dy));
     const int first = c0 > c1 ? t0 : t0 > t1 ? c0 : std::min(c0, t0);
     const int last = c0 > c1 ? t1 : t0 > t1 ? c1 : std::max(c1, t1);
-    for (int j = first; j <= last; ++j) {
+    const EdgeRow e{xa, ya, xb, yb, dy, slope, m};
+    // Row j's work: `cell` its crossing's cell (add_crossings'; below 0: none), [i0, i1] the cells
+    // its outline marks reach (touch_edge's, before the covered ones are left out; empty: none).
+    const auto row_work = [&](int j, int cell, int i0, int i1) {
       int lo = width_, hi = -1;  // the cells to mark
-      if (j >= c0 && j <= c1) {
-        const int i = crossing_cell(xa, ya, slope, j);
-        if (i >= 0) {
-          lo = hi = i;
-          band_crossings_ = true;
-          diff_[static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(i)] += crossing;
-        }
+      if (j >= c0 && j <= c1 && cell >= 0) {
+        lo = hi = cell;
+        band_crossings_ = true;
+        diff_[static_cast<std::size_t>(j) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(cell)] += crossing;
       }
-      if (j >= t0 && j <= t1) touch_row(j, EdgeRow{xa, ya, xb, yb, dy, slope, m}, lo, hi,
-                                        EdgeSides{xa, j + 0.5 - ya, dx, dy, near_line, rounding, side, delta});
+      // A covered cell never changes again: its outline counter no longer matters (an edge that
+      // leaves the outline later skips it too, as it is still covered then).
+      if (j >= t0 && j <= t1 && i0 <= i1 && unfrozen_span(j, i0, i1)) {
+        lo = std::min(lo, i0);
+        hi = std::max(hi, i1);
+        std::int32_t* row = net_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+        touch_centres(row, i0, i1, EdgeSides{xa, j + 0.5 - ya, dx, dy, near_line, rounding, side, delta});
+      }
       if (hi >= 0) mark(j, lo, hi);
+    };
+#if CULLKIT_COVERAGE_AVX2
+    for (int j = first; j <= last; j += 4) {
+      int cell[4], i0[4], i1[4];
+      edge_rows4(e, j, cell, i0, i1);
+      const int rows = std::min(4, last - j + 1);
+      for (int q = 0; q < rows; ++q) row_work(j + q, cell[q], i0[q], i1[q]);
     }
+#else
+    for (int j = first; j <= last; ++j) {
+      int i0 = 0, i1 = -1;
+      if (j >= t0 && j <= t1) touch_span(j, e, i0, i1);
+      row_work(j, j >= c0 && j <= c1 ? crossing_cell(xa, ya, slope, j) : -1, i0, i1);
+    }
+#endif
   }
 
   // An outline edge's endpoints sorted as touch_edge sorts them, its slope and margin.
   struct EdgeRow {
     double xa, ya, xb, yb, dy, slope, m;
   };
-  // touch_edge's work in row j: the edge's part in the row's slab, widened by the margin, narrowed
-  // to the cells not yet covered, gets the edge's weight by the side of each cell's centre; [lo, hi]
-  // is widened to those cells (for `mark`).
-  CULLKIT_FORCEINLINE void touch_row(int j, const EdgeRow& e, int& lo, int& hi, const EdgeSides& sides) {
+  // The cells of row j an outline edge's marks reach (touch_edge's): its part in the row's slab,
+  // widened by the margin, into [i0, i1]; left as they are when it misses the row.
+  void touch_span(int j, const EdgeRow& e, int& i0, int& i1) const {
     const double m = e.m;
     double xl = e.xa, xr = e.xb;
     if (e.dy > 0.0) {
@@ -833,15 +852,60 @@ class CoverageGrid {
       std::swap(xl, xr);
     }
     if (xr + m < 0.0 || xl - m >= width_) return;
-    int i0 = clamp_cell(xl - m, width_), i1 = clamp_cell(xr + m, width_);
-    // A covered cell never changes again: its outline counter no longer matters (an edge that
-    // leaves the outline later skips it too, as it is still covered then).
-    if (!unfrozen_span(j, i0, i1)) return;
-    lo = std::min(lo, i0);
-    hi = std::max(hi, i1);
-    std::int32_t* row = net_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
-    touch_centres(row, i0, i1, sides);
+    i0 = clamp_cell(xl - m, width_);
+    i1 = clamp_cell(xr + m, width_);
   }
+
+#if CULLKIT_COVERAGE_AVX2
+  // crossing_cell and touch_span for the rows j to j + 3 at once, in double lanes with the same
+  // operations on the same values (a product and a sum fused where the compiler fuses theirs, under
+  // FMA), so each row's cells are theirs, bit for bit: cell[q] the crossing's cell of row j + q
+  // (-1 past the last column), [i0[q], i1[q]] its marks' cells (i0 > i1 when it misses the row).
+  // Coordinates are finite here (a triangle's area was finite to be gathered).
+  void edge_rows4(const EdgeRow& e, int j, int* cell, int* i0, int* i1) const {
+    const auto mul_add = [](__m256d b, __m256d c, __m256d a) {
+#if defined(__FMA__)
+      return _mm256_fmadd_pd(b, c, a);
+#else
+      return _mm256_add_pd(a, _mm256_mul_pd(b, c));
+#endif
+    };
+    const __m256d rows = _mm256_add_pd(_mm256_set1_pd(static_cast<double>(j)), _mm256_setr_pd(0.0, 1.0, 2.0, 3.0));
+    const __m256d xa = _mm256_set1_pd(e.xa), ya = _mm256_set1_pd(e.ya), slope = _mm256_set1_pd(e.slope);
+    const __m256d half = _mm256_set1_pd(0.5), zero = _mm256_setzero_pd(), w = _mm256_set1_pd(static_cast<double>(width_));
+    // crossing_cell: x = xa + (j + 0.5 - ya) * slope, k = floor(x + 0.5); -1 from the width on, 0
+    // below 0 (-0.0 included), else k.
+    const __m256d x = mul_add(_mm256_sub_pd(_mm256_add_pd(rows, half), ya), slope, xa);
+    const __m256d k = _mm256_floor_pd(_mm256_add_pd(x, half));
+    const __m256d past = _mm256_cmp_pd(k, w, _CMP_GE_OQ);
+    const __m256d crossing = _mm256_blendv_pd(_mm256_min_pd(_mm256_max_pd(k, zero), w), _mm256_set1_pd(-1.0), past);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(cell), _mm256_cvttpd_epi32(crossing));
+    // touch_span: std::max(ya, j - m) is (j - m > ya ? j - m : ya) and std::min(yb, j + 1 + m) is
+    // (j + 1 + m < yb ? j + 1 + m : yb) for these values: max_pd and min_pd with the row first.
+    const __m256d m = _mm256_set1_pd(e.m);
+    __m256d xl, xr;
+    if (e.dy > 0.0) {
+      const __m256d y0 = _mm256_max_pd(_mm256_sub_pd(rows, m), ya);
+      const __m256d y1 = _mm256_min_pd(_mm256_add_pd(_mm256_add_pd(rows, _mm256_set1_pd(1.0)), m), _mm256_set1_pd(e.yb));
+      const __m256d x0 = mul_add(_mm256_sub_pd(y0, ya), slope, xa), x1 = mul_add(_mm256_sub_pd(y1, ya), slope, xa);
+      // The swap when x0 > x1: the smaller first (equal values are the same value).
+      xl = _mm256_min_pd(x1, x0);
+      xr = _mm256_max_pd(x1, x0);
+    } else {
+      xl = _mm256_set1_pd(std::min(e.xa, e.xb));
+      xr = _mm256_set1_pd(std::max(e.xa, e.xb));
+    }
+    const __m256d left = _mm256_sub_pd(xl, m), right = _mm256_add_pd(xr, m);
+    // `xr + m < 0.0 || xl - m >= width_` misses the row.
+    const __m256d meets = _mm256_and_pd(_mm256_cmp_pd(right, zero, _CMP_NLT_UQ), _mm256_cmp_pd(left, w, _CMP_NGE_UQ));
+    // clamp_cell: below 0 (or NaN) gives 0, from width - 1 on gives width - 1, else truncated.
+    const __m256d top = _mm256_set1_pd(static_cast<double>(width_ - 1));
+    const __m256d first = _mm256_blendv_pd(zero, _mm256_min_pd(_mm256_max_pd(left, zero), top), meets);
+    const __m256d last = _mm256_blendv_pd(_mm256_set1_pd(-1.0), _mm256_min_pd(_mm256_max_pd(right, zero), top), meets);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(i0), _mm256_cvttpd_epi32(first));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(i1), _mm256_cvttpd_epi32(last));
+  }
+#endif
 
   // Crossings of the edge (xa, ya) -> (xb, yb), ya < yb, with the rows' centre lines, half-open in
   // y: the count at a cell centre is the signed number of edges crossing its row left of it.
