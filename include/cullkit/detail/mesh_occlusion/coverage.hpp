@@ -385,19 +385,10 @@ class CoverageGrid {
       const double err = 0x1p-19 * (std::fabs(v) + span + inv_max) + 1e-12 * inv_max * (1.0 + extent * extent / std::fabs(area2));
       if (std::isfinite(v) && std::isfinite(err) && std::isfinite(a) && std::isfinite(b)) v00 = v + err;
     }
-    // The rows' spans four at a time (row_spans4: row_span's spans, bit for bit).
-    for (int j = r.y0; j <= r.y1; j += 4) {
-      int lo[4], hi[4];
-      unsigned rows = row_spans4(edges, j, m, lo, hi);
-      if (r.y1 - j < 3) rows &= (1u << (r.y1 - j + 1)) - 1u;
-      for (; rows != 0; rows &= rows - 1) {
-        const int q = lowest_bit(rows);
-        const float* row = depth_.data() + static_cast<std::size_t>(j + q) * static_cast<std::size_t>(width_);
-        const double start = v00 + b * (j + q - r.y0);
-        if (!row_behind(row, lo[q], hi[q], lo[q] - r.x0, start, a, highest)) return false;
-      }
-    }
-    return true;
+    return for_each_triangle_row(edges, r, m, [&](int j, int i0, int i1) {
+      const float* row = depth_.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(width_);
+      return row_behind(row, i0, i1, i0 - r.x0, v00 + b * (j - r.y0), a, highest);
+    });
   }
 
   /// True when every cell the box [xmin, xmax] x [ymin, ymax] touches (with a margin) is covered
@@ -507,18 +498,29 @@ class CoverageGrid {
   // them used; rows with no such cell are passed over.
   template <typename Body>
   CULLKIT_FORCEINLINE void for_each_row_span(const TriangleEdges& edges, const CellRect& r, double m, Body&& body) {
+    for_each_triangle_row(edges, r, m, [&](int j, int i0, int i1) {
+      if (unfrozen_span(j, i0, i1)) {
+        use(j, i0, i1);
+        body(j, i0, i1);
+      }
+      return true;
+    });
+  }
+
+  // Calls body(j, i0, i1) for each row j of r that the triangle touches, [i0, i1] its cells there
+  // (row_span's, four rows at a time by row_spans4), until body returns false; false then.
+  template <typename Body>
+  CULLKIT_FORCEINLINE bool for_each_triangle_row(const TriangleEdges& edges, const CellRect& r, double m, Body&& body) const {
     for (int j = r.y0; j <= r.y1; j += 4) {
       int lo[4], hi[4];
       unsigned rows = row_spans4(edges, j, m, lo, hi);
       if (r.y1 - j < 3) rows &= (1u << (r.y1 - j + 1)) - 1u;
       for (; rows != 0; rows &= rows - 1) {
         const int q = lowest_bit(rows);
-        int i0 = lo[q], i1 = hi[q];
-        if (!unfrozen_span(j + q, i0, i1)) continue;
-        use(j + q, i0, i1);
-        body(j + q, i0, i1);
+        if (!body(j + q, lo[q], hi[q])) return false;
       }
     }
+    return true;
   }
 
   // Cells of row j that the triangle touches (its part in the row's slab, widened by m): the
@@ -566,6 +568,17 @@ class CoverageGrid {
   // loop (a product and a sum fused where the compiler fuses the scalar loop's, under FMA).
   static void touch_centres(std::int32_t* row, int i0, int i1, const EdgeSides& e);
 
+#if CULLKIT_COVERAGE_AVX2
+  // b * c + a in lanes as the compiler computes a scalar `a + b * c`: fused under FMA.
+  static __m256d mul_add(__m256d b, __m256d c, __m256d a) {
+#if defined(__FMA__)
+    return _mm256_fmadd_pd(b, c, a);
+#else
+    return _mm256_add_pd(a, _mm256_mul_pd(b, c));
+#endif
+  }
+#endif
+
   // True when row[i] > min(highest, start + a * (i - i0 + step0)) > 0 for every i in [i0, i1]: the
   // triangle_behind test of one row (an uncovered cell holds 0, and a bound that is not positive,
   // rounding gone wild, proves nothing). Where the compiler targets AVX2, four cells at a time, the
@@ -574,13 +587,6 @@ class CoverageGrid {
   static bool row_behind(const float* row, int i0, int i1, int step0, double start, double a, double highest) {
     int i = i0;
 #if CULLKIT_COVERAGE_AVX2
-    const auto mul_add = [](__m256d b, __m256d c, __m256d d) {
-#if defined(__FMA__)
-      return _mm256_fmadd_pd(b, c, d);
-#else
-      return _mm256_add_pd(d, _mm256_mul_pd(b, c));
-#endif
-    };
     const __m256d a4 = _mm256_set1_pd(a), start4 = _mm256_set1_pd(start), highest4 = _mm256_set1_pd(highest);
     const __m256d zero = _mm256_setzero_pd(), four = _mm256_set1_pd(4.0);
     const __m128i lane = _mm_setr_epi32(0, 1, 2, 3);
@@ -863,13 +869,6 @@ class CoverageGrid {
   // (-1 past the last column), [i0[q], i1[q]] its marks' cells (i0 > i1 when it misses the row).
   // Coordinates are finite here (a triangle's area was finite to be gathered).
   void edge_rows4(const EdgeRow& e, int j, int* cell, int* i0, int* i1) const {
-    const auto mul_add = [](__m256d b, __m256d c, __m256d a) {
-#if defined(__FMA__)
-      return _mm256_fmadd_pd(b, c, a);
-#else
-      return _mm256_add_pd(a, _mm256_mul_pd(b, c));
-#endif
-    };
     const __m256d rows = _mm256_add_pd(_mm256_set1_pd(static_cast<double>(j)), _mm256_setr_pd(0.0, 1.0, 2.0, 3.0));
     const __m256d xa = _mm256_set1_pd(e.xa), ya = _mm256_set1_pd(e.ya), slope = _mm256_set1_pd(e.slope);
     const __m256d half = _mm256_set1_pd(0.5), zero = _mm256_setzero_pd(), w = _mm256_set1_pd(static_cast<double>(width_));
