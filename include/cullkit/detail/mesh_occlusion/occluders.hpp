@@ -436,25 +436,23 @@ inline void insert_clipped(CoverageGrid& grid, const ClippedPolygon& poly, int o
     const double w[3] = {poly.w[0], poly.w[f], poly.w[f + 1]};
     grid.add_depth(x, y, w);
   }
-  for (int f = 1; f + 1 < n; ++f) {
-    const double x[3] = {poly.x[0], poly.x[f], poly.x[f + 1]}, y[3] = {poly.y[0], poly.y[f], poly.y[f + 1]};
-    // Fan edge 0 -> f is the polygon's edge 0 only for the first triangle, f + 1 -> 0 its last edge
-    // only for the last one; otherwise they are diagonals.
-    unsigned skip = skipped(f) ? 2u : 0u;
-    skip |= f == 1 ? (skipped(0) ? 1u : 0u) : 1u;
-    skip |= f + 2 == n ? (skipped(n - 1) ? 4u : 0u) : 4u;
-    grid.add_count(x, y, orient, skip);
-  }
+  // The fan's diagonals are left out of the counts: each would cancel its twin in the fan exactly.
+  // So each of the polygon's edges gives its crossings and outline marks once, as its own.
   for (int k = 0; k < n; ++k) {
-    const int l = k + 1 == n ? 0 : k + 1;
+    if (skipped(k)) continue;
     const int e = poly.edge[k];
-    if (e < 0) {
-      grid.touch_edge(poly.x[k], poly.y[k], poly.x[l], poly.y[l], orient, 1);
-      continue;
-    }
-    if ((inner >> e) & 1u) continue;
-    if (twin_band[e] < my_band) grid.touch_edge(poly.x[l], poly.y[l], poly.x[k], poly.y[k], orient, -1);
-    else grid.touch_edge(poly.x[k], poly.y[k], poly.x[l], poly.y[l], orient, 1);
+    grid.add_outline_edge(poly.x, poly.y, k, k + 1 == n ? 0 : k + 1, orient, e >= 0 && twin_band[e] < my_band);
+  }
+}
+
+/// The projected corners of occluder triangle t (one not clipped).
+inline void triangle_corners(const MeshIndex& index, const Scratch& s, std::uint32_t t, double* x, double* y, double* w) {
+  const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
+  for (int k = 0; k < 3; ++k) {
+    const Projected& p = s.projected[s.vertex_slot[c[k]]];
+    x[k] = p.x;
+    y[k] = p.y;
+    w[k] = p.w;
   }
 }
 
@@ -468,13 +466,7 @@ inline int occluder_corners(const MeshIndex& index, const Scratch& s, std::uint3
     std::copy(poly.w, poly.w + poly.n, w);
     return poly.n;
   }
-  const std::uint32_t* c = &index.corners[3 * std::size_t(t)];
-  for (int k = 0; k < 3; ++k) {
-    const Projected& p = s.projected[s.vertex_slot[c[k]]];
-    x[k] = p.x;
-    y[k] = p.y;
-    w[k] = p.w;
-  }
+  triangle_corners(index, s, t, x, y, w);
   return 3;
 }
 
@@ -501,9 +493,6 @@ inline void insert_run(const MeshIndex& index, const Scratch& s, CoverageGrid& g
   const int orient = s.view.orient;
   const std::size_t count = static_cast<std::size_t>(last - first);
   const bool any_clipped = !s.clipped.empty();
-  const auto corners_of = [&](std::uint32_t t, double* x, double* y, double* w) {
-    return occluder_corners(index, s, t, x, y, w);
-  };
   for (std::size_t begin = 0, end = 0; begin < count; begin = end) {
     const std::uint32_t my_band = s.triangle_band[first[begin].second];
     end = begin;
@@ -533,19 +522,15 @@ inline void insert_run(const MeshIndex& index, const Scratch& s, CoverageGrid& g
         continue;
       }
       double x[3], y[3], w[3];
-      corners_of(t, x, y, w);
-      grid.add_depth(x, y, w);
-      // An edge shared within the band adds crossings from both triangles that cancel bit for bit
-      // (the same endpoints, the same arithmetic, opposite signs): both leave them out.
-      grid.add_count(x, y, orient, inner);
-      for (int k = 0; k < 3; ++k) {
-        const int l = k == 2 ? 0 : k + 1;
-        if ((inner >> k) & 1u) continue;  // cancels within the band
-        // The twin in an earlier band: its edge (l -> k, as its triangle runs) leaves the
-        // outline, and this one never joins it.
-        if (twin_band[k] < my_band) grid.touch_edge(x[l], y[l], x[k], y[k], orient, -1);
-        else grid.touch_edge(x[k], y[k], x[l], y[l], orient, 1);
-      }
+      triangle_corners(index, s, t, x, y, w);
+      // An edge shared within the band (`inner`) adds crossings from both triangles that cancel bit
+      // for bit (the same endpoints, the same arithmetic, opposite signs), and outline marks that
+      // cancel too: both leave it out. An edge whose twin is in an earlier band (`leaves`): the
+      // twin's edge (l -> k, as its triangle runs) leaves the outline, and this one never joins it.
+      unsigned leaves = 0;
+      for (int k = 0; k < 3; ++k)
+        if (twin_band[k] < my_band) leaves |= 1u << k;
+      grid.add_triangle(x, y, w, orient, inner, leaves);
     }
     if (end < count) grid.end_band();
   }
