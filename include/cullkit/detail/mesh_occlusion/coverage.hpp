@@ -660,7 +660,8 @@ class CoverageGrid {
   static std::size_t freeze8(__m256i c, int i, const float* bound, float* depth, std::uint64_t* frozen);
 #endif
 #if CULLKIT_HAS_SSE2
-  // The same for the four cells from i (a multiple of 4).
+  // The same for the four cells from i (a multiple of 4), returning early when none freezes: with no
+  // blend instruction, the store costs more than the branch.
   static std::size_t freeze4(__m128i c, int i, const float* bound, float* depth, std::uint64_t* frozen);
 #endif
 
