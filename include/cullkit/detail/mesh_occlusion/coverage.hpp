@@ -706,11 +706,14 @@ class CoverageGrid {
 
 #if CULLKIT_COVERAGE_AVX2
   // Freezes those of the eight cells from i (a multiple of 8) whose count `c` is at least one and
-  // that are not covered yet; returns how many.
+  // that are not covered yet; returns how many. The depths are stored whether any cell froze or not
+  // (a blend under an empty mask keeps them): which groups freeze is data, and a branch on it costs
+  // more than the store.
   static std::size_t freeze8(__m256i c, int i, const float* bound, float* depth, std::uint64_t* frozen);
 #endif
 #if CULLKIT_HAS_SSE2
-  // The same for the four cells from i (a multiple of 4).
+  // The same for the four cells from i (a multiple of 4), returning early when none freezes: with no
+  // blend instruction, the store costs more than the branch.
   static std::size_t freeze4(__m128i c, int i, const float* bound, float* depth, std::uint64_t* frozen);
 #endif
 

@@ -55,7 +55,6 @@ inline std::size_t CoverageGrid::freeze(int j, int a, int b) {
 inline std::size_t CoverageGrid::freeze8(__m256i c, int i, const float* bound, float* depth, std::uint64_t* frozen) {
   const int positive = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(c, _mm256_setzero_si256())));
   const int mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xffu);
-  if (mask == 0) return 0;
   const __m256i lane_bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
   const __m256 fresh = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask), lane_bit), lane_bit));
   _mm256_storeu_ps(depth + i, _mm256_blendv_ps(_mm256_loadu_ps(depth + i), _mm256_loadu_ps(bound + i), fresh));
@@ -118,13 +117,16 @@ inline std::size_t CoverageGrid::absorb(CoverageGrid& patch, bool layers) {
     // The span widened to whole groups of the vector loop (within the row): the patch's cells
     // outside its used ones are empty (no count, crossing, bound or depth), and adding an empty cell
     // changes nothing here (see absorb_span), so the loop needs no cell-by-cell head or tail.
-    const int a = i0 & ~(row_group - 1), b = std::min(i1 | (row_group - 1), width_ - 1);
-    covered += absorb_span(pass, a, b, run);
+    int a = i0 & ~(row_group - 1), b = std::min(i1 | (row_group - 1), width_ - 1);
     int last = i1;
-    if (run != 0) {
+    for (;;) {
+      covered += absorb_span(pass, a, b, run);
+      if (run == 0) break;
       // A crossing beyond the last column was dropped: the band's sum is constant on to the row's end.
-      covered += absorb_span(pass, b + 1, width_ - 1, run);
       last = width_ - 1;
+      if (b == last) break;
+      a = b + 1;
+      b = last;
     }
     grow(dirty_, CellRect{i0, pass.j, last, pass.j});
     grow(patch.dirty_, CellRect{i0, pass.j, last, pass.j});
@@ -136,7 +138,7 @@ inline std::size_t CoverageGrid::absorb(CoverageGrid& patch, bool layers) {
   return covered;
 }
 
-inline std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int b, std::int32_t& run) {
+CULLKIT_FORCEINLINE std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int b, std::int32_t& run) {
   CoverageGrid& patch = pass.patch;
   const std::size_t base = static_cast<std::size_t>(pass.j) * static_cast<std::size_t>(width_);
   const std::size_t word_base = static_cast<std::size_t>(pass.j) * static_cast<std::size_t>(words_);
@@ -155,12 +157,21 @@ inline std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int 
   // An empty cell of the patch (no count, crossing, bound or depth) changes nothing in either grid:
   // a cell of this grid counting at least one is covered already (only an open band changes counts,
   // and every band's end and every absorb freezes such cells), its bound stays, a depth of 0 is
-  // never nearer, and the patch's cell stays empty. The vector loops skip whole groups of them.
+  // never nearer, and the patch's cell stays empty.
   //
   // Per cell, in this order: the patch's open band ends (its crossings summed into its count, and
   // the cell freezing in the patch's grid at the patch's bound), then the patch's cell is added
   // into this grid, the cell freezes here at the running bound, takes the patch's bound where that
-  // is nearer, and the patch's cell is left empty behind.
+  // is nearer, and the patch's cell is left empty behind. A cell this grid covers already skips the
+  // adding: its count and running bound are never read again (every freeze tests the covered bit
+  // first), so only its depth may still change, to the patch's where that is nearer.
+  //
+  // The AVX2 loop makes every group's stores whatever its masks hold (a blend under an empty mask
+  // keeps the cells): which cells freeze or take a nearer bound is data, not a pattern, and a branch
+  // on it costs more than the stores. Under SSE2, with no blend instruction, a selection costs three
+  // operations and the branches pay (the same stores without them: the city's `absorb` 1.19 times
+  // as long). Either takes the short way for a group this grid covers whole (covered cells come in
+  // runs), and the SSE2 loop passes over groups the patch left empty.
   const auto one = [&](int i) {
     const std::uint64_t bit = std::uint64_t{1} << (i & 63);
     if (accumulate) {
@@ -172,12 +183,14 @@ inline std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int 
       from_depth[i] = from_bound[i];
       from_frozen[i >> 6] |= bit;
     }
-    net[i] += from_net[i];
-    bound[i] = std::min(bound[i], from_bound[i]);
-    if (net[i] >= 1 && (frozen[i >> 6] & bit) == 0) {
-      depth[i] = bound[i];
-      frozen[i >> 6] |= bit;
-      ++covered;
+    if ((frozen[i >> 6] & bit) == 0) {
+      net[i] += from_net[i];
+      bound[i] = std::min(bound[i], from_bound[i]);
+      if (net[i] >= 1) {
+        depth[i] = bound[i];
+        frozen[i >> 6] |= bit;
+        ++covered;
+      }
     }
     if (layers && from_depth[i] > depth[i]) {
       depth[i] = from_depth[i];
@@ -216,18 +229,20 @@ inline std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int 
       }
       const __m256 own_bound = _mm256_loadu_ps(from_bound + i);
       __m256 own = _mm256_loadu_ps(from_depth + i);
-      // Eight empty cells of the patch: nothing to add, nothing to clear.
-      const __m256i counts = _mm256_or_si256(own_net, own_count);
-      if (_mm256_testz_si256(counts, counts) &&
-          _mm256_movemask_ps(_mm256_and_ps(_mm256_cmp_ps(own_bound, empty8, _CMP_EQ_OQ), _mm256_cmp_ps(own, zero8_f, _CMP_EQ_OQ))) == 0xff)
-        continue;
       if (band) {
         const int positive = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(own_count, zero8)));
         const int mask = positive & ~static_cast<int>((from_frozen[i >> 6] >> (i & 63)) & 0xffu);
-        if (mask != 0) {
-          own = _mm256_blendv_ps(own, own_bound, lanes_of(mask));
-          from_frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
-        }
+        own = _mm256_blendv_ps(own, own_bound, lanes_of(mask));
+        from_frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+      }
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(from_net + i), zero8);
+      _mm256_storeu_ps(from_bound + i, empty8);
+      _mm256_storeu_ps(from_depth + i, zero8_f);
+      if (((frozen[i >> 6] >> (i & 63)) & 0xffu) == 0xffu) {
+        // Covered here already: only the depths, each the nearer of the two (max takes its first
+        // operand where the comparison holds, as the blend below).
+        if (layers) _mm256_storeu_ps(depth + i, _mm256_max_ps(own, _mm256_loadu_ps(depth + i)));
+        continue;
       }
       const __m256i c = _mm256_add_epi32(load_i(net), own_count);
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(net + i), c);
@@ -235,25 +250,16 @@ inline std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int 
       _mm256_storeu_ps(bound + i, bd);
       const int positive = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(c, zero8)));
       const int fresh_mask = positive & ~static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xffu);
-      __m256 d = _mm256_loadu_ps(depth + i);
-      if (fresh_mask != 0) {
-        d = _mm256_blendv_ps(d, bd, lanes_of(fresh_mask));
-        covered += bits_in_nibble(fresh_mask & 15) + bits_in_nibble(fresh_mask >> 4);
-      }
+      __m256 d = _mm256_blendv_ps(_mm256_loadu_ps(depth + i), bd, lanes_of(fresh_mask));
+      covered += bits_in_nibble(fresh_mask & 15) + bits_in_nibble(fresh_mask >> 4);
       int taken = fresh_mask;
       if (layers) {
         const __m256 nearer = _mm256_cmp_ps(own, d, _CMP_GT_OQ);
-        const int nearer_mask = _mm256_movemask_ps(nearer);
-        if (nearer_mask != 0) d = _mm256_blendv_ps(d, own, nearer);
-        taken |= nearer_mask;
+        d = _mm256_blendv_ps(d, own, nearer);
+        taken |= _mm256_movemask_ps(nearer);
       }
-      if (taken != 0) {
-        _mm256_storeu_ps(depth + i, d);
-        frozen[i >> 6] |= static_cast<std::uint64_t>(taken) << (i & 63);
-      }
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(from_net + i), zero8);
-      _mm256_storeu_ps(from_bound + i, empty8);
-      _mm256_storeu_ps(from_depth + i, zero8_f);
+      _mm256_storeu_ps(depth + i, d);
+      frozen[i >> 6] |= static_cast<std::uint64_t>(taken) << (i & 63);
     }
     run = _mm256_cvtsi256_si32(carry8);
   }
@@ -282,6 +288,30 @@ inline std::size_t CoverageGrid::absorb_span(const AbsorbPass& pass, int a, int 
         d = _mm_add_epi32(d, carry);
         own_count = _mm_add_epi32(own_count, d);
         carry = _mm_shuffle_epi32(d, 0xFF);
+      }
+      const int union_frozen = static_cast<int>((frozen[i >> 6] >> (i & 63)) & 0xfu);
+      if (union_frozen == 0xf) {
+        // Four cells this grid covers already: see the AVX2 loop.
+        if (band || layers) {
+          __m128 own = _mm_loadu_ps(from_depth + i);
+          if (band) {
+            const int positive = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(own_count, zero)));
+            const int mask = positive & ~static_cast<int>((from_frozen[i >> 6] >> (i & 63)) & 0xfu);
+            if (mask != 0) {
+              own = select(lanes_of(mask), _mm_loadu_ps(from_bound + i), own);
+              from_frozen[i >> 6] |= static_cast<std::uint64_t>(mask) << (i & 63);
+            }
+          }
+          if (layers) {
+            const __m128 d = _mm_loadu_ps(depth + i);
+            const __m128 nearer = _mm_cmpgt_ps(own, d);
+            if (_mm_movemask_ps(nearer) != 0) _mm_storeu_ps(depth + i, select(nearer, own, d));
+          }
+        }
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(from_net + i), zero);
+        _mm_storeu_ps(from_bound + i, empty4);
+        _mm_storeu_ps(from_depth + i, zero_f);
+        continue;
       }
       const __m128 own_bound = _mm_loadu_ps(from_bound + i);
       __m128 own = _mm_loadu_ps(from_depth + i);
