@@ -98,6 +98,14 @@ class CoverageGrid {
   /// bounds, depths and covered bits, into this grid, which must not have used them. The rows of a
   /// strip inserted into a grid of its own join the frame's grid so.
   void take_rows(const CoverageGrid& from) {
+    copy_rows(from);
+    adopt_rows(from);
+  }
+
+  /// take_rows' cells alone: writes nothing of this grid outside the rows `from` used, so it may run
+  /// while another thread works on this grid's other rows. adopt_rows must follow before this grid
+  /// is read or cleared as a whole.
+  void copy_rows(const CoverageGrid& from) {
     for (int n = 0; n < from.used_row_count_; ++n) {
       const int j = from.used_rows_[static_cast<std::size_t>(n)];
       const int lo = from.used_lo_[static_cast<std::size_t>(j)], hi = from.used_hi_[static_cast<std::size_t>(j)];
@@ -107,6 +115,15 @@ class CoverageGrid {
       std::copy(from.depth_.begin() + b, from.depth_.begin() + e, depth_.begin() + b);
       const auto words = static_cast<std::ptrdiff_t>(j) * words_;
       std::copy(from.frozen_bits_.begin() + words, from.frozen_bits_.begin() + words + words_, frozen_bits_.begin() + words);
+    }
+  }
+
+  /// take_rows' bookkeeping alone, after copy_rows: the rows `from` used become this grid's used
+  /// rows (what a later clear and the used-row tests go by).
+  void adopt_rows(const CoverageGrid& from) {
+    for (int n = 0; n < from.used_row_count_; ++n) {
+      const int j = from.used_rows_[static_cast<std::size_t>(n)];
+      const int lo = from.used_lo_[static_cast<std::size_t>(j)], hi = from.used_hi_[static_cast<std::size_t>(j)];
       use(j, lo, hi);
       grow(dirty_, CellRect{lo, j, hi, j});
     }

@@ -358,8 +358,12 @@ inline void insert_strips_on_tasks(const MeshIndex& index, const MeshOcclusionPa
                               return true;
                             });
     }
+    // A task with a grid of its own copies its rows into the frame's as soon as it has no strip
+    // left, while the others still insert: the strips' rows are disjoint, and the frame's grid's
+    // bookkeeping (which rows are used) is taken over after the tasks, on the calling thread.
+    if (task > 0) s.grid.copy_rows(own.grid);
   });
-  for (unsigned k = 1; k < used; ++k) s.grid.take_rows(s.strip_tasks[k].grid);
+  for (unsigned k = 1; k < used; ++k) s.grid.adopt_rows(s.strip_tasks[k].grid);
   s.grid.set_rows(0, height - 1);
   // A triangle counts once, in whichever strips it went in: the strips' flags (0 or 1) ORed eight
   // at a time, then counted.
