@@ -25,13 +25,18 @@ inline bool rect_hidden(const CoverageGrid& grid, const BoxView& b) {
   return r.empty() || (std::isfinite(threshold) && grid.all_nearer(r, threshold));
 }
 
+/// The second half of the box test below: clearly beyond the near plane (`b` usable), inside the
+/// solid boxes' hidden region.
+inline bool solid_boxes_hide(const Scratch& s, const BoxView& b, const Aabb& box) {
+  return !s.box_occluders.empty() && b.usable && s.box_tree.is_occluded(box);
+}
+
 /// The box test, once the frame's grid is finished and its solid boxes are in the occlusion tree:
 /// `b` is `box` projected by the frame's view (project_box). Hidden when its rectangle lies on cells
 /// covered nearer than it, or, clearly beyond the near plane, inside the solid boxes' hidden region.
 /// Reads only: safe from several threads at once.
 inline bool box_hidden(const Scratch& s, const BoxView& b, const Aabb& box) {
-  if (rect_hidden(s.grid, b)) return true;
-  return !s.box_occluders.empty() && b.usable && s.box_tree.is_occluded(box);
+  return rect_hidden(s.grid, b) || solid_boxes_hide(s, b, box);
 }
 
 /// The box test for any box, against a finished frame (`ready`: the frame's grid was filled). False

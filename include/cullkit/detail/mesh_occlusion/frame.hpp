@@ -212,6 +212,9 @@ struct Scratch {
   std::uint32_t member_value = 0;
   CoverageGrid patch_grid;
   std::vector<std::pair<float, std::uint32_t>> box_candidates;  // (screen cells, object)
+  // Per place in in_frustum, the box's rectangle test on the finished grid when insert_box_occluders
+  // took it: 1 hidden, 0 not; 2 not taken.
+  std::vector<std::uint8_t> box_rect_hidden;
   std::vector<Aabb> box_occluders;
   OcclusionTree box_tree{glm::vec3(0.0f)};  // the solid boxes' hidden region, when box_occluders is not empty
   // A cull on several threads: each task's own memory, and the object tests' answers by position

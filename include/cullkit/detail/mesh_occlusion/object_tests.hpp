@@ -243,16 +243,21 @@ inline bool box_meets_pyramid(const Aabb& box, const NearPyramid& py) {
 /// out too: every ray it could stop is stopped nearer on the grid, so it is taken neither into the
 /// tree's work nor among the `max_box_occluders`, whose places go to boxes the grid leaves open.
 /// Leaving an occluder out only hides less: conservative either way.
-/// Leaves `s.box_occluders` empty when there are none.
+/// Leaves `s.box_occluders` empty when there are none. Keeps, per object, the answer of the
+/// rectangle test when it took it (`s.box_rect_hidden`), for the object test to reuse.
 inline void insert_box_occluders(const MeshIndex& index, const MeshOcclusionParams& params, const Camera& camera,
                                  Scratch& s) {
   s.box_occluders.clear();
+  s.box_rect_hidden.assign(s.in_frustum.size(), 2);
   if (params.max_box_occluders == 0) return;
   const double min_cells = std::max(1.0, params.min_occluder_screen_fraction * double(s.grid.width()) * double(s.grid.height()));
   s.box_candidates.clear();
   for (std::size_t i = 0; i < s.in_frustum.size(); ++i) {
     const std::uint32_t o = s.in_frustum[i];
-    if (!index.solid_box[o] || !index.objects[o].occludes || rect_hidden(s.grid, s.boxes[i])) continue;
+    if (!index.solid_box[o] || !index.objects[o].occludes) continue;
+    const bool hidden = rect_hidden(s.grid, s.boxes[i]);
+    s.box_rect_hidden[i] = hidden ? 1 : 0;
+    if (hidden) continue;
     const double cells = screen_cells(s.boxes[i], s.grid);
     if (cells >= min_cells) s.box_candidates.emplace_back(static_cast<float>(cells), o);
   }
@@ -272,6 +277,9 @@ inline void insert_box_occluders(const MeshIndex& index, const MeshOcclusionPara
   s.box_tree.insert_box_occluders(s.box_occluders.data(), s.box_occluders.size());
 }
 
+/// The frame's own scratch memory (a task's view of it has its own overload, parallel_frame.hpp).
+inline const Scratch& frame_scratch(const Scratch& s) { return s; }
+
 /// The object test. Its box first (one rectangle, usually enough); else, when the object is cut into
 /// patches, each patch by its box or, for a patch of at most `object_test_triangles` triangles, by
 /// its triangles. Every triangle that can be seen is in some patch, so the object is hidden when all
@@ -279,7 +287,11 @@ inline void insert_box_occluders(const MeshIndex& index, const MeshOcclusionPara
 template <class Frame>  // Scratch, or a task's view of it (parallel_frame.hpp)
 inline bool object_hidden(const MeshIndex& index, const MeshOcclusionParams& params, Frame& s, std::size_t i) {
   const std::uint32_t o = s.in_frustum[i];
-  if (box_hidden(s, s.boxes[i], index.bounds[o])) return true;
+  // Its box: the rectangle test's answer when insert_box_occluders took it, else the whole test.
+  const std::uint8_t rect = frame_scratch(s).box_rect_hidden[i];
+  if (rect == 1 || (rect == 0 ? solid_boxes_hide(frame_scratch(s), s.boxes[i], index.bounds[o])
+                              : box_hidden(s, s.boxes[i], index.bounds[o])))
+    return true;
   const PatchSet& ps = index.patches;
   const std::uint32_t p0 = ps.object_first[o], p1 = ps.object_first[o + 1];
   if (p0 == p1) return false;

@@ -143,6 +143,7 @@ inline const BoxView& patch_box(const MeshIndex& index, TaskFrame& f, std::uint3
 }
 
 inline bool box_hidden(const TaskFrame& f, const BoxView& b, const Aabb& box) { return box_hidden(f.frame, b, box); }
+inline const Scratch& frame_scratch(const TaskFrame& f) { return f.frame; }
 
 /// s.boxes[i] for every object in the frustum, on `tasks` tasks; and, for the objects that may be
 /// occluders (those object_candidates measures patch by patch), their patches' boxes in the frame's
