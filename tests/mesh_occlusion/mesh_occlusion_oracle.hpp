@@ -60,6 +60,19 @@ inline void grid_quads(TestScene& s, const glm::vec3& origin, const glm::vec3& u
     }
 }
 
+/// The culler's index of `s` (the library's own build, as a culler makes it), its objects cut into
+/// patches of up to `patch_triangles`.
+inline void build_test_index(const TestScene& s, cullkit::detail::mesh_occlusion::MeshIndex& index,
+                             std::uint32_t patch_triangles) {
+  cullkit::detail::mesh_occlusion::build_index(
+      index, s.indices.size() / 3,
+      [&s](std::size_t t, glm::vec3 p[3]) {
+        for (int k = 0; k < 3; ++k) p[k] = s.positions[s.indices[3 * t + std::size_t(k)]];
+        return true;
+      },
+      s.objects.data(), s.objects.size(), cullkit::AbtParams{}, patch_triangles);
+}
+
 /// The near side of a camera: a point counts only if dot(p - eye, forward) > near.
 struct NearSide {
   glm::dvec3 eye, forward;

@@ -153,13 +153,7 @@ void clip_points(std::uint64_t seed) {
   occluders(s, rng, false, 12, 3, 0.8f);
   occluders(s, rng, true, 12, 3, 0.8f);
   dmo::MeshIndex index;
-  dmo::build_index(
-      index, s.indices.size() / 3,
-      [&s](std::size_t t, glm::vec3 p[3]) {
-        for (int k = 0; k < 3; ++k) p[k] = s.positions[s.indices[3 * t + std::size_t(k)]];
-        return true;
-      },
-      s.objects.data(), s.objects.size(), cullkit::AbtParams{}, 256);
+  mesh_oracle::build_test_index(s, index, 256);
   cullkit::MeshOcclusionParams params;
   params.min_occluder_screen_fraction = 0.0f;
   dmo::Scratch scratch;

@@ -30,6 +30,11 @@
 //   rule off (0, the control, and a NaN value, which is taken as 0) the slats fuse and hide them.
 //   From near, the slats are wide enough and hide the cubes by default; and one wall of the same
 //   size, two triangles, hides them from afar by default.
+// - twin_reach: the index's note of which edges' twins a frame looks up (PatchSet::twin_reach),
+//   against every patch's own triangles: an edge whose twin is in one of the patches holding the
+//   triangle must be marked as in the patch, one whose twin is outside one of them as elsewhere.
+//   The mesh has patches cut from one surface, a T-junction seam (cut triangles) and two objects
+//   sharing triangles, so each kind of pair occurs.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -305,6 +310,50 @@ void thin_slats() {
   CHECK(far_solid.hidden == far_solid.targets);
 }
 
+void twin_reach() {
+  namespace dmo = cullkit::detail::mesh_occlusion;
+  TestScene s;
+  s.begin_object();
+  grid_quads(s, glm::vec3(0, 0, 0), glm::vec3(4, 0, 0), glm::vec3(0, 4, 0), 20, 20);
+  // Beside it, half as fine: its corners fall on the finer grid's edges (T-junctions).
+  grid_quads(s, glm::vec3(4, 0, 0), glm::vec3(4, 0, 0), glm::vec3(0, 4, 0), 10, 10);
+  s.box(glm::vec3(1, 1, -3), glm::vec3(2, 2, -2));
+  // An object overlapping the first: its triangles are in a patch of each.
+  s.objects.push_back(cullkit::MeshObject{300, 200});
+  dmo::MeshIndex index;
+  mesh_oracle::build_test_index(s, index, 64);
+  const dmo::PatchSet& ps = index.patches;
+  const std::size_t triangles = index.corners.size() / 3;
+  CHECK(ps.twin_reach.size() == triangles);
+  if (ps.twin_reach.size() != triangles) return;
+  std::vector<std::uint32_t> in_patch(triangles, dmo::none);
+  std::size_t inside = 0, across = 0, shared = 0, bad = 0;
+  for (std::uint32_t p = 0; p < ps.patches.size(); ++p) {
+    const dmo::Patch& patch = ps.patches[p];
+    for (std::uint32_t i = patch.first; i < patch.first + patch.count; ++i) {
+      shared += in_patch[ps.triangles[i]] != dmo::none;
+      in_patch[ps.triangles[i]] = p;
+    }
+    for (std::uint32_t i = patch.first; i < patch.first + patch.count; ++i) {
+      const std::uint32_t t = ps.triangles[i];
+      for (unsigned k = 0; k < 3; ++k) {
+        const std::uint32_t twin = index.twins[3 * std::size_t(t) + k];
+        if (twin == dmo::none) continue;
+        const bool here = in_patch[twin / 3] == p;
+        inside += here;
+        across += !here;
+        const unsigned bit = here ? 1u << k : 8u << k;
+        bad += (ps.twin_reach[t] & bit) == 0;
+      }
+    }
+  }
+  std::printf("%-32s pairs in a patch %zu, across %zu, triangles in two patches %zu, missed %zu\n", "twin_reach", inside,
+              across, shared, bad);
+  CHECK(index.build_stats.triangles_cut > 0);
+  CHECK(inside > 0 && across > 0 && shared > 0);
+  CHECK(bad == 0);
+}
+
 }  // namespace
 
 int main() {
@@ -315,5 +364,6 @@ int main() {
   far_backdrop();
   dense_wall();
   thin_slats();
+  twin_reach();
   return cullkit_test::report("test_mesh_occlusion_patches");
 }

@@ -311,7 +311,15 @@ inline const Projected& project_vertex(const MeshIndex& index, Scratch& s, std::
     s.vertex_stamp[v] = s.frame;
     s.vertex_slot[v] = static_cast<std::uint32_t>(s.projected.size());
     const glm::vec3& p = index.positions[v];
-    s.projected.push_back(s.view.project(p.x, p.y, p.z));
+    const Projected q = s.view.project(p.x, p.y, p.z);
+    // Stored field by field: a copy of the whole would be built on the stack (its flags a byte at
+    // a time) and read back in one wide load that waits for those stores to retire.
+    Projected& to = s.projected.emplace_back();
+    to.x = q.x;
+    to.y = q.y;
+    to.w = q.w;
+    to.usable = q.usable;
+    to.inside = q.inside;
   }
   return s.projected[s.vertex_slot[v]];
 }

@@ -493,6 +493,7 @@ inline void insert_run(const MeshIndex& index, const Scratch& s, CoverageGrid& g
   const int orient = s.view.orient;
   const std::size_t count = static_cast<std::size_t>(last - first);
   const bool any_clipped = !s.clipped.empty();
+  const std::uint8_t* reach = index.patches.twin_reach.empty() ? nullptr : index.patches.twin_reach.data();
   for (std::size_t begin = 0, end = 0; begin < count; begin = end) {
     const std::uint32_t my_band = s.triangle_band[first[begin].second];
     end = begin;
@@ -509,12 +510,16 @@ inline void insert_run(const MeshIndex& index, const Scratch& s, CoverageGrid& g
       const std::uint32_t t = first[i].second;
       if (!members.has(t)) continue;
       ++inserted;
-      std::uint32_t twin_band[3];
+      std::uint32_t twin_band[3] = {none, none, none};
       unsigned inner = 0;  // edges shared with a triangle of this band
+      // Only the edges whose twin may be in the patch (PatchSet::twin_reach) can have it in the run;
+      // an index without patches (a moving occluder's, one run) looks up all three.
+      const unsigned in_patch = reach != nullptr ? reach[t] & twin_in_patch : twin_in_patch;
       for (int k = 0; k < 3; ++k) {
+        if (!((in_patch >> k) & 1u)) continue;
         const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
-        const bool twin_here = twin != none && members.has(twin / 3);
-        twin_band[k] = twin_here ? s.triangle_band[twin / 3] : none;
+        if (twin == none || !members.has(twin / 3)) continue;
+        twin_band[k] = s.triangle_band[twin / 3];
         if (twin_band[k] == my_band) inner |= 1u << k;
       }
       if (any_clipped && s.clip_stamp[t] == s.frame) {

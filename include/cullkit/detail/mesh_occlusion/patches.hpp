@@ -53,7 +53,15 @@ struct PatchSet {
   // each once: vertices[vertex_first[p], vertex_first[p + 1]). A frame projects its occluders' corners
   // from these lists.
   std::vector<std::uint32_t> vertex_first, vertices;
+  // Per triangle, which of its edges' twins a frame must look up: bit k when edge k's twin may be
+  // in the same patch (a run's shared edges, insert_run), bit 3 + k when it may be in another
+  // (the seams with earlier patches, insert_strip_in_order). A triangle and twin each in one patch
+  // are in the same or not; one in several patches sets both bits; an edge with no twin, neither.
+  std::vector<std::uint8_t> twin_reach;
 };
+
+/// Bits of PatchSet::twin_reach: edges whose twin may be in the triangle's own patch, or in another.
+inline constexpr unsigned twin_in_patch = 0x7u, twin_elsewhere = 0x38u;
 
 /// Cuts the objects into patches. `corners` (3 per triangle, none for triangles that cannot occlude)
 /// and `twins` (the opposite directed edge or none) are the index's; `objects[o].triangle_count` is 0
@@ -155,6 +163,25 @@ inline void build_patches(PatchSet& set, const std::vector<glm::vec3>& positions
       }
     }
     set.vertex_first[p + 1] = static_cast<std::uint32_t>(set.vertices.size());
+  }
+  // The patch of each triangle in exactly one (none for those in none or several).
+  std::vector<std::uint32_t> only_patch(corners.size() / 3, none);
+  for (std::size_t p = 0; p < set.patches.size(); ++p)
+    for (std::uint32_t k = set.patches[p].first; k < set.patches[p].first + set.patches[p].count; ++k)
+      if (patch_count[set.triangles[k]] == 1) only_patch[set.triangles[k]] = static_cast<std::uint32_t>(p);
+  set.twin_reach.assign(corners.size() / 3, 0);
+  for (std::size_t t = 0; t < corners.size() / 3; ++t) {
+    if (patch_count[t] == 0) continue;
+    unsigned reach = 0;
+    for (unsigned k = 0; k < 3; ++k) {
+      const std::uint32_t twin = twins[3 * t + k];
+      if (twin == none) continue;
+      const std::uint32_t a = only_patch[t], b = only_patch[twin / 3];
+      const bool sure = a != none && b != none;
+      if (!sure || a == b) reach |= 1u << k;
+      if (!sure || a != b) reach |= 8u << k;
+    }
+    set.twin_reach[t] = static_cast<std::uint8_t>(reach);
   }
 }
 

@@ -177,7 +177,10 @@ inline void insert_strip_in_order(const MeshIndex& index, const MeshOcclusionPar
       if (!members.has(t)) continue;  // dropped over covered cells
       if (!whole) strip.inserted[member.first] = 1;
       task.done_stamp[t] = task.done_value;
+      // Only the edges whose twin may be in another patch (PatchSet::twin_reach) can be such seams.
+      const unsigned elsewhere = (index.patches.twin_reach[t] & twin_elsewhere) >> 3;
       for (int k = 0; k < 3; ++k) {
+        if (!((elsewhere >> k) & 1u)) continue;
         const std::uint32_t twin = index.twins[3 * std::size_t(t) + std::size_t(k)];
         if (twin == none || task.done_stamp[twin / 3] != task.done_value || s.triangle_owner[twin / 3] == q) continue;
         double ex0, ey0, ex1, ey1;
